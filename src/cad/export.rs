@@ -1,0 +1,120 @@
+//! Writes the parametric library to disk: one .glb per model (node tree = parts) plus its metadata.
+
+use std::path::Path;
+
+use glam::{Affine3A, Mat4};
+use serde::{Deserialize, Serialize};
+
+use crate::cad::library::ParametricLibrary;
+use crate::cad::model::CadModel;
+use crate::error::IsceneError;
+use crate::io::atomic::write_file_atomically;
+use crate::io::gltf_write::{GltfNode, glb_bytes};
+use crate::kinematics::JointSpec;
+
+/// The metadata file `<id>.json` beside `<id>.glb`.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct ModelMetadata {
+    pub id: String,
+    pub class: String,
+    /// Canonical frame convention, spelled out for tools that read the file alone.
+    pub frame: String,
+    pub size: [f32; 3],
+    pub glb: String,
+    pub parts: Vec<PartMetadata>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+pub struct PartMetadata {
+    pub name: String,
+    pub parent: Option<String>,
+    /// Column-major 4x4 pose of the part's frame in its parent's frame at joint value zero.
+    pub parent_from_part: [f32; 16],
+    pub joint: JointSpec,
+    pub color: [f32; 3],
+    pub vertices: usize,
+    pub triangles: usize,
+}
+
+pub const CANONICAL_FRAME: &str =
+    "metres; +z up; front faces -y; origin at the bottom centre of the closed bounding box";
+
+pub fn metadata(model: &CadModel) -> ModelMetadata {
+    ModelMetadata {
+        id: model.id.clone(),
+        class: model.class.clone(),
+        frame: CANONICAL_FRAME.into(),
+        size: model.size.to_array(),
+        glb: format!("{}.glb", model.id),
+        parts: model
+            .parts
+            .iter()
+            .map(|p| PartMetadata {
+                name: p.name.clone(),
+                parent: p
+                    .parent
+                    .and_then(|i| model.parts.get(i))
+                    .map(|q| q.name.clone()),
+                parent_from_part: Mat4::from(p.parent_from_part).to_cols_array(),
+                joint: p.joint,
+                color: p.color,
+                vertices: p.mesh.positions.len(),
+                triangles: p.mesh.triangles.len(),
+            })
+            .collect(),
+    }
+}
+
+/// The model as a glTF node tree: a node per part under its parent, joints in the nodes' extras.
+pub fn model_glb(model: &CadModel) -> Result<Vec<u8>, String> {
+    let mut nodes: Vec<GltfNode> = model
+        .parts
+        .iter()
+        .map(|p| {
+            let mut node = GltfNode::new(p.name.clone());
+            let (_, rotation, translation) =
+                Affine3A::to_scale_rotation_translation(&p.parent_from_part);
+            node.rotation = rotation;
+            node.translation = translation;
+            node.mesh = Some((p.mesh.clone(), p.color));
+            node.extras = serde_json::to_value(p.joint)
+                .ok()
+                .map(|j| serde_json::json!({ "joint": j }));
+            node
+        })
+        .collect();
+    // Children come after their parents: attach from the back so indices stay valid.
+    for i in (1..nodes.len()).rev() {
+        let parent = model.parts[i].parent.unwrap_or(0);
+        let node = nodes.remove(i);
+        nodes[parent].children.insert(0, node);
+    }
+    let mut root = GltfNode::new(model.id.clone());
+    root.extras = Some(serde_json::json!({ "class": model.class, "size": model.size.to_array() }));
+    root.children = nodes;
+    glb_bytes(&root, "z_up")
+}
+
+/// Writes every model of the library, plus `index.json`, into `dir`.
+pub fn write_library(dir: &Path) -> Result<usize, IsceneError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| IsceneError::io(format!("creating {}", dir.display()), e))?;
+    let mut index = Vec::new();
+    for entry in ParametricLibrary::entries() {
+        let model = entry.model();
+        let glb = model_glb(&model)
+            .map_err(|e| IsceneError::Internal(format!("{}: glTF: {e}", model.id)))?;
+        write_file_atomically(&dir.join(format!("{}.glb", model.id)), &glb)?;
+        let meta = metadata(&model);
+        let json =
+            serde_json::to_vec_pretty(&meta).map_err(|e| IsceneError::Internal(e.to_string()))?;
+        write_file_atomically(&dir.join(format!("{}.json", model.id)), &json)?;
+        index.push(serde_json::json!({ "id": model.id, "class": model.class, "articulated": model.is_articulated() }));
+    }
+    let json = serde_json::to_vec_pretty(
+        &serde_json::json!({ "generator": "iscene cad generate", "models": index }),
+    )
+    .map_err(|e| IsceneError::Internal(e.to_string()))?;
+    write_file_atomically(&dir.join("index.json"), &json)?;
+    Ok(index.len())
+}

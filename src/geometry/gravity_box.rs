@@ -1,0 +1,126 @@
+//! Gravity-aligned oriented boxes: a centre, a yaw about +z and a size.
+
+use glam::{Affine3A, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// A box whose z axis is the world's up axis. `size` is the full extent along the box's own axes;
+/// `yaw` (radians) turns the box's x axis counter-clockwise from the world's x axis.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GravityBox {
+    pub center: Vec3,
+    pub yaw: f32,
+    pub size: Vec3,
+}
+
+impl GravityBox {
+    pub fn world_from_box(&self) -> Affine3A {
+        Affine3A::from_rotation_translation(Quat::from_rotation_z(self.yaw), self.center)
+    }
+
+    /// The eight corners in world space; bit 0 picks +x, bit 1 +y, bit 2 +z.
+    pub fn corners(&self) -> [Vec3; 8] {
+        let world_from_box = self.world_from_box();
+        let h = self.size * 0.5;
+        std::array::from_fn(|i| {
+            let local = Vec3::new(
+                if i & 1 == 0 { -h.x } else { h.x },
+                if i & 2 == 0 { -h.y } else { h.y },
+                if i & 4 == 0 { -h.z } else { h.z },
+            );
+            world_from_box.transform_point3(local)
+        })
+    }
+
+    pub fn bottom_z(&self) -> f32 {
+        self.center.z - 0.5 * self.size.z
+    }
+
+    pub fn top_z(&self) -> f32 {
+        self.center.z + 0.5 * self.size.z
+    }
+
+    pub fn volume(&self) -> f32 {
+        self.size.x * self.size.y * self.size.z
+    }
+
+    /// Whether `point_in_world` is inside the box grown by `margin` on every side.
+    pub fn contains(&self, point_in_world: Vec3, margin: f32) -> bool {
+        let local = self
+            .world_from_box()
+            .inverse()
+            .transform_point3(point_in_world);
+        let h = self.size * 0.5 + Vec3::splat(margin);
+        local.x.abs() <= h.x && local.y.abs() <= h.y && local.z.abs() <= h.z
+    }
+
+    /// The gravity-aligned box with yaw `yaw` that encloses `points_in_world` tightly.
+    pub fn enclosing(points_in_world: &[Vec3], yaw: f32) -> Option<GravityBox> {
+        let box_from_world = Quat::from_rotation_z(-yaw);
+        let first = box_from_world * *points_in_world.first()?;
+        let (lo, hi) = points_in_world
+            .iter()
+            .map(|p| box_from_world * *p)
+            .fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let center_in_box = (lo + hi) * 0.5;
+        Some(GravityBox {
+            center: Quat::from_rotation_z(yaw) * center_in_box,
+            yaw,
+            size: hi - lo,
+        })
+    }
+
+    /// Whether two boxes overlap once each is grown by `margin` (separating axes in the floor plane
+    /// plus the z interval: both boxes share the z axis, so four axes decide).
+    pub fn overlaps(&self, other: &GravityBox, margin: f32) -> bool {
+        if self.bottom_z() - margin > other.top_z() || other.bottom_z() - margin > self.top_z() {
+            return false;
+        }
+        let axes = |b: &GravityBox| {
+            let (s, c) = b.yaw.sin_cos();
+            [glam::Vec2::new(c, s), glam::Vec2::new(-s, c)]
+        };
+        let project = |b: &GravityBox, axis: glam::Vec2| {
+            let [ax, ay] = axes(b);
+            let centre = b.center.truncate().dot(axis);
+            let radius = 0.5 * (b.size.x * ax.dot(axis).abs() + b.size.y * ay.dot(axis).abs());
+            (centre - radius, centre + radius)
+        };
+        axes(self).into_iter().chain(axes(other)).all(|axis| {
+            let (a0, a1) = project(self, axis);
+            let (b0, b1) = project(other, axis);
+            a0 - margin <= b1 && b0 - margin <= a1
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn enclosing_box_contains_its_corners(
+            cx in -5.0f32..5.0, cy in -5.0f32..5.0, cz in 0.0f32..2.0,
+            sx in 0.05f32..3.0, sy in 0.05f32..3.0, sz in 0.05f32..3.0, yaw in -3.1f32..3.1,
+        ) {
+            let b = GravityBox { center: Vec3::new(cx, cy, cz), yaw, size: Vec3::new(sx, sy, sz) };
+            let corners = b.corners();
+            for c in corners {
+                prop_assert!(b.contains(c, 1e-4));
+            }
+            let again = GravityBox::enclosing(&corners, yaw).expect("corners");
+            prop_assert!((again.center - b.center).length() < 1e-3);
+            prop_assert!((again.size - b.size).abs().max_element() < 1e-3);
+            prop_assert!(b.overlaps(&again, 0.0));
+        }
+
+        #[test]
+        fn boxes_apart_do_not_overlap(gap in 0.01f32..2.0, yaw in -3.1f32..3.1) {
+            let a = GravityBox { center: Vec3::ZERO, yaw, size: Vec3::ONE };
+            // The enclosing circle of a unit square has radius sqrt(0.5); beyond it nothing touches.
+            let b = GravityBox { center: Vec3::new(2.0 * 0.7072 + gap, 0.0, 0.0), yaw: -yaw, size: Vec3::ONE };
+            prop_assert!(!a.overlaps(&b, 0.0));
+        }
+    }
+}

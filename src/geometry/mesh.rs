@@ -1,0 +1,236 @@
+//! Indexed triangle meshes and the primitives the parametric CAD library is built from.
+
+use glam::{Affine3A, Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// An indexed triangle mesh. Triangles wind counter-clockwise seen from outside (normals point out).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TriMesh {
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriMesh {
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// Appends `other`, re-indexing its triangles.
+    pub fn append(&mut self, other: &TriMesh) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.triangles.extend(
+            other
+                .triangles
+                .iter()
+                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+        );
+    }
+
+    /// The mesh with every vertex mapped by `to_from_mesh`.
+    pub fn transformed(&self, to_from_mesh: &Affine3A) -> TriMesh {
+        TriMesh {
+            positions: self
+                .positions
+                .iter()
+                .map(|p| to_from_mesh.transform_point3(*p))
+                .collect(),
+            triangles: self.triangles.clone(),
+        }
+    }
+
+    /// Axis-aligned bounds `(min, max)`; `None` for a mesh without vertices.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
+        )
+    }
+
+    /// The three corners of triangle `i`.
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        let t = self.triangles[i];
+        [
+            self.positions[t[0] as usize],
+            self.positions[t[1] as usize],
+            self.positions[t[2] as usize],
+        ]
+    }
+
+    /// Unit normal of triangle `i` (zero for a degenerate triangle).
+    pub fn face_normal(&self, i: usize) -> Vec3 {
+        let [a, b, c] = self.triangle(i);
+        (b - a).cross(c - a).normalize_or_zero()
+    }
+
+    /// Total surface area in square metres.
+    pub fn area(&self) -> f32 {
+        (0..self.triangles.len())
+            .map(|i| {
+                let [a, b, c] = self.triangle(i);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+
+    /// Signed volume by the divergence theorem; positive for a closed outward-wound mesh.
+    pub fn signed_volume(&self) -> f32 {
+        (0..self.triangles.len())
+            .map(|i| {
+                let [a, b, c] = self.triangle(i);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    /// A closed box spanning `min..max`.
+    pub fn cuboid(min: Vec3, max: Vec3) -> TriMesh {
+        let corner = |i: usize| {
+            Vec3::new(
+                if i & 1 == 0 { min.x } else { max.x },
+                if i & 2 == 0 { min.y } else { max.y },
+                if i & 4 == 0 { min.z } else { max.z },
+            )
+        };
+        let positions = (0..8).map(corner).collect();
+        // Quads as corner indices, each counter-clockwise seen from outside.
+        const QUADS: [[u32; 4]; 6] = [
+            [0, 2, 3, 1], // -z
+            [4, 5, 7, 6], // +z
+            [0, 1, 5, 4], // -y
+            [2, 6, 7, 3], // +y
+            [0, 4, 6, 2], // -x
+            [1, 3, 7, 5], // +x
+        ];
+        let triangles = QUADS
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        TriMesh {
+            positions,
+            triangles,
+        }
+    }
+
+    /// A closed box given by its centre and full size.
+    pub fn cuboid_centered(center: Vec3, size: Vec3) -> TriMesh {
+        TriMesh::cuboid(center - size * 0.5, center + size * 0.5)
+    }
+
+    /// A closed surface of revolution about the z axis through `(center.x, center.y)`.
+    ///
+    /// `profile` holds `(radius, z)` pairs from bottom to top, relative to `center`; the ends are
+    /// capped with fans when their radius is not zero. A profile that goes up the outside and
+    /// back down the inside gives a cup or bowl with a wall thickness; one that ends where it
+    /// starts sweeps a ring and gets no caps.
+    pub fn lathe(center: Vec3, profile: &[Vec2], segments: u32) -> TriMesh {
+        let segments = segments.max(3);
+        let rings = profile.len() as u32;
+        let mut positions = Vec::with_capacity((rings * segments + 2) as usize);
+        for p in profile {
+            for s in 0..segments {
+                let angle = std::f32::consts::TAU * s as f32 / segments as f32;
+                positions.push(center + Vec3::new(p.x * angle.cos(), p.x * angle.sin(), p.y));
+            }
+        }
+        let mut triangles = Vec::new();
+        for r in 0..rings.saturating_sub(1) {
+            for s in 0..segments {
+                let a = r * segments + s;
+                let b = r * segments + (s + 1) % segments;
+                let c = a + segments;
+                let d = b + segments;
+                triangles.push([a, b, d]);
+                triangles.push([a, d, c]);
+            }
+        }
+        let mut cap = |ring: u32, z: f32, up: bool| {
+            let centre_index = positions.len() as u32;
+            positions.push(center + Vec3::new(0.0, 0.0, z));
+            for s in 0..segments {
+                let a = ring * segments + s;
+                let b = ring * segments + (s + 1) % segments;
+                triangles.push(if up {
+                    [centre_index, a, b]
+                } else {
+                    [centre_index, b, a]
+                });
+            }
+        };
+        if let (Some(first), Some(last)) = (profile.first(), profile.last()) {
+            if first == last {
+                // A closed loop (a ring): the sweep alone is closed.
+                return TriMesh {
+                    positions,
+                    triangles,
+                };
+            }
+            if first.x > 0.0 {
+                cap(0, first.y, false);
+            }
+            if last.x > 0.0 && rings > 1 {
+                // The top cap faces up when the profile ends going outward-up, as for a solid.
+                cap(rings - 1, last.y, true);
+            }
+        }
+        TriMesh {
+            positions,
+            triangles,
+        }
+    }
+
+    /// A closed vertical cylinder standing on `bottom_center`.
+    pub fn cylinder(bottom_center: Vec3, radius: f32, height: f32, segments: u32) -> TriMesh {
+        TriMesh::lathe(
+            bottom_center,
+            &[Vec2::new(radius, 0.0), Vec2::new(radius, height)],
+            segments,
+        )
+    }
+
+    /// A closed cylinder between two points (legs that splay, a star base's spokes).
+    pub fn rod(from: Vec3, to: Vec3, radius: f32, segments: u32) -> TriMesh {
+        let axis = to - from;
+        let length = axis.length();
+        let upright = TriMesh::cylinder(Vec3::ZERO, radius, length, segments);
+        let rotation = glam::Quat::from_rotation_arc(Vec3::Z, axis / length.max(f32::EPSILON));
+        upright.transformed(&Affine3A::from_rotation_translation(rotation, from))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cuboid_is_closed_and_outward() {
+        let m = TriMesh::cuboid(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0));
+        assert!(
+            (m.signed_volume() - 6.0).abs() < 1e-5,
+            "volume {}",
+            m.signed_volume()
+        );
+        assert!((m.area() - 22.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn cylinder_volume_approaches_pi_r2_h() {
+        let m = TriMesh::cylinder(Vec3::ZERO, 0.5, 2.0, 64);
+        let exact = std::f32::consts::PI * 0.25 * 2.0;
+        assert!(
+            (m.signed_volume() - exact).abs() / exact < 0.01,
+            "volume {}",
+            m.signed_volume()
+        );
+    }
+
+    #[test]
+    fn rod_spans_its_endpoints() {
+        let m = TriMesh::rod(Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 2.0), 0.1, 8);
+        let (lo, hi) = m.bounds().expect("vertices");
+        assert!((lo.z - 0.0).abs() < 1e-5 && (hi.z - 2.0).abs() < 1e-5);
+        assert!(m.signed_volume() > 0.0);
+    }
+}

@@ -1,0 +1,12 @@
+//! Plain geometric types shared by every stage: triangle meshes, gravity-aligned boxes, planes.
+
+pub mod gravity_box;
+pub mod mesh;
+pub mod pinhole;
+pub mod plane;
+pub mod point_triangle;
+
+pub use gravity_box::GravityBox;
+pub use mesh::TriMesh;
+pub use pinhole::Pinhole;
+pub use plane::Plane;

@@ -1,0 +1,121 @@
+//! An RGB-D sequence whatever its layout: camera, depth scale, gravity, and per-frame files.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, Vec3};
+
+use crate::error::InputError;
+use crate::geometry::Pinhole;
+use crate::io::images::{read_color, read_depth, read_labels};
+use crate::io::{native, open3d_log, tum};
+use crate::scene::ground_truth::Labels;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SequenceFormat {
+    /// The native layout, which is also 7-Scenes' and tsdf-fusion's (`frame-NNNNNN.*`).
+    Native,
+    /// TUM RGB-D: `rgb.txt`, `depth.txt`, `groundtruth.txt`, depth scale 5000.
+    Tum,
+    /// Open3D's reconstruction-system layout: `color/`, `depth/`, `trajectory.log`.
+    Open3dLog,
+}
+
+/// One frame's files and its validated pose.
+#[derive(Clone, Debug)]
+pub struct FrameRecord {
+    pub index: usize,
+    pub color: PathBuf,
+    pub depth: PathBuf,
+    pub label: Option<PathBuf>,
+    pub world_from_camera: Affine3A,
+}
+
+#[derive(Clone, Debug)]
+pub struct Sequence {
+    pub root: PathBuf,
+    pub format: SequenceFormat,
+    pub camera: Pinhole,
+    /// Depth image value per metre (1000 for millimetres, 5000 for TUM).
+    pub depth_scale: f32,
+    /// Gravity as a unit vector in the world frame, when the sequence says.
+    pub gravity: Option<Vec3>,
+    pub frames: Vec<FrameRecord>,
+    pub labels: Option<Labels>,
+}
+
+/// One loaded frame.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub index: usize,
+    pub camera: Pinhole,
+    /// Row-major RGB, 8 bits per channel.
+    pub color: Vec<u8>,
+    /// Row-major depth in metres along the optical axis; 0 where there is no measurement.
+    pub depth: Vec<f32>,
+    pub world_from_camera: Affine3A,
+    /// Ground-truth instance ids, when the sequence has them.
+    pub labels: Option<Vec<u16>>,
+}
+
+impl Sequence {
+    /// Opens a sequence folder, recognising its layout from the files in it.
+    pub fn open(root: &Path) -> Result<Sequence, InputError> {
+        if !root.is_dir() {
+            return Err(InputError::missing(root, "sequence folder not found"));
+        }
+        if root.join("rgb.txt").is_file() || root.join("depth.txt").is_file() {
+            return tum::open(root);
+        }
+        if root.join("trajectory.log").is_file() {
+            return open3d_log::open(root);
+        }
+        if root.join("camera-intrinsics.txt").is_file() {
+            return native::open(root);
+        }
+        Err(InputError::invalid(
+            root,
+            "not an RGB-D sequence: expected camera-intrinsics.txt and frame-NNNNNN.* files (native/7-Scenes), rgb.txt/depth.txt/groundtruth.txt (TUM) or trajectory.log with color/ and depth/ (Open3D)",
+        ))
+    }
+
+    /// Keeps frames `start..end` stepping by `step` (indices into the frame list).
+    pub fn select(&mut self, start: usize, end: Option<usize>, step: usize) {
+        let end = end.unwrap_or(self.frames.len()).min(self.frames.len());
+        self.frames = self
+            .frames
+            .iter()
+            .take(end)
+            .skip(start)
+            .step_by(step.max(1))
+            .cloned()
+            .collect();
+    }
+
+    /// Loads and checks frame `i` of the (selected) frame list.
+    pub fn load_frame(&self, i: usize) -> Result<Frame, InputError> {
+        let Some(record) = self.frames.get(i) else {
+            return Err(InputError::invalid(
+                &self.root,
+                format!(
+                    "frame {i} requested but the sequence has {} frames",
+                    self.frames.len()
+                ),
+            ));
+        };
+        let depth = read_depth(&record.depth, &self.camera, self.depth_scale)?;
+        let color = read_color(&record.color, &self.camera)?;
+        let labels = record
+            .label
+            .as_deref()
+            .map(|p| read_labels(p, &self.camera))
+            .transpose()?;
+        Ok(Frame {
+            index: record.index,
+            camera: self.camera,
+            color,
+            depth,
+            world_from_camera: record.world_from_camera,
+            labels,
+        })
+    }
+}

@@ -1,0 +1,216 @@
+//! The `iscene` command line: parse, run, print. Exit codes: 0 success, 2 bad input, 1 internal failure.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use iscene::error::IsceneError;
+use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
+use iscene::render::{RenderOptions, render_sequence};
+use iscene::scene::SceneSpec;
+
+#[derive(Parser)]
+#[command(
+    name = "iscene",
+    version,
+    about = "RGB-D stream of a room to an interactive, simulatable scene"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene specification to an RGB-D sequence folder with ground truth.
+    Render {
+        spec: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Number of frames (default: the specification's, else 300).
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Turn every noise model off.
+        #[arg(long)]
+        no_noise: bool,
+    },
+    /// Reconstruct a scene from a specification (rendered first), a sequence folder or a TUM folder.
+    Reconstruct(ReconstructArgs),
+    /// The CAD database.
+    Cad {
+        #[command(subcommand)]
+        command: CadCommand,
+    },
+}
+
+#[derive(clap::Args)]
+struct ReconstructArgs {
+    /// Scene specification (.json), sequence folder, or TUM folder; default: the built-in kitchen.
+    input: Option<PathBuf>,
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Frames to use as A:B[:STEP] (B may be empty for "to the end").
+    #[arg(long, value_parser = parse_frames)]
+    frames: Option<(usize, Option<usize>, usize)>,
+    /// TSDF voxel size in metres.
+    #[arg(long, default_value_t = 0.02)]
+    voxel: f32,
+    #[arg(long, value_enum, default_value_t = Segmentation::Oracle)]
+    segmentation: Segmentation,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Segmentation {
+    Oracle,
+    Onnx,
+    None,
+}
+
+#[derive(Subcommand)]
+enum CadCommand {
+    /// Write the parametric library (glTF meshes and metadata) into a folder.
+    Generate {
+        #[arg(long, default_value = "assets/cad")]
+        into: PathBuf,
+    },
+}
+
+fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), String> {
+    let parts: Vec<&str> = s.split(':').collect();
+    let number = |p: &str| {
+        p.parse::<usize>()
+            .map_err(|_| format!("{p:?} is not a frame number (expected A:B[:STEP])"))
+    };
+    match parts[..] {
+        [a, b] | [a, b, _] => {
+            let start = if a.is_empty() { 0 } else { number(a)? };
+            let end = if b.is_empty() { None } else { Some(number(b)?) };
+            let step = if parts.len() == 3 {
+                number(parts[2])?
+            } else {
+                1
+            };
+            if step == 0 || end.is_some_and(|e| e <= start) {
+                return Err(format!("{s:?} selects no frames"));
+            }
+            Ok((start, end, step))
+        }
+        _ => Err(format!("{s:?}: expected A:B[:STEP]")),
+    }
+}
+
+#[expect(clippy::print_stdout, reason = "the CLI's job is to print the summary")]
+fn run(cli: Cli) -> Result<(), IsceneError> {
+    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    match cli.command {
+        Some(Command::Render {
+            spec,
+            out,
+            frames,
+            no_noise,
+        }) => {
+            let parsed = SceneSpec::load(&spec)?;
+            let s = render_sequence(
+                &parsed,
+                &spec,
+                &out,
+                &RenderOptions {
+                    frames,
+                    no_noise,
+                    progress: interactive,
+                },
+            )?;
+            println!(
+                "rendered {} frames of {} ({} objects, {} triangles) into {} in {:.2} s ({:.1} frames/s)",
+                s.frames,
+                parsed.name,
+                s.objects,
+                s.triangles,
+                s.dir.display(),
+                s.seconds,
+                s.frames as f64 / s.seconds.max(1e-9)
+            );
+        }
+        Some(Command::Cad {
+            command: CadCommand::Generate { into },
+        }) => {
+            let n = iscene::cad::export::write_library(&into)?;
+            println!(
+                "wrote {n} parametric models (glb + json) and index.json into {}",
+                into.display()
+            );
+        }
+        command => {
+            let args = match command {
+                Some(Command::Reconstruct(args)) => args,
+                _ => ReconstructArgs {
+                    input: None,
+                    out: None,
+                    frames: None,
+                    voxel: 0.02,
+                    segmentation: Segmentation::Oracle,
+                },
+            };
+            let out = args.out.unwrap_or_else(|| {
+                let stem = args
+                    .input
+                    .as_ref()
+                    .and_then(|p| p.file_stem())
+                    .map_or("kitchen".into(), |s| s.to_string_lossy().into_owned());
+                PathBuf::from("out").join(stem)
+            });
+            let segmentation = match args.segmentation {
+                Segmentation::Oracle => SegmentationChoice::Oracle,
+                Segmentation::Onnx => SegmentationChoice::Onnx,
+                Segmentation::None => SegmentationChoice::None,
+            };
+            let options = ReconstructOptions {
+                input: args.input,
+                out: out.clone(),
+                frames: args.frames,
+                voxel: args.voxel,
+                segmentation,
+                progress: interactive,
+            };
+            let r = reconstruct(&options)?;
+            println!(
+                "input      {} ({}{} frames, {}x{})",
+                r.input.display(),
+                if r.rendered { "rendered, " } else { "" },
+                r.ingest.frames,
+                r.ingest.width,
+                r.ingest.height
+            );
+            println!(
+                "depth      {:.1}% valid, {:.2}..{:.2} m; trajectory {:.2} m; gravity {}",
+                100.0 * r.ingest.valid_depth_fraction,
+                r.ingest.min_depth_m,
+                r.ingest.max_depth_m,
+                r.ingest.trajectory_length_m,
+                if r.ingest.has_gravity {
+                    "given"
+                } else {
+                    "to be estimated"
+                }
+            );
+            println!("entities   {}   relations {}", r.entities, r.relations);
+            for (stage, seconds) in &r.timings {
+                println!("  {stage:<20} {seconds:>8.3} s");
+            }
+            println!("not built yet: {}", r.stages_not_built.join(", "));
+            println!("wrote {}: {}", out.display(), r.outputs.join(", "));
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("iscene: error: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}

@@ -1,0 +1,211 @@
+//! Kinect-like depth noise, and the noise settings of a scene specification.
+//!
+//! The depth model follows Nguyen, Izadi and Lovell (3DIMPVT 2012) for axial noise,
+//! sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres, and the structured-light disparity
+//! quantisation of Smisek et al. (2011): depth is measured as a disparity in 1/8 pixel steps over
+//! a 7.5 cm baseline, so the depth step grows with z^2. Pixels drop out beyond the range limits,
+//! at grazing angles, next to depth edges, and at random.
+
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::segmentation::noise::{SegmentationNoise, SegmentationNoiseSetting, SegmentationPreset};
+
+/// Parameters of the depth noise model. Angles in degrees, lengths in metres.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DepthNoise {
+    pub min_range: f32,
+    pub max_range: f32,
+    /// sigma(z) = axial_base + axial_quadratic * (z - axial_offset)^2.
+    pub axial_base: f32,
+    pub axial_quadratic: f32,
+    pub axial_offset: f32,
+    /// Projector-camera baseline of the disparity quantisation; 0 turns quantisation off.
+    pub baseline: f32,
+    /// Disparity step in pixels (1/8 for the Kinect).
+    pub disparity_step: f32,
+    /// Incidence angle (between the view ray and the surface normal) where dropouts begin...
+    pub grazing_start_deg: f32,
+    /// ...and where every pixel drops out; the probability rises linearly in between.
+    pub grazing_end_deg: f32,
+    /// A neighbour this much nearer or farther (relative to depth) makes a pixel a depth edge.
+    pub edge_jump_ratio: f32,
+    pub edge_dropout: f32,
+    pub random_dropout: f32,
+}
+
+impl Default for DepthNoise {
+    fn default() -> Self {
+        Self::KINECT
+    }
+}
+
+impl DepthNoise {
+    pub const KINECT: DepthNoise = DepthNoise {
+        min_range: 0.5,
+        max_range: 4.5,
+        axial_base: 0.0012,
+        axial_quadratic: 0.0019,
+        axial_offset: 0.4,
+        baseline: 0.075,
+        disparity_step: 0.125,
+        grazing_start_deg: 70.0,
+        grazing_end_deg: 85.0,
+        edge_jump_ratio: 0.05,
+        edge_dropout: 0.6,
+        random_dropout: 0.002,
+    };
+
+    /// Standard deviation of the axial noise at depth `z`.
+    pub fn axial_sigma(&self, z: f32) -> f32 {
+        self.axial_base + self.axial_quadratic * (z - self.axial_offset).powi(2)
+    }
+
+    /// Depth quantisation step at depth `z` for focal length `fx` (0 when quantisation is off).
+    pub fn quantisation_step(&self, z: f32, fx: f32) -> f32 {
+        if self.baseline <= 0.0 || self.disparity_step <= 0.0 {
+            return 0.0;
+        }
+        z * z * self.disparity_step / (fx * self.baseline)
+    }
+
+    /// Probability that a pixel seeing a surface at incidence angle `angle_deg` drops out.
+    pub fn grazing_dropout(&self, angle_deg: f32) -> f32 {
+        let span = (self.grazing_end_deg - self.grazing_start_deg).max(1e-3);
+        ((angle_deg - self.grazing_start_deg) / span).clamp(0.0, 1.0)
+    }
+
+    /// Applies the model to a clean depth image in place. `cos_incidence[i]` is |cos| of the angle
+    /// between pixel i's view ray and the surface normal; `fx` is the focal length in pixels.
+    pub fn apply(
+        &self,
+        depth: &mut [f32],
+        cos_incidence: &[f32],
+        width: usize,
+        fx: f32,
+        rng: &mut impl Rng,
+    ) {
+        let height = depth.len() / width.max(1);
+        let clean = depth.to_vec();
+        let is_edge = |i: usize| {
+            let z = clean[i];
+            let (x, y) = (i % width, i / width);
+            let mut neighbours = [None; 4];
+            if x > 0 {
+                neighbours[0] = Some(i - 1);
+            }
+            if x + 1 < width {
+                neighbours[1] = Some(i + 1);
+            }
+            if y > 0 {
+                neighbours[2] = Some(i - width);
+            }
+            if y + 1 < height {
+                neighbours[3] = Some(i + width);
+            }
+            neighbours.into_iter().flatten().any(|j| {
+                let n = clean[j];
+                n == 0.0 || (n - z).abs() > self.edge_jump_ratio * z
+            })
+        };
+        for i in 0..depth.len() {
+            let z = clean[i];
+            // Draw every random number for every pixel, so that one parameter's change does not
+            // reshuffle the others' outcomes.
+            let u_grazing: f32 = rng.random();
+            let u_edge: f32 = rng.random();
+            let u_random: f32 = rng.random();
+            let normal: f32 = StandardNormal.sample(rng);
+            if z == 0.0 || z < self.min_range || z > self.max_range {
+                depth[i] = 0.0;
+                continue;
+            }
+            let angle = cos_incidence[i].clamp(0.0, 1.0).acos().to_degrees();
+            if u_grazing < self.grazing_dropout(angle)
+                || u_random < self.random_dropout
+                || (u_edge < self.edge_dropout && is_edge(i))
+            {
+                depth[i] = 0.0;
+                continue;
+            }
+            let noisy = z + self.axial_sigma(z) * normal;
+            let step = self.quantisation_step(noisy, fx);
+            // Quantise in disparity, which is linear in 1/z; the axial noise before it dithers the
+            // steps, so the error stays close to zero-mean.
+            depth[i] = if step > 0.0 {
+                let disparity_unit = fx * self.baseline / self.disparity_step;
+                let d = (disparity_unit / noisy).round();
+                if d > 0.0 { disparity_unit / d } else { 0.0 }
+            } else {
+                noisy
+            };
+        }
+    }
+}
+
+/// A depth noise setting: a preset name or explicit parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum DepthNoiseSetting {
+    Preset(DepthPreset),
+    Custom(DepthNoise),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthPreset {
+    Kinect,
+    None,
+}
+
+/// The `noise` object of a scene specification.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseSettings {
+    #[serde(default = "NoiseSettings::default_depth")]
+    pub depth: DepthNoiseSetting,
+    #[serde(default = "NoiseSettings::default_segmentation")]
+    pub segmentation: SegmentationNoiseSetting,
+}
+
+impl Default for NoiseSettings {
+    fn default() -> Self {
+        Self {
+            depth: Self::default_depth(),
+            segmentation: Self::default_segmentation(),
+        }
+    }
+}
+
+impl NoiseSettings {
+    fn default_depth() -> DepthNoiseSetting {
+        DepthNoiseSetting::Preset(DepthPreset::Kinect)
+    }
+
+    fn default_segmentation() -> SegmentationNoiseSetting {
+        SegmentationNoiseSetting::Preset(SegmentationPreset::Realistic)
+    }
+
+    /// No noise at all (the `--no-noise` switch).
+    pub fn off() -> Self {
+        Self {
+            depth: DepthNoiseSetting::Preset(DepthPreset::None),
+            segmentation: SegmentationNoiseSetting::Preset(SegmentationPreset::None),
+        }
+    }
+
+    /// The depth model to apply, or `None` for clean depth.
+    pub fn depth_model(&self) -> Option<DepthNoise> {
+        match &self.depth {
+            DepthNoiseSetting::Preset(DepthPreset::Kinect) => Some(DepthNoise::KINECT),
+            DepthNoiseSetting::Preset(DepthPreset::None) => None,
+            DepthNoiseSetting::Custom(params) => Some(*params),
+        }
+    }
+
+    pub fn segmentation_model(&self) -> Option<SegmentationNoise> {
+        self.segmentation.model()
+    }
+}

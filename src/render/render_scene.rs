@@ -1,0 +1,76 @@
+//! The world flattened into triangles the rasteriser can walk: world-space corners, instance id,
+//! colour and normal per triangle.
+
+use glam::Vec3;
+
+use crate::scene::SceneWorld;
+
+/// How a triangle's colour is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Surface {
+    Plain,
+    /// A tiled floor: the colour alternates on a 0.5 m grid.
+    FloorTiles,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderScene {
+    pub corners: Vec<[Vec3; 3]>,
+    pub normals: Vec<Vec3>,
+    pub instances: Vec<u16>,
+    pub colors: Vec<[f32; 3]>,
+    pub surfaces: Vec<Surface>,
+}
+
+impl RenderScene {
+    pub fn from_world(world: &SceneWorld) -> RenderScene {
+        let mut scene = RenderScene::default();
+        for l in &world.layout {
+            let surface = if l.class == "floor" {
+                Surface::FloorTiles
+            } else {
+                Surface::Plain
+            };
+            scene.push_mesh(&l.mesh, l.instance, l.color, surface);
+        }
+        for o in &world.objects {
+            for (part, world_from_part) in o.model.parts.iter().zip(o.world_from_parts()) {
+                scene.push_mesh(
+                    &part.mesh.transformed(&world_from_part),
+                    o.instance,
+                    part.color,
+                    Surface::Plain,
+                );
+            }
+        }
+        scene
+    }
+
+    fn push_mesh(
+        &mut self,
+        mesh: &crate::geometry::TriMesh,
+        instance: u16,
+        color: [f32; 3],
+        surface: Surface,
+    ) {
+        for i in 0..mesh.triangles.len() {
+            let normal = mesh.face_normal(i);
+            if normal == Vec3::ZERO {
+                continue;
+            }
+            self.corners.push(mesh.triangle(i));
+            self.normals.push(normal);
+            self.instances.push(instance);
+            self.colors.push(color);
+            self.surfaces.push(surface);
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.corners.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.corners.is_empty()
+    }
+}

@@ -1,0 +1,172 @@
+//! Ground truth of a synthetic world: the contact graph (support and proximal edges), instance
+//! labels, and per-entity meshes, all as a reconstruction would ideally produce them.
+
+use std::collections::BTreeMap;
+
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::classes::EntityKind;
+use crate::geometry::plane::dominant_planes;
+use crate::geometry::{GravityBox, TriMesh};
+use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
+use crate::scene::world::{SceneWorld, Support};
+
+/// Boxes closer than this (metres) count as touching for proximal edges.
+pub const PROXIMAL_MARGIN: f32 = 0.02;
+/// Smallest surface, in square metres, that is listed as a plane of an object.
+const MIN_PLANE_AREA: f32 = 0.01;
+const MAX_PLANES: usize = 8;
+/// Layout boxes are slabs this thick behind their surface.
+const LAYOUT_THICKNESS: f32 = 0.1;
+
+/// `labels.json` of the sequence format.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Labels {
+    pub instances: BTreeMap<String, LabelEntry>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LabelEntry {
+    pub class: String,
+    pub entity: String,
+}
+
+impl Labels {
+    /// Instance id -> entry, with numeric keys.
+    pub fn by_instance(&self) -> BTreeMap<u16, &LabelEntry> {
+        self.instances
+            .iter()
+            .filter_map(|(k, v)| k.parse().ok().map(|id| (id, v)))
+            .collect()
+    }
+}
+
+impl SceneWorld {
+    pub fn labels(&self) -> Labels {
+        Labels {
+            instances: self
+                .instances()
+                .into_iter()
+                .map(|(id, class, entity)| (id.to_string(), LabelEntry { class, entity }))
+                .collect(),
+        }
+    }
+
+    /// Every entity's mesh in the world frame with its colour, layout first.
+    pub fn entity_meshes(&self) -> Vec<(String, TriMesh, [f32; 3])> {
+        let layout = self
+            .layout
+            .iter()
+            .map(|l| (l.id.clone(), l.mesh.clone(), l.color));
+        let objects = self
+            .objects
+            .iter()
+            .map(|o| (o.id.clone(), o.world_mesh(), o.model.parts[0].color));
+        layout.chain(objects).collect()
+    }
+
+    /// The layout entity's box: a slab of the room-facing rectangle, `LAYOUT_THICKNESS` deep behind it.
+    fn layout_box(&self, index: usize) -> GravityBox {
+        let l = &self.layout[index];
+        let behind = -l.plane.normal * LAYOUT_THICKNESS;
+        let points: Vec<Vec3> = l
+            .mesh
+            .positions
+            .iter()
+            .flat_map(|p| [*p, *p + behind])
+            .collect();
+        GravityBox::enclosing(&points, 0.0).unwrap_or(GravityBox {
+            center: Vec3::ZERO,
+            yaw: 0.0,
+            size: Vec3::ZERO,
+        })
+    }
+
+    /// The ground-truth contact graph in the schema of `contact_graph.json`.
+    pub fn contact_graph(&self) -> ContactGraph {
+        let mut nodes = Vec::new();
+        let mut boxes = Vec::new();
+        for (i, l) in self.layout.iter().enumerate() {
+            let b = self.layout_box(i);
+            boxes.push((l.id.clone(), b, l.class));
+            nodes.push(GraphNode {
+                id: l.id.clone(),
+                class: l.class.into(),
+                kind: EntityKind::Layout,
+                bbox: b.into(),
+                planes: vec![l.plane.to_array()],
+                cad: None,
+                joints: BTreeMap::new(),
+            });
+        }
+        for o in &self.objects {
+            let b = o.gravity_box();
+            boxes.push((o.id.clone(), b, "object"));
+            let planes = dominant_planes(&o.world_mesh(), MIN_PLANE_AREA, MAX_PLANES)
+                .into_iter()
+                .map(|(p, _)| p.to_array())
+                .collect();
+            nodes.push(GraphNode {
+                id: o.id.clone(),
+                class: o.class.clone(),
+                kind: o.kind,
+                bbox: b.into(),
+                planes,
+                cad: Some(CadPlacement {
+                    model: o.model.id.clone(),
+                    world_from_model: Mat4::from(o.world_from_model).to_cols_array(),
+                    scale: 1.0,
+                    alignment_error: 0.0,
+                }),
+                joints: o.joint_values.iter().cloned().collect(),
+            });
+        }
+        let mut edges = Vec::new();
+        for o in &self.objects {
+            let parent = match &o.support {
+                Support::Floor => "floor".to_string(),
+                Support::OnObject(p) | Support::InObject(p) => self.objects[*p].id.clone(),
+                Support::Wall(k) => format!("wall_{k}"),
+            };
+            edges.push(GraphEdge::Support {
+                parent,
+                child: o.id.clone(),
+            });
+        }
+        let supports: Vec<(String, String)> = edges
+            .iter()
+            .filter_map(|e| match e {
+                GraphEdge::Support { parent, child } => Some((parent.clone(), child.clone())),
+                GraphEdge::Proximal { .. } => None,
+            })
+            .collect();
+        let related = |a: &str, b: &str| {
+            supports
+                .iter()
+                .any(|(p, c)| (p == a && c == b) || (p == b && c == a))
+        };
+        for (i, (a, box_a, kind_a)) in boxes.iter().enumerate() {
+            for (b, box_b, kind_b) in &boxes[i + 1..] {
+                // Floor and ceiling only ever support; walls are proximal to what stands against them.
+                let skip = |k: &str| k == "floor" || k == "ceiling";
+                if skip(kind_a)
+                    || skip(kind_b)
+                    || (*kind_a == "wall" && *kind_b == "wall")
+                    || related(a, b)
+                {
+                    continue;
+                }
+                if box_a.overlaps(box_b, PROXIMAL_MARGIN) {
+                    edges.push(GraphEdge::Proximal {
+                        a: a.clone(),
+                        b: b.clone(),
+                    });
+                }
+            }
+        }
+        ContactGraph { nodes, edges }
+    }
+}

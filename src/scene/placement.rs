@@ -1,0 +1,253 @@
+//! Builds a `SceneWorld` from a validated specification: picks models, sizes them, and stands each
+//! object on the floor, on its parent's top, inside its container, or on its wall.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{Affine3A, Quat, Vec3};
+
+use crate::cad::ParametricLibrary;
+use crate::classes::ClassTable;
+use crate::error::InputError;
+use crate::scene::spec::{Placement, SceneSpec};
+use crate::scene::world::{
+    FIRST_OBJECT_INSTANCE, PlacedObject, SceneWorld, Support, wall_frame, wall_length, yaw_facing,
+};
+
+/// How far into a container's height the search for its inner floor starts (below the top board).
+const INSIDE_PROBE_HEIGHT: f32 = 0.6;
+
+impl SceneWorld {
+    /// The world of `spec`. `source` names the specification file in errors.
+    pub fn from_spec(spec: &SceneSpec, source: &Path) -> Result<SceneWorld, InputError> {
+        let room = Vec3::from_array(spec.room.size);
+        let err = |i: usize, problem: String| {
+            InputError::invalid(source, format!("objects[{i}].{problem}"))
+        };
+        let order = support_order(spec);
+        let mut placed: Vec<Option<PlacedObject>> = vec![None; spec.objects.len()];
+        let index: HashMap<&str, usize> = spec
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| (o.id.as_str(), i))
+            .collect();
+        for i in order {
+            let o = &spec.objects[i];
+            let entry = match &o.model {
+                Some(m) => ParametricLibrary::get(m),
+                None => {
+                    let variants: Vec<_> = ParametricLibrary::variants(&o.class).collect();
+                    variants
+                        .get(
+                            (stable_hash(spec.seed, &o.id) % variants.len().max(1) as u64) as usize,
+                        )
+                        .copied()
+                }
+            }
+            .ok_or_else(|| err(i, format!("class: no CAD model for class {:?}", o.class)))?;
+            let model = match o.size {
+                Some(s) => entry.model_sized(Vec3::from_array(s)),
+                None => entry.model(),
+            };
+            for name in o.joints.keys() {
+                if !model.movable_parts().any(|p| &p.name == name) {
+                    let movable: Vec<_> = model.movable_parts().map(|p| p.name.as_str()).collect();
+                    return Err(err(
+                        i,
+                        format!(
+                            "joints.{name}: model {} has no such moving part (it has: {})",
+                            model.id,
+                            movable.join(", ")
+                        ),
+                    ));
+                }
+            }
+            let joint_values: Vec<(String, f32)> =
+                o.joints.iter().map(|(k, v)| (k.clone(), *v)).collect();
+            let placement = spec.placement(i).map_err(|p| err(i, p))?;
+            let parent_of = |id: &str| {
+                index
+                    .get(id)
+                    .and_then(|&p| placed[p].as_ref())
+                    .map(|p| (index[id], p))
+            };
+            let (support, yaw, position) = match placement {
+                Placement::Floor { x, y } => (
+                    Support::Floor,
+                    o.yaw_deg.unwrap_or(0.0).to_radians(),
+                    Vec3::new(x, y, 0.0),
+                ),
+                Placement::OnObject { parent, offset } => {
+                    let Some((p, parent)) = parent_of(&parent) else {
+                        return Err(err(i, format!("on: {parent:?} is not placed")));
+                    };
+                    let b = parent.gravity_box();
+                    let top = b.world_from_box().transform_point3(Vec3::new(
+                        offset[0],
+                        offset[1],
+                        0.5 * b.size.z,
+                    ));
+                    if offset[0].abs() > 0.5 * b.size.x || offset[1].abs() > 0.5 * b.size.y {
+                        return Err(err(
+                            i,
+                            format!(
+                                "offset: {offset:?} is off the top of {} ({:.2} x {:.2} m)",
+                                parent.id, b.size.x, b.size.y
+                            ),
+                        ));
+                    }
+                    (
+                        Support::OnObject(p),
+                        o.yaw_deg.map_or(parent.yaw, f32::to_radians),
+                        top,
+                    )
+                }
+                Placement::InObject { parent, offset } => {
+                    let Some((p, parent)) = parent_of(&parent) else {
+                        return Err(err(i, format!("in: {parent:?} is not placed")));
+                    };
+                    let b = parent.gravity_box();
+                    let start = parent.world_from_model.transform_point3(Vec3::new(
+                        offset[0],
+                        offset[1],
+                        INSIDE_PROBE_HEIGHT * b.size.z,
+                    ));
+                    let Some(z) = surface_below(&parent.world_mesh(), start) else {
+                        return Err(err(
+                            i,
+                            format!("in: {} has no inner surface under {offset:?}", parent.id),
+                        ));
+                    };
+                    (
+                        Support::InObject(p),
+                        o.yaw_deg.map_or(parent.yaw, f32::to_radians),
+                        Vec3::new(start.x, start.y, z),
+                    )
+                }
+                Placement::OnWall {
+                    wall,
+                    along,
+                    height,
+                } => {
+                    let (start, dir, inward) = wall_frame(room, wall);
+                    let length = wall_length(room, wall);
+                    if along - 0.5 * model.size.x < 0.0 || along + 0.5 * model.size.x > length {
+                        return Err(err(
+                            i,
+                            format!(
+                                "offset: {along} m along wall_{wall} puts the object past the wall's ends (0..{length} m)"
+                            ),
+                        ));
+                    }
+                    let p = start + dir * along + inward * (0.5 * model.size.y) + Vec3::Z * height;
+                    (Support::Wall(wall), yaw_facing(inward), p)
+                }
+            };
+            let world_from_model =
+                Affine3A::from_rotation_translation(Quat::from_rotation_z(yaw), position);
+            let kind = ClassTable::builtin()
+                .get(&o.class)
+                .map(|c| c.kind)
+                .ok_or_else(|| err(i, format!("class: unknown {:?}", o.class)))?;
+            let object = PlacedObject {
+                id: o.id.clone(),
+                class: o.class.clone(),
+                kind,
+                instance: FIRST_OBJECT_INSTANCE + i as u16,
+                model,
+                world_from_model,
+                yaw,
+                joint_values,
+                support,
+            };
+            let b = object.gravity_box();
+            let inside = b.corners().iter().all(|c| {
+                c.x >= -0.01
+                    && c.y >= -0.01
+                    && c.x <= room.x + 0.01
+                    && c.y <= room.y + 0.01
+                    && c.z <= room.z + 0.01
+            });
+            if !inside {
+                return Err(err(
+                    i,
+                    format!(
+                        "position: {} ({} at {:.2?}, {:.2?} m) does not fit inside the room",
+                        o.id, object.model.id, b.center, b.size
+                    ),
+                ));
+            }
+            placed[i] = Some(object);
+        }
+        let objects = placed.into_iter().flatten().collect::<Vec<_>>();
+        Ok(SceneWorld {
+            name: spec.name.clone(),
+            seed: spec.seed,
+            room_size: room,
+            layout: SceneWorld::room_layout(room),
+            objects,
+        })
+    }
+}
+
+/// Object indices with every parent before its children (the spec was checked to be a forest).
+fn support_order(spec: &SceneSpec) -> Vec<usize> {
+    let depth = |mut i: usize| {
+        let mut d = 0;
+        while let Some(parent) = spec.objects[i]
+            .on
+            .as_deref()
+            .or(spec.objects[i].inside.as_deref())
+        {
+            match spec.objects.iter().position(|o| o.id == parent) {
+                Some(p) if d < spec.objects.len() => {
+                    i = p;
+                    d += 1;
+                }
+                _ => break,
+            }
+        }
+        d
+    };
+    let mut order: Vec<usize> = (0..spec.objects.len()).collect();
+    order.sort_by_key(|&i| (depth(i), i));
+    order
+}
+
+/// The height of the first upward-facing surface of `mesh` straight below `start`.
+fn surface_below(mesh: &crate::geometry::TriMesh, start: Vec3) -> Option<f32> {
+    let mut best: Option<f32> = None;
+    for i in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.triangle(i);
+        if mesh.face_normal(i).z < 0.5 {
+            continue;
+        }
+        // Barycentric test of the start point's footprint in the triangle's projection.
+        let (p, a2, b2, c2) = (start.truncate(), a.truncate(), b.truncate(), c.truncate());
+        let det = (b2 - a2).perp_dot(c2 - a2);
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let u = (p - a2).perp_dot(c2 - a2) / det;
+        let v = (b2 - a2).perp_dot(p - a2) / det;
+        if u < 0.0 || v < 0.0 || u + v > 1.0 {
+            continue;
+        }
+        let z = a.z + u * (b.z - a.z) + v * (c.z - a.z);
+        if z <= start.z && best.is_none_or(|b| z > b) {
+            best = Some(z);
+        }
+    }
+    best
+}
+
+/// A hash that is the same on every machine and run (FNV-1a over the seed and the id).
+pub fn stable_hash(seed: u64, id: &str) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for byte in seed.to_le_bytes().iter().chain(id.as_bytes()) {
+        h ^= u64::from(*byte);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}

@@ -1,0 +1,379 @@
+//! The scene specification of DESIGN.md (`scenes/*.json`), parsed strictly: unknown keys, unknown
+//! classes, dangling references and impossible sizes are errors that name the key.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::cad::ParametricLibrary;
+use crate::classes::{ClassTable, EntityKind};
+use crate::error::InputError;
+use crate::render::noise::NoiseSettings;
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    pub name: String,
+    #[serde(default)]
+    pub seed: u64,
+    pub room: RoomSpec,
+    pub objects: Vec<ObjectSpec>,
+    #[serde(default)]
+    pub camera: CameraSpec,
+    #[serde(default)]
+    pub noise: NoiseSettings,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoomSpec {
+    /// x, y extent and height in metres; the floor spans `[0, x] x [0, y]` at z = 0.
+    pub size: [f32; 3],
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    pub id: String,
+    pub class: String,
+    /// x, y on the floor (room frame).
+    pub position: Option<[f32; 2]>,
+    /// Id of the supporting object, or `wall_0..3` for an object hung on a wall.
+    pub on: Option<String>,
+    /// Id of a container the object stands in, on its lowest inner surface under the middle.
+    #[serde(rename = "in")]
+    pub inside: Option<String>,
+    /// On an object: x, y in the parent's box frame. On a wall: distance along the wall from its
+    /// first corner and the height of the object's bottom.
+    pub offset: Option<[f32; 2]>,
+    /// World yaw in degrees; objects on objects default to their parent's yaw, objects on walls
+    /// always face into the room.
+    pub yaw_deg: Option<f32>,
+    pub size: Option<[f32; 3]>,
+    /// A model id of the parametric library (default: a variant picked by the scene's seed).
+    pub model: Option<String>,
+    /// Joint values by part name (radians or metres), e.g. `{"door": 0.4}`; default closed.
+    #[serde(default)]
+    pub joints: BTreeMap<String, f32>,
+}
+
+/// The camera path. The default is a loop through the room that sees every object.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    pub frames: Option<usize>,
+    /// Camera height above the floor, metres (default 1.45).
+    pub height: Option<f32>,
+}
+
+/// Where an object rests, after validation.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Placement {
+    Floor {
+        x: f32,
+        y: f32,
+    },
+    OnObject {
+        parent: String,
+        offset: [f32; 2],
+    },
+    InObject {
+        parent: String,
+        offset: [f32; 2],
+    },
+    OnWall {
+        wall: usize,
+        along: f32,
+        height: f32,
+    },
+}
+
+impl SceneSpec {
+    /// Reads and validates a specification file.
+    pub fn load(path: &Path) -> Result<SceneSpec, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, &e))?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and validates `text`; `path` is only used to name the source in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<SceneSpec, InputError> {
+        let spec: SceneSpec = serde_json::from_str(text)
+            .map_err(|e| InputError::invalid(path, format!("invalid scene specification: {e}")))?;
+        spec.validate()
+            .map_err(|problem| InputError::invalid(path, problem))?;
+        Ok(spec)
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let [rx, ry, rz] = self.room.size;
+        if !(rx.is_finite() && ry.is_finite() && rz.is_finite())
+            || rx < 1.0
+            || ry < 1.0
+            || rz < 1.8
+            || rx > 30.0
+            || ry > 30.0
+            || rz > 6.0
+        {
+            return Err(format!(
+                "room.size: {:?} is not a room (x, y in 1..30 m, height in 1.8..6 m)",
+                self.room.size
+            ));
+        }
+        if self.objects.is_empty() {
+            return Err("objects: a scene needs at least one object".into());
+        }
+        if let Some(0) = self.camera.frames {
+            return Err("camera.frames: must be at least 1".into());
+        }
+        if let Some(h) = self.camera.height
+            && !(0.3..rz).contains(&h)
+        {
+            return Err(format!(
+                "camera.height: {h} is outside the room (0.3..{rz} m)"
+            ));
+        }
+        let classes = ClassTable::builtin();
+        let mut index: HashMap<&str, usize> = HashMap::new();
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = format!("objects[{i}]");
+            if o.id.is_empty()
+                || !o
+                    .id
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+            {
+                return Err(format!(
+                    "{key}.id: {:?} must be non-empty ASCII letters, digits, '_' or '-'",
+                    o.id
+                ));
+            }
+            if is_layout_id(&o.id) {
+                return Err(format!(
+                    "{key}.id: {:?} is reserved for the room's layout",
+                    o.id
+                ));
+            }
+            if index.insert(o.id.as_str(), i).is_some() {
+                return Err(format!("{key}.id: duplicate id {:?}", o.id));
+            }
+            let Some(info) = classes.get(&o.class) else {
+                let known: Vec<_> = classes
+                    .iter()
+                    .filter(|(_, c)| c.kind != EntityKind::Layout)
+                    .map(|(n, _)| n)
+                    .collect();
+                return Err(format!(
+                    "{key}.class: unknown class {:?} (known: {})",
+                    o.class,
+                    known.join(", ")
+                ));
+            };
+            if info.kind == EntityKind::Layout {
+                return Err(format!(
+                    "{key}.class: {:?} is layout; the room makes its own floor, walls and ceiling",
+                    o.class
+                ));
+            }
+            if let Some(size) = o.size {
+                let ok = size.iter().enumerate().all(|(k, s)| {
+                    s.is_finite() && *s >= info.size_min[k] && *s <= info.size_max[k]
+                });
+                if !ok {
+                    return Err(format!(
+                        "{key}.size: {size:?} outside the {} range {} .. {}",
+                        o.class, info.size_min, info.size_max
+                    ));
+                }
+            }
+            if let Some(model) = &o.model {
+                match ParametricLibrary::get(model) {
+                    None => return Err(format!("{key}.model: unknown model {model:?}")),
+                    Some(e) if e.class != o.class => {
+                        return Err(format!(
+                            "{key}.model: {model:?} is a {}, not a {}",
+                            e.class, o.class
+                        ));
+                    }
+                    Some(_) => {}
+                }
+            }
+            if let Some(y) = o.yaw_deg
+                && !y.is_finite()
+            {
+                return Err(format!("{key}.yaw_deg: not a finite number"));
+            }
+            for (name, value) in &o.joints {
+                if !value.is_finite() {
+                    return Err(format!("{key}.joints.{name}: not a finite number"));
+                }
+            }
+            self.placement(i).map_err(|p| format!("{key}.{p}"))?;
+        }
+        // References must resolve and the support relation must be a tree.
+        for (i, o) in self.objects.iter().enumerate() {
+            let mut seen = vec![i];
+            let mut current = o;
+            while let Some(parent) = current.on.as_deref().or(current.inside.as_deref()) {
+                if is_layout_id(parent) {
+                    break;
+                }
+                let Some(&p) = index.get(parent) else {
+                    let key = if current.on.is_some() { "on" } else { "in" };
+                    return Err(format!(
+                        "objects[{}].{key}: no object with id {parent:?}",
+                        seen[seen.len() - 1]
+                    ));
+                };
+                if seen.contains(&p) {
+                    return Err(format!("objects[{i}].on: support cycle through {parent:?}"));
+                }
+                seen.push(p);
+                current = &self.objects[p];
+            }
+        }
+        Ok(())
+    }
+
+    /// The validated placement of object `i`; errors name the offending key.
+    pub fn placement(&self, i: usize) -> Result<Placement, String> {
+        let o = &self.objects[i];
+        let offset = o.offset.unwrap_or([0.0, 0.0]);
+        if !offset.iter().all(|v| v.is_finite()) {
+            return Err("offset: not finite".into());
+        }
+        match (&o.position, &o.on, &o.inside) {
+            (Some(p), None, None) => {
+                let [rx, ry, _] = self.room.size;
+                if !(p[0].is_finite() && p[1].is_finite())
+                    || p[0] <= 0.0
+                    || p[1] <= 0.0
+                    || p[0] >= rx
+                    || p[1] >= ry
+                {
+                    return Err(format!(
+                        "position: {p:?} is outside the floor [0, {rx}] x [0, {ry}]"
+                    ));
+                }
+                if o.offset.is_some() {
+                    return Err("offset: only for objects given with \"on\" or \"in\"".into());
+                }
+                Ok(Placement::Floor { x: p[0], y: p[1] })
+            }
+            (None, Some(parent), None) => match wall_index(parent) {
+                Some(wall) if wall < 4 => {
+                    let Some([along, height]) = o.offset else {
+                        return Err("offset: an object on a wall needs [distance along the wall, height of its bottom]".into());
+                    };
+                    Ok(Placement::OnWall {
+                        wall,
+                        along,
+                        height,
+                    })
+                }
+                Some(_) => Err(format!("on: {parent:?}: the room has walls wall_0..wall_3")),
+                None if is_layout_id(parent) => Err(format!(
+                    "on: {parent:?}: give floor objects a \"position\" instead"
+                )),
+                None => Ok(Placement::OnObject {
+                    parent: parent.clone(),
+                    offset,
+                }),
+            },
+            (None, None, Some(parent)) if !is_layout_id(parent) => Ok(Placement::InObject {
+                parent: parent.clone(),
+                offset,
+            }),
+            (None, None, Some(parent)) => Err(format!("in: {parent:?} is not an object")),
+            (None, None, None) => {
+                Err("position: give either \"position\", \"on\" or \"in\"".into())
+            }
+            _ => Err("position: give only one of \"position\", \"on\" and \"in\"".into()),
+        }
+    }
+}
+
+pub fn is_layout_id(id: &str) -> bool {
+    id == "floor" || id == "ceiling" || wall_index(id).is_some()
+}
+
+/// `wall_3` -> 3.
+pub fn wall_index(id: &str) -> Option<usize> {
+    id.strip_prefix("wall_").and_then(|n| n.parse().ok())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(json: &str) -> Result<SceneSpec, String> {
+        SceneSpec::parse(json, Path::new("test.json")).map_err(|e| e.to_string())
+    }
+
+    const MINIMAL: &str = r#"{"name": "t", "room": {"size": [4, 3, 2.5]},
+        "objects": [{"id": "table_1", "class": "table", "position": [2, 1.5]},
+                    {"id": "cup_1", "class": "cup", "on": "table_1", "offset": [0.1, 0]}]}"#;
+
+    #[test]
+    fn minimal_spec_parses() {
+        let spec = parse(MINIMAL).expect("valid");
+        assert_eq!(
+            spec.placement(1),
+            Ok(Placement::OnObject {
+                parent: "table_1".into(),
+                offset: [0.1, 0.0]
+            })
+        );
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let cases = [
+            (
+                MINIMAL
+                    .replace("\"seed\"", "x")
+                    .replace("\"name\": \"t\"", "\"name\": \"t\", \"colour\": 1"),
+                "colour",
+            ),
+            (
+                MINIMAL.replace("\"class\": \"cup\"", "\"class\": \"teapot\""),
+                "objects[1].class",
+            ),
+            (
+                MINIMAL.replace("\"on\": \"table_1\"", "\"on\": \"table_9\""),
+                "objects[1].on",
+            ),
+            (
+                MINIMAL.replace("[2, 1.5]", "[7, 1.5]"),
+                "objects[0].position",
+            ),
+            (
+                MINIMAL.replace("\"id\": \"cup_1\"", "\"id\": \"table_1\""),
+                "duplicate id",
+            ),
+            (
+                MINIMAL.replace("\"offset\": [0.1, 0]", "\"size\": [3, 3, 3]"),
+                "objects[1].size",
+            ),
+            (
+                MINIMAL.replace("\"offset\": [0.1, 0]", "\"model\": \"chair_01\""),
+                "objects[1].model",
+            ),
+            (MINIMAL.replace("[4, 3, 2.5]", "[4, 3]"), "room"),
+        ];
+        for (json, key) in cases {
+            let err = parse(&json).expect_err(key);
+            assert!(
+                err.contains(key) && err.contains("test.json"),
+                "error {err:?} should name {key}"
+            );
+        }
+    }
+
+    #[test]
+    fn support_cycles_are_rejected() {
+        let json = r#"{"name": "t", "room": {"size": [4, 3, 2.5]},
+            "objects": [{"id": "a", "class": "box", "on": "b"}, {"id": "b", "class": "box", "on": "a"}]}"#;
+        assert!(parse(json).expect_err("cycle").contains("cycle"));
+    }
+}

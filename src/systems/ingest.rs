@@ -1,0 +1,130 @@
+//! Ingest stage: load every selected frame once, in parallel, so that bad input fails before any
+//! work is done, and record what the sequence holds.
+
+use bevy::prelude::*;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::InputError;
+use crate::io::Sequence;
+use glam::Vec3;
+
+/// The input sequence of this reconstruction.
+#[derive(Resource)]
+pub struct InputSequence(pub Sequence);
+
+/// What the ingest stage found.
+#[derive(Resource, Clone, Debug, Default, Serialize)]
+pub struct IngestReport {
+    pub frames: usize,
+    pub width: u32,
+    pub height: u32,
+    /// Fraction of pixels with a depth measurement, over all frames.
+    pub valid_depth_fraction: f64,
+    pub min_depth_m: f32,
+    pub max_depth_m: f32,
+    /// Path length of the camera trajectory, metres.
+    pub trajectory_length_m: f32,
+    pub has_gravity: bool,
+    pub has_ground_truth_labels: bool,
+}
+
+/// The first bad-input error of a stage, for the caller to report (exit code 2).
+#[derive(Resource, Default)]
+pub struct StageError(pub Option<InputError>);
+
+/// Reads and checks all frames; pure function behind the system.
+pub fn ingest(sequence: &Sequence) -> Result<IngestReport, InputError> {
+    let stats = (0..sequence.frames.len())
+        .into_par_iter()
+        .map(|i| {
+            let frame = sequence.load_frame(i)?;
+            let valid: Vec<f32> = frame.depth.iter().copied().filter(|&d| d > 0.0).collect();
+            let lo = valid.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = valid.iter().copied().fold(0.0f32, f32::max);
+            Ok((valid.len(), frame.depth.len(), lo, hi))
+        })
+        .collect::<Result<Vec<_>, InputError>>()?;
+    let (valid, total) = stats
+        .iter()
+        .fold((0usize, 0usize), |(v, t), s| (v + s.0, t + s.1));
+    let trajectory_length_m = sequence
+        .frames
+        .windows(2)
+        .map(|w| {
+            Vec3::from(w[1].world_from_camera.translation)
+                .distance(w[0].world_from_camera.translation.into())
+        })
+        .sum();
+    Ok(IngestReport {
+        frames: sequence.frames.len(),
+        width: sequence.camera.width,
+        height: sequence.camera.height,
+        valid_depth_fraction: if total > 0 {
+            valid as f64 / total as f64
+        } else {
+            0.0
+        },
+        min_depth_m: stats.iter().map(|s| s.2).fold(f32::INFINITY, f32::min),
+        max_depth_m: stats.iter().map(|s| s.3).fold(0.0, f32::max),
+        trajectory_length_m,
+        has_gravity: sequence.gravity.is_some(),
+        has_ground_truth_labels: sequence.labels.is_some(),
+    })
+}
+
+pub fn ingest_system(
+    mut commands: Commands,
+    sequence: Res<InputSequence>,
+    mut error: ResMut<StageError>,
+) {
+    match ingest(&sequence.0) {
+        Ok(report) => commands.insert_resource(report),
+        Err(e) => error.0 = Some(e),
+    }
+}
+
+/// Adds the ingest system to its stage.
+pub struct IngestPlugin;
+
+impl Plugin for IngestPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<StageError>()
+            .init_resource::<StageTimings>()
+            .add_systems(
+                crate::systems::Reconstruct,
+                timed(crate::systems::ReconstructionStage::Ingest, ingest_system)
+                    .in_set(crate::systems::ReconstructionStage::Ingest),
+            );
+    }
+}
+
+/// Wall-clock seconds per stage, for report.json.
+#[derive(Resource, Clone, Debug, Default, Serialize)]
+pub struct StageTimings(pub Vec<(String, f64)>);
+
+/// Wraps a stage's system so that its run time lands in `StageTimings`.
+pub fn timed<M>(
+    stage: crate::systems::ReconstructionStage,
+    system: impl IntoSystem<(), (), M>,
+) -> impl IntoScheduleConfigs<bevy::ecs::system::ScheduleSystem, ()> {
+    (
+        (move |world: &mut World| {
+            world.insert_resource(StageClock(std::time::Instant::now()));
+        }),
+        system,
+        (move |world: &mut World| {
+            let seconds = world
+                .get_resource::<StageClock>()
+                .map_or(0.0, |c| c.0.elapsed().as_secs_f64());
+            world
+                .resource_mut::<StageTimings>()
+                .0
+                .push((stage.name().to_string(), seconds));
+        }),
+    )
+        .chain()
+}
+
+#[derive(Resource)]
+struct StageClock(std::time::Instant);

@@ -1,0 +1,9 @@
+//! Pipeline stages as ECS systems: thin wrappers that read components, call a bevy-free
+//! algorithm, and write components. `stages` fixes their order.
+
+pub mod ingest;
+pub mod scene_graph;
+pub mod stages;
+
+pub use ingest::IngestPlugin;
+pub use stages::{Reconstruct, ReconstructionStage, StagesPlugin};

@@ -1,0 +1,181 @@
+//! Spawns a contact graph as ECS entities whose transform hierarchy is the kinematic tree: every
+//! layout entity hangs from the scene root, every object from the entity that supports it.
+
+use std::collections::HashMap;
+
+use bevy::prelude::*;
+use glam::{Affine3A, Mat4};
+
+use crate::classes::{ClassTable, EntityKind};
+use crate::components::{CadModel, Joint, OrientedBox, Panoptic, SceneEntity, SurfacePlanes};
+use crate::geometry::{GravityBox, Plane};
+use crate::graph::ContactGraph;
+use crate::kinematics::JointSpec;
+
+/// Marks the root of the kinematic tree (the world frame).
+#[derive(Component, Clone, Copy, Debug, Default)]
+pub struct SceneRoot;
+
+/// The pose of an entity's own frame: its CAD model's frame when it has one, else its box's.
+fn world_from_entity(graph_box: &GravityBox, cad: Option<&crate::graph::CadPlacement>) -> Affine3A {
+    match cad {
+        Some(c) => Affine3A::from_mat4(Mat4::from_cols_array(&c.world_from_model)),
+        None => graph_box.world_from_box(),
+    }
+}
+
+fn transform_of(a: Affine3A) -> Transform {
+    let (scale, rotation, translation) = a.to_scale_rotation_translation();
+    Transform {
+        translation,
+        rotation: rotation.normalize(),
+        scale,
+    }
+}
+
+/// The joint an object gets to its support: floating for movable classes, fixed otherwise.
+pub fn support_joint(class: &str) -> JointSpec {
+    match ClassTable::builtin().get(class) {
+        Some(info) if info.movable => JointSpec::FLOATING,
+        _ => JointSpec::FIXED,
+    }
+}
+
+/// Spawns `graph` under a new `SceneRoot`; returns the entity of each node id.
+pub fn spawn_contact_graph(
+    world: &mut World,
+    graph: &ContactGraph,
+) -> Result<HashMap<String, Entity>, String> {
+    graph.check()?;
+    let root = world
+        .spawn((SceneRoot, Name::new("world"), Transform::IDENTITY))
+        .id();
+    let mut entities = HashMap::new();
+    let mut poses = HashMap::new();
+    for node in &graph.nodes {
+        let gbox = GravityBox::from(&node.bbox);
+        let pose = world_from_entity(&gbox, node.cad.as_ref());
+        let mut e = world.spawn((
+            SceneEntity(node.id.clone()),
+            Name::new(node.id.clone()),
+            Panoptic {
+                instance: entities.len() as u32 + 1,
+                class: node.class.clone(),
+                kind: node.kind,
+            },
+            OrientedBox(gbox),
+            SurfacePlanes(node.planes.iter().map(|p| Plane::from_array(*p)).collect()),
+        ));
+        if let Some(c) = &node.cad {
+            e.insert(CadModel {
+                model: c.model.clone(),
+                world_from_model: pose,
+                scale: c.scale,
+                alignment_error: c.alignment_error,
+            });
+        }
+        entities.insert(node.id.clone(), e.id());
+        poses.insert(node.id.clone(), pose);
+    }
+    for node in &graph.nodes {
+        let entity = entities[&node.id];
+        let (parent, parent_pose, joint) = match graph.parent_of(&node.id) {
+            Some(p) => (entities[p], poses[p], support_joint(&node.class)),
+            None => {
+                let joint = if node.kind == EntityKind::Layout {
+                    JointSpec::FIXED
+                } else {
+                    support_joint(&node.class)
+                };
+                (root, Affine3A::IDENTITY, joint)
+            }
+        };
+        let local = parent_pose.inverse() * poses[&node.id];
+        world.entity_mut(entity).insert((
+            ChildOf(parent),
+            transform_of(local),
+            Joint {
+                spec: joint,
+                value: 0.0,
+            },
+        ));
+    }
+    Ok(entities)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{SceneSpec, SceneWorld};
+    use std::path::Path;
+
+    fn kitchen_app() -> (App, HashMap<String, Entity>) {
+        let spec = SceneSpec::parse(
+            include_str!("../../scenes/kitchen.json"),
+            Path::new("kitchen.json"),
+        )
+        .expect("spec");
+        let graph = SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
+            .expect("world")
+            .contact_graph();
+        let mut app = App::new();
+        app.add_plugins((MinimalPlugins, TransformPlugin));
+        let entities = spawn_contact_graph(app.world_mut(), &graph).expect("spawn");
+        app.update();
+        (app, entities)
+    }
+
+    #[test]
+    fn the_transform_hierarchy_is_the_support_tree() {
+        let (app, entities) = kitchen_app();
+        let world = app.world();
+        let cup = entities["cup_1"];
+        let table = entities["table_1"];
+        assert_eq!(
+            world.get::<ChildOf>(cup).map(ChildOf::parent),
+            Some(table),
+            "the table supports the cup"
+        );
+        assert_eq!(
+            world.get::<Joint>(cup).map(|j| j.spec.kind),
+            Some(crate::kinematics::JointKind::Floating)
+        );
+        assert_eq!(
+            world.get::<Joint>(table).map(|j| j.spec.kind),
+            Some(crate::kinematics::JointKind::Fixed)
+        );
+        let global = world.get::<GlobalTransform>(cup).expect("global transform");
+        let cad = world.get::<CadModel>(cup).expect("cad");
+        let expected = Vec3::from(cad.world_from_model.translation);
+        assert!(
+            global.translation().distance(expected) < 1e-4,
+            "cup at {} instead of {expected}",
+            global.translation()
+        );
+    }
+
+    #[test]
+    fn moving_a_table_moves_the_cup_on_it() {
+        let (mut app, entities) = kitchen_app();
+        let before = app
+            .world()
+            .get::<GlobalTransform>(entities["cup_1"])
+            .expect("cup")
+            .translation();
+        app.world_mut()
+            .get_mut::<Transform>(entities["table_1"])
+            .expect("table")
+            .translation += Vec3::new(0.5, 0.0, 0.0);
+        app.update();
+        let after = app
+            .world()
+            .get::<GlobalTransform>(entities["cup_1"])
+            .expect("cup")
+            .translation();
+        assert!(
+            (after - before - Vec3::new(0.5, 0.0, 0.0)).length() < 1e-4,
+            "cup moved by {}",
+            after - before
+        );
+    }
+}
