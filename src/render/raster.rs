@@ -86,50 +86,72 @@ fn clip_near(c: &[Vec3; 3], out: &mut [Vec3; 4]) -> usize {
     count
 }
 
+/// Sub-pixel precision of the rasteriser's fixed-point coordinates (8 bits).
+const SUBPIXEL: f32 = 256.0;
+
+/// Draws one triangle with exact integer edge functions and the top-left fill rule, so that
+/// triangles sharing an edge leave no gap and cover no pixel twice.
 fn draw(camera: &Pinhole, tri: [Vec3; 3], index: u32, depth: &mut [f32], triangle: &mut [u32]) {
-    let p = tri.map(|v| camera.project(v));
-    let inv_z = tri.map(|v| 1.0 / v.z);
-    let edge = |a: glam::Vec2, b: glam::Vec2, x: f32, y: f32| {
-        (b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x)
+    let projected = tri.map(|v| camera.project(v));
+    let mut p = projected.map(|q| {
+        (
+            (q.x * SUBPIXEL).round() as i64,
+            (q.y * SUBPIXEL).round() as i64,
+        )
+    });
+    let mut inv_z = tri.map(|v| 1.0 / v.z);
+    let edge = |a: (i64, i64), b: (i64, i64), x: i64, y: i64| {
+        (b.0 - a.0) * (y - a.1) - (b.1 - a.1) * (x - a.0)
     };
-    let area = edge(p[0], p[1], p[2].x, p[2].y);
-    if area.abs() < 1e-9 {
+    let mut area = edge(p[0], p[1], p[2].0, p[2].1);
+    if area == 0 {
         return;
     }
+    if area < 0 {
+        // Work with one winding; which one the image shows does not matter here.
+        p.swap(1, 2);
+        inv_z.swap(1, 2);
+        area = -area;
+    }
     let (w, h) = (camera.width as i64, camera.height as i64);
-    let min_x = (p[0].x.min(p[1].x).min(p[2].x).ceil() as i64).max(0);
-    let max_x = (p[0].x.max(p[1].x).max(p[2].x).floor() as i64).min(w - 1);
-    let min_y = (p[0].y.min(p[1].y).min(p[2].y).ceil() as i64).max(0);
-    let max_y = (p[0].y.max(p[1].y).max(p[2].y).floor() as i64).min(h - 1);
+    let s = SUBPIXEL as i64;
+    let min_x = ((p[0].0.min(p[1].0).min(p[2].0) + s - 1).div_euclid(s)).max(0);
+    let max_x = (p[0].0.max(p[1].0).max(p[2].0).div_euclid(s)).min(w - 1);
+    let min_y = ((p[0].1.min(p[1].1).min(p[2].1) + s - 1).div_euclid(s)).max(0);
+    let max_y = (p[0].1.max(p[1].1).max(p[2].1).div_euclid(s)).min(h - 1);
     if min_x > max_x || min_y > max_y {
         return;
     }
-    let inv_area = 1.0 / area;
-    // Edge functions are affine in x: step them along each row instead of re-evaluating.
-    let (dx0, dx1, dx2) = (
-        -(p[2].y - p[1].y) * inv_area,
-        -(p[0].y - p[2].y) * inv_area,
-        -(p[1].y - p[0].y) * inv_area,
-    );
+    // Top-left rule: a pixel exactly on an edge belongs to the triangle only for top or left edges.
+    let bias = |a: (i64, i64), b: (i64, i64)| {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let top_left = (dy == 0 && dx < 0) || dy > 0;
+        if top_left { 0 } else { -1 }
+    };
+    let edges = [(p[1], p[2]), (p[2], p[0]), (p[0], p[1])];
+    let biases = edges.map(|(a, b)| bias(a, b));
+    let steps = edges.map(|(a, b)| -(b.1 - a.1) * s);
+    let inv_area = 1.0 / area as f64;
     for y in min_y..=max_y {
-        let fy = y as f32;
-        let fx = min_x as f32;
-        let mut b0 = edge(p[1], p[2], fx, fy) * inv_area;
-        let mut b1 = edge(p[2], p[0], fx, fy) * inv_area;
-        let mut b2 = edge(p[0], p[1], fx, fy) * inv_area;
+        let (fx, fy) = (min_x * s, y * s);
+        let mut e = [0, 1, 2].map(|k| edge(edges[k].0, edges[k].1, fx, fy));
         let row = (y * w) as usize;
         for x in min_x..=max_x {
-            if b0 >= 0.0 && b1 >= 0.0 && b2 >= 0.0 {
-                let z = 1.0 / (b0 * inv_z[0] + b1 * inv_z[1] + b2 * inv_z[2]);
+            if e[0] + biases[0] >= 0 && e[1] + biases[1] >= 0 && e[2] + biases[2] >= 0 {
+                let inv = (e[0] as f64 * inv_z[0] as f64
+                    + e[1] as f64 * inv_z[1] as f64
+                    + e[2] as f64 * inv_z[2] as f64)
+                    * inv_area;
+                let z = (1.0 / inv) as f32;
                 let i = row + x as usize;
                 if z < depth[i] {
                     depth[i] = z;
                     triangle[i] = index;
                 }
             }
-            b0 += dx0;
-            b1 += dx1;
-            b2 += dx2;
+            for k in 0..3 {
+                e[k] += steps[k];
+            }
         }
     }
 }

@@ -98,8 +98,14 @@ impl SceneSpec {
 
     /// Parses and validates `text`; `path` is only used to name the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<SceneSpec, InputError> {
-        let spec: SceneSpec = serde_json::from_str(text)
-            .map_err(|e| InputError::invalid(path, format!("invalid scene specification: {e}")))?;
+        let mut de = serde_json::Deserializer::from_str(text);
+        let spec: SceneSpec = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let key = e.path().to_string();
+            InputError::invalid(
+                path,
+                format!("invalid scene specification at {key}: {}", e.into_inner()),
+            )
+        })?;
         spec.validate()
             .map_err(|problem| InputError::invalid(path, problem))?;
         Ok(spec)
