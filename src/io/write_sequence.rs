@@ -31,9 +31,9 @@ pub fn write_color(path: &Path, rgb: &[u8], camera: &Pinhole) -> Result<(), Isce
     write_png(path, rgb, camera, image::ExtendedColorType::Rgb8)
 }
 
-/// 16-bit big-endian samples, as PNG stores them.
+/// 16-bit samples; the encoder takes them in native byte order and writes PNG's big-endian.
 fn u16_png(path: &Path, values: &[u16], camera: &Pinhole) -> Result<(), IsceneError> {
-    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_ne_bytes()).collect();
     write_png(path, &bytes, camera, image::ExtendedColorType::L16)
 }
 

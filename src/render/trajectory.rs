@@ -7,6 +7,9 @@ use glam::{Affine3A, Mat3, Vec3};
 const MARGIN: f32 = 0.8;
 /// How far the view turns left and right of the room centre, radians.
 const SWAY: f32 = 0.5;
+/// Height the camera looks at on average, and how far the view nods up and down from it, metres.
+const TARGET_HEIGHT: f32 = 0.8;
+const TARGET_NOD: f32 = 0.6;
 
 /// `world_from_camera` for a camera at `eye` looking at `target` with the world's +z up
 /// (OpenCV axes: x right, y down, z forward).
@@ -34,9 +37,15 @@ pub fn room_loop(room: Vec3, frames: usize, height: f32) -> Vec<Affine3A> {
             let to_centre = (centre - eye).truncate();
             let look = glam::Vec2::from_angle(SWAY * (3.0 * phase).sin())
                 .rotate(to_centre.normalize_or_zero());
-            // Aim at a point across the room at table height, so the view tilts down.
+            // Aim across the room, mostly down at furniture and table tops, sometimes up at wall
+            // cabinets and shelves.
             let reach = to_centre.length().max(1.0) * 1.1;
-            let target = Vec3::new(eye.x + look.x * reach, eye.y + look.y * reach, 0.55);
+            let target_height = TARGET_HEIGHT + TARGET_NOD * (5.0 * phase).sin();
+            let target = Vec3::new(
+                eye.x + look.x * reach,
+                eye.y + look.y * reach,
+                target_height,
+            );
             look_at(eye, target)
         })
         .collect()

@@ -1,0 +1,75 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code, reason = "each test binary uses a different subset")]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The project's root folder.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `../shared/data/<relative>`, or a panic that says the test needs the shared data.
+pub fn shared_data(relative: &str) -> PathBuf {
+    let path = root().join("../shared/data").join(relative);
+    assert!(
+        path.exists(),
+        "this test needs the shared data set at {} (see ../shared/data/README.md); it is always present in CI",
+        path.display()
+    );
+    path
+}
+
+/// Runs the `iscene` binary; returns (exit code, stdout, stderr).
+pub fn iscene(args: &[&str], cwd: &Path) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_iscene"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("run iscene");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The scene specifications shipped in scenes/.
+pub fn scene_specs() -> Vec<PathBuf> {
+    let mut specs: Vec<PathBuf> = std::fs::read_dir(root().join("scenes"))
+        .expect("scenes/")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    specs.sort();
+    specs
+}
+
+/// SHA-256 of every file under `dir`, by relative path.
+pub fn hash_tree(dir: &Path) -> Vec<(String, String)> {
+    use sha2::Digest;
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d)
+            .expect("read dir")
+            .filter_map(Result::ok)
+        {
+            let p = entry.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let bytes = std::fs::read(&p).expect("read file");
+                let digest = sha2::Sha256::digest(&bytes);
+                let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
+                out.push((
+                    p.strip_prefix(dir).expect("prefix").display().to_string(),
+                    hex,
+                ));
+            }
+        }
+    }
+    out.sort();
+    out
+}
