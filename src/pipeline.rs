@@ -14,7 +14,8 @@ use crate::io::sequence::SequenceFormat;
 use crate::io::write_sequence::write_text;
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
-use crate::systems::ingest::{IngestReport, InputSequence, StageError, StageTimings};
+use crate::systems::ingest::{IngestReport, InputSequence, StageError};
+use crate::systems::stages::StageMarks;
 use crate::systems::{Reconstruct, ReconstructionStage};
 
 /// Which segmentation service labels the frames.
@@ -170,7 +171,13 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         .get_resource::<IngestReport>()
         .cloned()
         .unwrap_or_default();
-    timings.extend(app.world().resource::<StageTimings>().0.iter().cloned());
+    let stage_seconds = app.world().resource::<StageMarks>().seconds();
+    timings.extend(
+        stage_seconds
+            .into_iter()
+            .filter(|(s, _)| BUILT_STAGES.contains(s))
+            .map(|(s, t)| (s.name().to_string(), t)),
+    );
 
     let write_start = Instant::now();
     let staged = StagedDir::new(&options.out)?;

@@ -89,42 +89,9 @@ pub struct IngestPlugin;
 
 impl Plugin for IngestPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<StageError>()
-            .init_resource::<StageTimings>()
-            .add_systems(
-                crate::systems::Reconstruct,
-                timed(crate::systems::ReconstructionStage::Ingest, ingest_system)
-                    .in_set(crate::systems::ReconstructionStage::Ingest),
-            );
+        app.init_resource::<StageError>().add_systems(
+            crate::systems::Reconstruct,
+            ingest_system.in_set(crate::systems::ReconstructionStage::Ingest),
+        );
     }
 }
-
-/// Wall-clock seconds per stage, for report.json.
-#[derive(Resource, Clone, Debug, Default, Serialize)]
-pub struct StageTimings(pub Vec<(String, f64)>);
-
-/// Wraps a stage's system so that its run time lands in `StageTimings`.
-pub fn timed<M>(
-    stage: crate::systems::ReconstructionStage,
-    system: impl IntoSystem<(), (), M>,
-) -> impl IntoScheduleConfigs<bevy::ecs::system::ScheduleSystem, ()> {
-    (
-        (move |world: &mut World| {
-            world.insert_resource(StageClock(std::time::Instant::now()));
-        }),
-        system,
-        (move |world: &mut World| {
-            let seconds = world
-                .get_resource::<StageClock>()
-                .map_or(0.0, |c| c.0.elapsed().as_secs_f64());
-            world
-                .resource_mut::<StageTimings>()
-                .0
-                .push((stage.name().to_string(), seconds));
-        }),
-    )
-        .chain()
-}
-
-#[derive(Resource)]
-struct StageClock(std::time::Instant);

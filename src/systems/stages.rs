@@ -2,6 +2,8 @@
 //! `SystemSet` per stage. Later stages add their systems to their set; the order lives here only.
 
 use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel};
+use std::time::Instant;
+
 use bevy::prelude::*;
 
 /// The schedule a reconstruction runs once, stage after stage.
@@ -95,5 +97,91 @@ impl Plugin for StagesPlugin {
                 .chain(),
         );
         app.add_schedule(schedule);
+        // A clock mark before the first stage, between every two stages, and after the last:
+        // exclusive systems ordered around the sets, so they never race a stage's systems.
+        app.init_resource::<StageMarks>();
+        for k in 0..=Self::STAGES.len() {
+            let mark = move |world: &mut World| {
+                world
+                    .resource_mut::<StageMarks>()
+                    .0
+                    .push((k, Instant::now()))
+            };
+            let config = match (
+                k.checked_sub(1).map(|p| Self::STAGES[p]),
+                Self::STAGES.get(k),
+            ) {
+                (None, Some(next)) => mark.before(*next),
+                (Some(prev), Some(next)) => mark.after(prev).before(*next),
+                (Some(prev), None) => mark.after(prev),
+                (None, None) => continue,
+            };
+            app.add_systems(Reconstruct, config);
+        }
+    }
+}
+
+impl StagesPlugin {
+    const STAGES: [ReconstructionStage; 11] = ReconstructionStage::ALL;
+}
+
+/// Clock readings between stages, taken by the `StagesPlugin`'s mark systems.
+#[derive(Resource, Default)]
+pub struct StageMarks(pub Vec<(usize, Instant)>);
+
+impl StageMarks {
+    /// Wall-clock seconds each stage took in the last run of the schedule.
+    pub fn seconds(&self) -> Vec<(ReconstructionStage, f64)> {
+        let at = |k: usize| self.0.iter().rev().find(|(i, _)| *i == k).map(|(_, t)| *t);
+        ReconstructionStage::ALL
+            .iter()
+            .enumerate()
+            .filter_map(|(k, stage)| {
+                Some((*stage, at(k + 1)?.duration_since(at(k)?).as_secs_f64()))
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Resource, Default)]
+    struct Counter(u32);
+
+    #[test]
+    #[should_panic(expected = "conflicting data access have indeterminate execution order")]
+    fn two_unordered_writers_in_one_stage_are_an_error() {
+        let mut app = App::new();
+        app.add_plugins(StagesPlugin).init_resource::<Counter>();
+        let bump = |mut c: ResMut<Counter>| c.0 += 1;
+        app.add_systems(
+            Reconstruct,
+            (
+                bump.in_set(ReconstructionStage::Extract),
+                bump.in_set(ReconstructionStage::Extract),
+            ),
+        );
+        app.world_mut().run_schedule(Reconstruct);
+    }
+
+    #[test]
+    fn writers_in_different_stages_are_ordered_by_the_chain() {
+        let mut app = App::new();
+        app.add_plugins(StagesPlugin).init_resource::<Counter>();
+        app.add_systems(
+            Reconstruct,
+            (
+                (|mut c: ResMut<Counter>| c.0 = c.0 * 10 + 2).in_set(ReconstructionStage::Export),
+                (|mut c: ResMut<Counter>| c.0 = c.0 * 10 + 1).in_set(ReconstructionStage::Ingest),
+            ),
+        );
+        app.world_mut().run_schedule(Reconstruct);
+        assert_eq!(
+            app.world().resource::<Counter>().0,
+            12,
+            "ingest runs before export"
+        );
     }
 }
