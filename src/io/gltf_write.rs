@@ -64,7 +64,7 @@ pub fn glb_bytes(root: &GltfNode, up_axis_node: &str) -> Result<Vec<u8>, String>
         nodes: vec![wrapper],
     });
     doc.scene = Some(scene);
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     if let Some(b) = doc.buffers.first_mut() {
@@ -131,7 +131,7 @@ fn push_view(
     bytes: &[u8],
     target: json::buffer::Target,
 ) -> json::Index<json::buffer::View> {
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let offset = bin.len();

@@ -64,7 +64,7 @@ pub fn open(root: &Path) -> Result<Sequence, InputError> {
     let log = root.join("trajectory.log");
     let text = std::fs::read_to_string(&log).map_err(|e| InputError::io(&log, &e))?;
     let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-    if lines.len() % 5 != 0 {
+    if !lines.len().is_multiple_of(5) {
         return Err(InputError::invalid(
             &log,
             format!(

@@ -89,6 +89,7 @@ impl DepthNoise {
     ) {
         let height = depth.len() / width.max(1);
         let clean = depth.to_vec();
+        let cos_start = self.grazing_start_deg.to_radians().cos();
         let is_edge = |i: usize| {
             let z = clean[i];
             let (x, y) = (i % width, i / width);
@@ -122,8 +123,14 @@ impl DepthNoise {
                 depth[i] = 0.0;
                 continue;
             }
-            let angle = cos_incidence[i].clamp(0.0, 1.0).acos().to_degrees();
-            if u_grazing < self.grazing_dropout(angle)
+            // Most pixels face the camera well within the dropout band: skip the arc cosine.
+            let cos = cos_incidence[i].clamp(0.0, 1.0);
+            let grazing = if cos >= cos_start {
+                0.0
+            } else {
+                self.grazing_dropout(cos.acos().to_degrees())
+            };
+            if u_grazing < grazing
                 || u_random < self.random_dropout
                 || (u_edge < self.edge_dropout && is_edge(i))
             {

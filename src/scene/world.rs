@@ -175,7 +175,7 @@ pub fn wall_frame(room: Vec3, k: usize) -> (Vec3, Vec3, Vec3) {
 }
 
 pub fn wall_length(room: Vec3, k: usize) -> f32 {
-    if k % 2 == 0 { room.x } else { room.y }
+    if k.is_multiple_of(2) { room.x } else { room.y }
 }
 
 /// The yaw that turns a model's front (-y) to face along `inward`.
