@@ -141,12 +141,18 @@ impl DepthNoise {
             let step = self.quantisation_step(noisy, fx);
             // Quantise in disparity, which is linear in 1/z; the axial noise before it dithers the
             // steps, so the error stays close to zero-mean.
-            depth[i] = if step > 0.0 {
+            let measured = if step > 0.0 {
                 let disparity_unit = fx * self.baseline / self.disparity_step;
                 let d = (disparity_unit / noisy).round();
                 if d > 0.0 { disparity_unit / d } else { 0.0 }
             } else {
                 noisy
+            };
+            // The sensor reports nothing outside its range, whatever the noise did.
+            depth[i] = if (self.min_range..=self.max_range).contains(&measured) {
+                measured
+            } else {
+                0.0
             };
         }
     }
@@ -214,5 +220,69 @@ impl NoiseSettings {
 
     pub fn segmentation_model(&self) -> Option<SegmentationNoise> {
         self.segmentation.model()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn dropped_fraction(model: &DepthNoise, depth: f32, angle_deg: f32) -> f32 {
+        let n = 200 * 200;
+        let mut d = vec![depth; n];
+        let cos = vec![angle_deg.to_radians().cos(); n];
+        model.apply(&mut d, &cos, 200, 525.0, &mut ChaCha8Rng::seed_from_u64(5));
+        d.iter().filter(|&&v| v == 0.0).count() as f32 / n as f32
+    }
+
+    #[test]
+    fn dropouts_follow_incidence_angle_and_range() {
+        let model = DepthNoise {
+            edge_dropout: 0.0,
+            random_dropout: 0.0,
+            ..DepthNoise::KINECT
+        };
+        assert_eq!(dropped_fraction(&model, 2.0, 30.0), 0.0);
+        let half = dropped_fraction(&model, 2.0, 77.5);
+        assert!(
+            (half - 0.5).abs() < 0.02,
+            "half-way through the grazing band: {half}"
+        );
+        assert_eq!(dropped_fraction(&model, 2.0, 88.0), 1.0);
+        assert_eq!(
+            dropped_fraction(&model, 0.3, 0.0),
+            1.0,
+            "closer than the minimum range"
+        );
+        assert_eq!(
+            dropped_fraction(&model, 6.0, 0.0),
+            1.0,
+            "beyond the maximum range"
+        );
+    }
+
+    #[test]
+    fn depth_edges_drop_out_at_their_rate() {
+        let model = DepthNoise {
+            random_dropout: 0.0,
+            ..DepthNoise::KINECT
+        };
+        let (w, h) = (100, 100);
+        // Left half at 1 m, right half at 2 m: columns 49 and 50 are edge pixels.
+        let mut d: Vec<f32> = (0..w * h)
+            .map(|i| if i % w < 50 { 1.0 } else { 2.0 })
+            .collect();
+        let cos = vec![1.0; w * h];
+        model.apply(&mut d, &cos, w, 525.0, &mut ChaCha8Rng::seed_from_u64(8));
+        let dropped =
+            |col: usize| (0..h).filter(|r| d[r * w + col] == 0.0).count() as f32 / h as f32;
+        assert!(
+            (dropped(49) - model.edge_dropout).abs() < 0.15,
+            "edge column dropped {}",
+            dropped(49)
+        );
+        assert_eq!(dropped(20), 0.0, "no dropout away from edges");
     }
 }
