@@ -8,20 +8,7 @@ use std::path::{Path, PathBuf};
 /// A valid 3-frame sequence rendered without noise, copied fresh for each case.
 fn good_sequence(dir: &Path) -> PathBuf {
     let seq = dir.join("seq");
-    let spec = common::root().join("scenes/kitchen.json");
-    let (code, out, err) = common::iscene(
-        &[
-            "render",
-            spec.to_str().expect("utf8"),
-            "--out",
-            seq.to_str().expect("utf8"),
-            "--frames",
-            "3",
-            "--no-noise",
-        ],
-        dir,
-    );
-    assert_eq!(code, 0, "{out}{err}");
+    common::render_scene("kitchen", &seq, 3, true);
     seq
 }
 

@@ -21,20 +21,7 @@ fn the_stage_schedule_builds_without_ambiguities_and_runs_in_order() {
     }
     let dir = tempfile::tempdir().expect("tempdir");
     let seq = dir.path().join("seq");
-    let spec = common::root().join("scenes/office.json");
-    let (code, out, err) = common::iscene(
-        &[
-            "render",
-            spec.to_str().expect("utf8"),
-            "--out",
-            seq.to_str().expect("utf8"),
-            "--frames",
-            "2",
-            "--no-noise",
-        ],
-        dir.path(),
-    );
-    assert_eq!(code, 0, "{out}{err}");
+    common::render_scene("office", &seq, 2, true);
     app.insert_resource(iscene::systems::ingest::InputSequence(
         iscene::io::Sequence::open(&seq).expect("sequence"),
     ));

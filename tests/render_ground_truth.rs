@@ -154,30 +154,11 @@ fn only_instance(scene: &RenderScene, instance: u16) -> RenderScene {
     out
 }
 
-/// Renders `frames` frames of the kitchen without noise through the CLI, as a user would.
-fn render_kitchen(out: &Path, frames: usize, no_noise: bool) {
-    let spec = common::root().join("scenes/kitchen.json");
-    let frames = frames.to_string();
-    let mut args = vec![
-        "render",
-        spec.to_str().expect("utf8"),
-        "--out",
-        out.to_str().expect("utf8"),
-        "--frames",
-        &frames,
-    ];
-    if no_noise {
-        args.push("--no-noise");
-    }
-    let (code, stdout, stderr) = common::iscene(&args, &common::root());
-    assert_eq!(code, 0, "render failed: {stdout}{stderr}");
-}
-
 #[test]
 fn back_projected_depth_lands_on_the_ground_truth_meshes() {
     let dir = tempfile::tempdir().expect("tempdir");
     let seq_dir = dir.path().join("kitchen");
-    render_kitchen(&seq_dir, 12, true);
+    common::render_scene("kitchen", &seq_dir, 12, true);
     let sequence = Sequence::open(&seq_dir).expect("the rendered sequence reads back");
     assert_eq!(sequence.frames.len(), 12);
     assert_eq!(sequence.gravity, Some(Vec3::new(0.0, 0.0, -1.0)));
@@ -305,8 +286,8 @@ fn depth_noise_statistics_follow_the_model() {
 #[test]
 fn rendering_twice_with_one_seed_gives_identical_files() {
     let dir = tempfile::tempdir().expect("tempdir");
-    render_kitchen(&dir.path().join("a"), 6, false);
-    render_kitchen(&dir.path().join("b"), 6, false);
+    common::render_scene("kitchen", &dir.path().join("a"), 6, false);
+    common::render_scene("kitchen", &dir.path().join("b"), 6, false);
     let a = common::hash_tree(&dir.path().join("a"));
     let b = common::hash_tree(&dir.path().join("b"));
     assert_eq!(

@@ -152,8 +152,7 @@ pub fn render_sequence(
     let dir = staged.path().to_path_buf();
     write_camera(&dir, &camera, 1000.0)?;
     write_text(&dir.join("gravity-direction.txt"), "0 0 -1\n")?;
-    let json = |v: &dyn erased::Json| v.to_json();
-    write_text(&dir.join("labels.json"), &json(&world.labels()))?;
+    write_text(&dir.join("labels.json"), &pretty_json(&world.labels()))?;
     let gt = dir.join("gt");
     let meshes = gt.join("meshes");
     std::fs::create_dir_all(&meshes)
@@ -176,7 +175,7 @@ pub fn render_sequence(
         depth_noise,
         segmentation_noise: noise.segmentation_model(),
     };
-    write_text(&gt.join("render.json"), &json(&record))?;
+    write_text(&gt.join("render.json"), &pretty_json(&record))?;
 
     let progress = crate::progress::bar(frames as u64, "rendering", options.progress);
     poses.par_iter().enumerate().try_for_each(
@@ -211,16 +210,9 @@ pub fn render_sequence(
     })
 }
 
-/// Serialising the few record types above through one helper.
-mod erased {
-    pub trait Json {
-        fn to_json(&self) -> String;
-    }
-    impl<T: serde::Serialize> Json for T {
-        fn to_json(&self) -> String {
-            serde_json::to_string_pretty(self).unwrap_or_default()
-        }
-    }
+fn pretty_json(value: &impl Serialize) -> String {
+    // Plain records of strings and finite numbers: serialisation cannot fail.
+    serde_json::to_string_pretty(value).unwrap_or_default()
 }
 
 /// Which instances a frame sees, with their pixel counts.

@@ -44,6 +44,9 @@ pub fn ingest(sequence: &Sequence) -> Result<IngestReport, InputError> {
             let hi = valid.iter().copied().fold(0.0f32, f32::max);
             Ok((valid.len(), frame.depth.len(), lo, hi))
         })
+        .collect::<Vec<Result<_, InputError>>>()
+        // The first bad frame in order, not whichever thread failed first: errors are reproducible.
+        .into_iter()
         .collect::<Result<Vec<_>, InputError>>()?;
     let (valid, total) = stats
         .iter()

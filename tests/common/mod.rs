@@ -73,3 +73,22 @@ pub fn hash_tree(dir: &Path) -> Vec<(String, String)> {
     out.sort();
     out
 }
+
+/// Renders `scenes/<scene>.json` through the CLI into `out`, as a user would.
+pub fn render_scene(scene: &str, out: &Path, frames: usize, no_noise: bool) {
+    let spec = root().join("scenes").join(format!("{scene}.json"));
+    let frames = frames.to_string();
+    let mut args = vec![
+        "render",
+        spec.to_str().expect("utf8"),
+        "--out",
+        out.to_str().expect("utf8"),
+        "--frames",
+        &frames,
+    ];
+    if no_noise {
+        args.push("--no-noise");
+    }
+    let (code, stdout, stderr) = iscene(&args, &root());
+    assert_eq!(code, 0, "rendering {scene} failed: {stdout}{stderr}");
+}
