@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod graph;
 pub mod io;
 pub mod kinematics;
+pub mod map;
 pub mod pipeline;
 pub mod progress;
 pub mod render;
