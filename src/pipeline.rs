@@ -57,11 +57,9 @@ pub struct ReconstructReport {
 /// Stages with systems in this build.
 const BUILT_STAGES: [ReconstructionStage; 1] = [ReconstructionStage::Ingest];
 
-fn spec_fingerprint(text: &str, frames: Option<usize>) -> String {
+fn spec_fingerprint(text: &str) -> String {
     use sha2::Digest;
-    let digest = sha2::Sha256::digest(
-        format!("{text}\n{frames:?}\n{}", env!("CARGO_PKG_VERSION")).as_bytes(),
-    );
+    let digest = sha2::Sha256::digest(format!("{text}\n{}", env!("CARGO_PKG_VERSION")).as_bytes());
     digest.iter().take(8).map(|b| format!("{b:02x}")).collect()
 }
 
@@ -77,7 +75,7 @@ fn render_input(
     let spec = SceneSpec::parse(spec_text, spec_path)?;
     let sequence_dir = PathBuf::from(format!("{}.sequence", out.display()));
     let stamp = sequence_dir.join("gt").join("spec.fingerprint");
-    let fingerprint = spec_fingerprint(spec_text, None);
+    let fingerprint = spec_fingerprint(spec_text);
     if std::fs::read_to_string(&stamp).is_ok_and(|s| s.trim() == fingerprint) {
         return Ok(sequence_dir);
     }

@@ -24,6 +24,16 @@ pub struct Voxel {
     pub color: [u8; 3],
 }
 
+/// Centre of voxel `index` of block `key`, world frame.
+fn voxel_center(voxel_size: f32, key: IVec3, index: usize) -> Vec3 {
+    let local = IVec3::new(
+        (index % BLOCK_SIDE) as i32,
+        ((index / BLOCK_SIDE) % BLOCK_SIDE) as i32,
+        (index / (BLOCK_SIDE * BLOCK_SIDE)) as i32,
+    );
+    (key * BLOCK_SIDE as i32 + local).as_vec3() * voxel_size + Vec3::splat(0.5 * voxel_size)
+}
+
 pub struct Block {
     pub voxels: Box<[Voxel; BLOCK_VOXELS]>,
 }
@@ -56,17 +66,6 @@ impl TsdfMap {
 
     fn block_of(&self, point: Vec3) -> IVec3 {
         (point / self.block_size()).floor().as_ivec3()
-    }
-
-    /// Centre of voxel `index` of block `key`, world frame.
-    fn voxel_center(&self, key: IVec3, index: usize) -> Vec3 {
-        let local = IVec3::new(
-            (index % BLOCK_SIDE) as i32,
-            ((index / BLOCK_SIDE) % BLOCK_SIDE) as i32,
-            (index / (BLOCK_SIDE * BLOCK_SIDE)) as i32,
-        );
-        (key * BLOCK_SIDE as i32 + local).as_vec3() * self.voxel_size
-            + Vec3::splat(0.5 * self.voxel_size)
     }
 
     /// Fuses one depth frame (metres, 0 = none) with its colour (row-major RGB, may be empty).
@@ -107,20 +106,14 @@ impl TsdfMap {
         let camera_from_world = world_from_camera.inverse();
         let (truncation, max_weight, voxel_size) =
             (self.truncation, self.max_weight, self.voxel_size);
-        let centers: Vec<(IVec3, [Vec3; BLOCK_VOXELS])> = touched
-            .iter()
-            .map(|k| (*k, std::array::from_fn(|v| self.voxel_center(*k, v))))
-            .collect();
-        let centers: HashMap<IVec3, [Vec3; BLOCK_VOXELS]> = centers.into_iter().collect();
+        let max_ray_length = self.max_ray_length;
         self.blocks
             .par_iter_mut()
             .filter(|(k, _)| touched.contains(k))
             .for_each(|(key, block)| {
-                let Some(centers) = centers.get(key) else {
-                    return;
-                };
-                for (voxel, center) in block.voxels.iter_mut().zip(centers) {
-                    let p = camera_from_world.transform_point3(*center);
+                for (index, voxel) in block.voxels.iter_mut().enumerate() {
+                    let p =
+                        camera_from_world.transform_point3(voxel_center(voxel_size, *key, index));
                     if p.z <= 0.0 {
                         continue;
                     }
@@ -131,7 +124,7 @@ impl TsdfMap {
                     }
                     let i = v as usize * w + u as usize;
                     let d = depth[i];
-                    if d <= 0.0 || d > self.max_ray_length {
+                    if d <= 0.0 || d > max_ray_length {
                         continue;
                     }
                     let sdf = d - p.z;
