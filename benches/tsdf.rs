@@ -5,7 +5,7 @@ use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use iscene::io::Sequence;
-use iscene::map::TsdfMap;
+use iscene::map::{TsdfFrame, TsdfMap};
 
 fn integrate(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/rgbd/7scenes-redkitchen");
@@ -23,7 +23,13 @@ fn integrate(c: &mut Criterion) {
             b.iter(|| {
                 let mut map = TsdfMap::new(voxel);
                 for f in &frames {
-                    map.integrate(&f.depth, &f.color, &f.camera, &f.world_from_camera);
+                    map.integrate(&TsdfFrame {
+                        depth: &f.depth,
+                        color: &f.color,
+                        labels: None,
+                        camera: &f.camera,
+                        world_from_camera: &f.world_from_camera,
+                    });
                 }
                 map.blocks.len()
             })

@@ -1,5 +1,15 @@
-//! The volumetric map: a hashed TSDF of voxel blocks (first part of the panoptic mapping, issue 3).
+//! The volumetric map: a hashed TSDF of voxel blocks with a segment label per voxel, and the
+//! labelled marching cubes that turns it into meshes.
 
 pub mod tsdf;
 
-pub use tsdf::{BLOCK_SIDE, TsdfMap, Voxel};
+pub use tsdf::{BLOCK_SIDE, SegmentLabel, TsdfFrame, TsdfMap, Voxel};
+
+/// Median of `values` (reordered in place); 0 when empty.
+pub fn median(values: &mut [f32]) -> f32 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mid = values.len() / 2;
+    *values.select_nth_unstable_by(mid, f32::total_cmp).1
+}

@@ -1,11 +1,14 @@
-//! A voxel-hashed truncated signed distance field: blocks of 8^3 voxels in a hash map, projective
-//! integration of depth frames in parallel over blocks, weights that drop off behind the surface.
+//! A voxel-hashed truncated signed distance field with a segment label per voxel: blocks of 8^3
+//! voxels in an arena indexed by a hash map, projective integration of depth frames in parallel
+//! over the blocks a frame touches, weights that drop off behind the surface, colour, and
+//! Voxblox++'s label confidence vote.
 //!
 //! Signs: `sdf` is positive in front of the surface (free space, towards the camera), negative
 //! behind it, in metres, clamped to `[-truncation, truncation]`.
 
 use std::collections::{HashMap, HashSet};
 
+use foldhash::fast::FixedState;
 use glam::{Affine3A, IVec3, Vec3};
 use rayon::prelude::*;
 
@@ -13,7 +16,10 @@ use crate::geometry::Pinhole;
 
 /// Voxels along one side of a block.
 pub const BLOCK_SIDE: usize = 8;
-const BLOCK_VOXELS: usize = BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE;
+pub const BLOCK_VOXELS: usize = BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE;
+
+/// A global segment label; 0 = none.
+pub type SegmentLabel = u32;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Voxel {
@@ -22,20 +28,53 @@ pub struct Voxel {
     /// Accumulated integration weight; 0 = never observed.
     pub weight: f32,
     pub color: [u8; 3],
-}
-
-/// Centre of voxel `index` of block `key`, world frame.
-fn voxel_center(voxel_size: f32, key: IVec3, index: usize) -> Vec3 {
-    let local = IVec3::new(
-        (index % BLOCK_SIDE) as i32,
-        ((index / BLOCK_SIDE) % BLOCK_SIDE) as i32,
-        (index / (BLOCK_SIDE * BLOCK_SIDE)) as i32,
-    );
-    (key * BLOCK_SIDE as i32 + local).as_vec3() * voxel_size + Vec3::splat(0.5 * voxel_size)
+    /// The segment label that won the vote so far; 0 = none.
+    pub label: SegmentLabel,
+    /// How far `label` leads the vote (Voxblox++'s label confidence).
+    pub label_weight: f32,
 }
 
 pub struct Block {
+    pub key: IVec3,
     pub voxels: Box<[Voxel; BLOCK_VOXELS]>,
+}
+
+impl Block {
+    fn new(key: IVec3) -> Self {
+        Self {
+            key,
+            voxels: Box::new([Voxel::default(); BLOCK_VOXELS]),
+        }
+    }
+}
+
+/// Index of voxel `local` (each coordinate in `0..BLOCK_SIDE`) inside its block.
+pub fn voxel_index(local: IVec3) -> usize {
+    local.x as usize + BLOCK_SIDE * (local.y as usize + BLOCK_SIDE * local.z as usize)
+}
+
+/// One frame to fuse: depth in metres along the optical axis (0 = none), optional row-major RGB
+/// (empty = none) and optional per-pixel global segment labels.
+pub struct TsdfFrame<'a> {
+    pub depth: &'a [f32],
+    pub color: &'a [u8],
+    pub labels: Option<&'a [SegmentLabel]>,
+    pub camera: &'a Pinhole,
+    pub world_from_camera: &'a Affine3A,
+}
+
+/// Deterministic hashing: block order never depends on a per-process random seed.
+type BlockIndex = HashMap<IVec3, u32, FixedState>;
+type BlockSet = HashSet<IVec3, FixedState>;
+
+/// `floor` per coordinate without a libm call (baseline x86-64 has no rounding instruction).
+fn floor_ivec3(p: Vec3) -> IVec3 {
+    let t = p.as_ivec3();
+    t - IVec3::new(
+        i32::from(t.x as f32 > p.x),
+        i32::from(t.y as f32 > p.y),
+        i32::from(t.z as f32 > p.z),
+    )
 }
 
 pub struct TsdfMap {
@@ -45,7 +84,9 @@ pub struct TsdfMap {
     pub max_ray_length: f32,
     /// Running averages stop growing their weight here, so the map can still change.
     pub max_weight: f32,
-    pub blocks: HashMap<IVec3, Block>,
+    /// Blocks in the order they were first touched.
+    pub blocks: Vec<Block>,
+    index: BlockIndex,
 }
 
 impl TsdfMap {
@@ -56,109 +97,140 @@ impl TsdfMap {
             truncation: 4.0 * voxel_size,
             max_ray_length: 5.0,
             max_weight: 1000.0,
-            blocks: HashMap::new(),
+            blocks: Vec::new(),
+            index: BlockIndex::default(),
         }
     }
 
-    fn block_size(&self) -> f32 {
+    pub fn block_size(&self) -> f32 {
         self.voxel_size * BLOCK_SIDE as f32
     }
 
-    fn block_of(&self, point: Vec3) -> IVec3 {
-        (point / self.block_size()).floor().as_ivec3()
+    /// Bytes held by voxel blocks.
+    pub fn memory_bytes(&self) -> usize {
+        self.blocks.len() * (BLOCK_VOXELS * std::mem::size_of::<Voxel>() + 16)
+            + self.index.capacity() * 24
     }
 
-    /// Fuses one depth frame (metres, 0 = none) with its colour (row-major RGB, may be empty).
-    pub fn integrate(
-        &mut self,
-        depth: &[f32],
-        color: &[u8],
-        camera: &Pinhole,
-        world_from_camera: &Affine3A,
-    ) {
-        let w = camera.width as usize;
-        // Blocks the truncation band around every measurement passes through.
-        let mut touched: HashSet<IVec3> = HashSet::new();
-        let eye = Vec3::from(world_from_camera.translation);
-        let step = (self.block_size() * 0.5).max(self.voxel_size);
-        for (i, &d) in depth.iter().enumerate() {
-            if d <= 0.0 || d > self.max_ray_length {
-                continue;
-            }
-            let point = world_from_camera.transform_point3(camera.unproject(
-                (i % w) as f32,
-                (i / w) as f32,
-                d,
-            ));
-            let ray = (point - eye).normalize_or_zero();
-            let mut t = -self.truncation;
-            while t <= self.truncation {
-                touched.insert(self.block_of(point + ray * t));
-                t += step;
-            }
-            touched.insert(self.block_of(point + ray * self.truncation));
-        }
-        for key in &touched {
-            self.blocks.entry(*key).or_insert_with(|| Block {
-                voxels: Box::new([Voxel::default(); BLOCK_VOXELS]),
-            });
-        }
-        let camera_from_world = world_from_camera.inverse();
-        let (truncation, max_weight, voxel_size) =
-            (self.truncation, self.max_weight, self.voxel_size);
-        let max_ray_length = self.max_ray_length;
-        self.blocks
-            .par_iter_mut()
-            .filter(|(k, _)| touched.contains(k))
-            .for_each(|(key, block)| {
-                for (index, voxel) in block.voxels.iter_mut().enumerate() {
-                    let p =
-                        camera_from_world.transform_point3(voxel_center(voxel_size, *key, index));
-                    if p.z <= 0.0 {
-                        continue;
-                    }
-                    let uv = camera.project(p);
-                    let (u, v) = (uv.x.round(), uv.y.round());
-                    if u < 0.0 || v < 0.0 || u >= camera.width as f32 || v >= camera.height as f32 {
-                        continue;
-                    }
-                    let i = v as usize * w + u as usize;
-                    let d = depth[i];
+    /// Keys of the blocks the truncation band of `frame` passes through, sorted. Rays are sampled
+    /// every few pixels: neighbouring rays are far closer together than a block is wide.
+    fn touched_blocks(&self, frame: &TsdfFrame) -> Vec<IVec3> {
+        let camera = frame.camera;
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        let footprint_at_max_range = self.max_ray_length / camera.fx;
+        let stride = ((self.block_size() / (4.0 * footprint_at_max_range)) as usize).clamp(1, 8);
+        let inv_block = 1.0 / self.block_size();
+        let step = 0.5 * self.block_size();
+        let (truncation, max_ray_length) = (self.truncation, self.max_ray_length);
+        let pose = frame.world_from_camera;
+        let keys: BlockSet = (0..h)
+            .into_par_iter()
+            .step_by(stride)
+            .fold(BlockSet::default, |mut keys, v| {
+                let mut last = IVec3::MAX;
+                let eye = Vec3::from(pose.translation);
+                for u in (0..w).step_by(stride) {
+                    let d = frame.depth[v * w + u];
                     if d <= 0.0 || d > max_ray_length {
                         continue;
                     }
-                    let sdf = d - p.z;
-                    if sdf < -truncation {
-                        continue;
-                    }
-                    // Full weight in front of and at the surface, falling linearly to zero at the back
-                    // of the truncation band (Voxblox's drop-off).
-                    let weight = if sdf >= -voxel_size {
-                        1.0
-                    } else {
-                        (truncation + sdf) / (truncation - voxel_size)
-                    };
-                    let total = voxel.weight + weight;
-                    voxel.sdf = (voxel.sdf * voxel.weight + sdf.min(truncation) * weight) / total;
-                    if let Some(c) = color.get(3 * i..3 * i + 3) {
-                        for (old, new) in voxel.color.iter_mut().zip(c) {
-                            *old = ((f32::from(*old) * voxel.weight + f32::from(*new) * weight)
-                                / total)
-                                .round() as u8;
+                    let ray = pose.matrix3 * camera.unproject(u as f32, v as f32, 1.0);
+                    let mut t = (d - truncation).max(0.0);
+                    loop {
+                        let key = floor_ivec3((eye + ray * t) * inv_block);
+                        // Neighbouring samples mostly share a block: skip the hash then.
+                        if key != last {
+                            keys.insert(key);
+                            last = key;
                         }
+                        if t >= d + truncation {
+                            break;
+                        }
+                        t = (t + step).min(d + truncation);
                     }
-                    voxel.weight = total.min(max_weight);
                 }
+                keys
+            })
+            .reduce(BlockSet::default, |mut a, b| {
+                a.extend(b);
+                a
             });
+        let mut keys: Vec<IVec3> = keys.into_iter().collect();
+        keys.sort_unstable_by_key(|k| (k.x, k.y, k.z));
+        keys
+    }
+
+    /// Fuses one frame: depth, colour when given, labels when given.
+    pub fn integrate(&mut self, frame: &TsdfFrame) {
+        let keys = self.touched_blocks(frame);
+        let mut touched = vec![false; self.blocks.len() + keys.len()];
+        for key in keys {
+            let next = self.blocks.len() as u32;
+            let slot = *self.index.entry(key).or_insert(next);
+            if slot == next {
+                self.blocks.push(Block::new(key));
+            }
+            touched[slot as usize] = true;
+        }
+        let integrator = Integrator {
+            camera: *frame.camera,
+            camera_from_world: frame.world_from_camera.inverse(),
+            depth: frame.depth,
+            color: frame.color,
+            labels: frame.labels,
+            voxel_size: self.voxel_size,
+            truncation: self.truncation,
+            max_ray_length: self.max_ray_length,
+            max_weight: self.max_weight,
+        };
+        let mut work: Vec<&mut Block> = self
+            .blocks
+            .iter_mut()
+            .zip(&touched)
+            .filter_map(|(b, &t)| t.then_some(b))
+            .collect();
+        work.par_iter_mut()
+            .with_min_len(4)
+            .for_each(|block| integrator.block(block));
+    }
+
+    /// Replaces voxel labels: `relabel[l]` is the new label of `l` (labels past its end stay).
+    pub fn relabel(&mut self, relabel: &[SegmentLabel]) {
+        self.blocks.par_iter_mut().for_each(|block| {
+            for voxel in block.voxels.iter_mut() {
+                if let Some(&l) = relabel.get(voxel.label as usize) {
+                    voxel.label = l;
+                }
+            }
+        });
+    }
+
+    /// The block holding voxel `index` (integer voxel coordinates), and the voxel's slot in it.
+    fn locate(&self, voxel: IVec3) -> Option<(&Block, usize)> {
+        let key = voxel.div_euclid(IVec3::splat(BLOCK_SIDE as i32));
+        let local = voxel.rem_euclid(IVec3::splat(BLOCK_SIDE as i32));
+        let slot = *self.index.get(&key)?;
+        Some((&self.blocks[slot as usize], voxel_index(local)))
+    }
+
+    /// Integer coordinates of the voxel containing `point`.
+    pub fn voxel_coords(&self, point: Vec3) -> IVec3 {
+        (point / self.voxel_size).floor().as_ivec3()
+    }
+
+    /// Centre of the voxel with integer coordinates `voxel`.
+    pub fn voxel_center(&self, voxel: IVec3) -> Vec3 {
+        (voxel.as_vec3() + Vec3::splat(0.5)) * self.voxel_size
+    }
+
+    /// The voxel with integer coordinates `voxel`, if its block exists.
+    pub fn voxel(&self, voxel: IVec3) -> Option<&Voxel> {
+        self.locate(voxel).map(|(b, i)| &b.voxels[i])
     }
 
     /// The voxel containing `point`, if its block exists.
     pub fn voxel_at(&self, point: Vec3) -> Option<&Voxel> {
-        let index = (point / self.voxel_size).floor().as_ivec3();
-        let key = index.div_euclid(IVec3::splat(BLOCK_SIDE as i32));
-        let local = index.rem_euclid(IVec3::splat(BLOCK_SIDE as i32));
-        let i = local.x as usize + BLOCK_SIDE * (local.y as usize + BLOCK_SIDE * local.z as usize);
-        self.blocks.get(&key).map(|b| &b.voxels[i])
+        self.voxel(self.voxel_coords(point))
     }
 
     /// Trilinear signed distance at `point` from observed voxels; `None` where any corner is unobserved.
@@ -166,17 +238,165 @@ impl TsdfMap {
         let base = point / self.voxel_size - Vec3::splat(0.5);
         let corner = base.floor();
         let f = base - corner;
+        let corner = corner.as_ivec3();
         let mut value = 0.0;
         for c in 0..8 {
-            let offset = Vec3::new((c & 1) as f32, ((c >> 1) & 1) as f32, ((c >> 2) & 1) as f32);
-            let center = (corner + offset + Vec3::splat(0.5)) * self.voxel_size;
-            let v = self.voxel_at(center).filter(|v| v.weight > 0.0)?;
+            let offset = IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+            let v = self.voxel(corner + offset).filter(|v| v.weight > 0.0)?;
             let wx = if c & 1 == 1 { f.x } else { 1.0 - f.x };
             let wy = if c & 2 == 2 { f.y } else { 1.0 - f.y };
             let wz = if c & 4 == 4 { f.z } else { 1.0 - f.z };
             value += wx * wy * wz * v.sdf;
         }
         Some(value)
+    }
+
+    /// Depth (along the optical axis) of the first zero crossing of the map along the ray through
+    /// pixel `(u, v)`, or `None` when the ray leaves the map's observed space without a crossing.
+    pub fn raycast_depth(
+        &self,
+        camera: &Pinhole,
+        world_from_camera: &Affine3A,
+        u: f32,
+        v: f32,
+    ) -> Option<f32> {
+        let dir = world_from_camera.matrix3 * camera.unproject(u, v, 1.0);
+        let eye = Vec3::from(world_from_camera.translation);
+        let scale = dir.length();
+        let mut t = 0.1;
+        let mut previous: Option<(f32, f32)> = None;
+        while t < self.max_ray_length {
+            let p = eye + dir * t;
+            match self.sdf_at(p) {
+                Some(sdf) => {
+                    if let Some((t0, sdf0)) = previous
+                        && sdf0 > 0.0
+                        && sdf <= 0.0
+                    {
+                        return Some(t0 + (t - t0) * sdf0 / (sdf0 - sdf));
+                    }
+                    previous = Some((t, sdf));
+                    // Never step past the surface: at most the distance left, at least half a voxel.
+                    t += (sdf.abs() * 0.8).max(0.5 * self.voxel_size) / scale;
+                }
+                None => {
+                    previous = None;
+                    t += self.voxel_size / scale;
+                }
+            }
+        }
+        None
+    }
+}
+
+/// What one frame's integration needs, shared by the threads.
+struct Integrator<'a> {
+    camera: Pinhole,
+    camera_from_world: Affine3A,
+    depth: &'a [f32],
+    color: &'a [u8],
+    labels: Option<&'a [SegmentLabel]>,
+    voxel_size: f32,
+    truncation: f32,
+    max_ray_length: f32,
+    max_weight: f32,
+}
+
+impl Integrator<'_> {
+    /// Projects every voxel of `block` into the frame and fuses the pixel it lands on. Voxel
+    /// positions in the camera frame advance by constant steps, so the inner loop is adds, one
+    /// division and a lookup.
+    fn block(&self, block: &mut Block) {
+        let vs = self.voxel_size;
+        let origin = (block.key * BLOCK_SIDE as i32).as_vec3() * vs + Vec3::splat(0.5 * vs);
+        let p0 = self.camera_from_world.transform_point3(origin);
+        let r = self.camera_from_world.matrix3;
+        let (dx, dy, dz) = (
+            Vec3::from(r.x_axis) * vs,
+            Vec3::from(r.y_axis) * vs,
+            Vec3::from(r.z_axis) * vs,
+        );
+        let (w, h) = (self.camera.width as i32, self.camera.height as i32);
+        let (fx, fy, cx, cy) = (self.camera.fx, self.camera.fy, self.camera.cx, self.camera.cy);
+        let with_color = self.color.len() == self.depth.len() * 3;
+        let mut index = 0;
+        for z in 0..BLOCK_SIDE {
+            for y in 0..BLOCK_SIDE {
+                let mut p = p0 + dz * z as f32 + dy * y as f32;
+                for _ in 0..BLOCK_SIDE {
+                    let here = p;
+                    let slot = index;
+                    p += dx;
+                    index += 1;
+                    if here.z <= 0.05 {
+                        continue;
+                    }
+                    let inv_z = 1.0 / here.z;
+                    // Nearest pixel; `as i32` truncates towards zero, hence the +0.5 and the >= 0 test
+                    // on the shifted value.
+                    let uf = fx * here.x * inv_z + cx + 0.5;
+                    let vf = fy * here.y * inv_z + cy + 0.5;
+                    if uf < 0.0 || vf < 0.0 {
+                        continue;
+                    }
+                    let (u, v) = (uf as i32, vf as i32);
+                    if u >= w || v >= h {
+                        continue;
+                    }
+                    let pixel = (v * w + u) as usize;
+                    let d = self.depth[pixel];
+                    if d <= 0.0 || d > self.max_ray_length {
+                        continue;
+                    }
+                    let sdf = d - here.z;
+                    if sdf < -self.truncation {
+                        continue;
+                    }
+                    self.fuse(&mut block.voxels[slot], sdf, pixel, with_color);
+                }
+            }
+        }
+    }
+
+    fn fuse(&self, voxel: &mut Voxel, sdf: f32, pixel: usize, with_color: bool) {
+        // Full weight in front of and at the surface, falling linearly to zero at the back of the
+        // truncation band (Voxblox's drop-off).
+        let weight = if sdf >= -self.voxel_size {
+            1.0
+        } else {
+            (self.truncation + sdf) / (self.truncation - self.voxel_size)
+        };
+        if weight <= 0.0 {
+            return;
+        }
+        let total = voxel.weight + weight;
+        let share = weight / total;
+        voxel.sdf += (sdf.min(self.truncation) - voxel.sdf) * share;
+        if with_color {
+            let c = &self.color[3 * pixel..3 * pixel + 3];
+            for (old, &new) in voxel.color.iter_mut().zip(c) {
+                let o = f32::from(*old);
+                *old = (o + (f32::from(new) - o) * share + 0.5) as u8;
+            }
+        }
+        voxel.weight = total.min(self.max_weight);
+        // Labels vote only near the surface, where the voxel belongs to what the pixel sees.
+        if let Some(labels) = self.labels
+            && sdf < self.truncation
+        {
+            let label = labels[pixel];
+            if label == 0 {
+                return;
+            }
+            if voxel.label == label {
+                voxel.label_weight = (voxel.label_weight + weight).min(self.max_weight);
+            } else if voxel.label_weight <= weight {
+                voxel.label = label;
+                voxel.label_weight = weight;
+            } else {
+                voxel.label_weight -= weight;
+            }
+        }
     }
 }
 
@@ -200,15 +420,25 @@ mod tests {
         let mut map = TsdfMap::new(0.02);
         for (k, pose) in poses.iter().enumerate().step_by(2) {
             let f = render_frame(&scene, &camera, pose, None, 1, k);
-            map.integrate(&f.depth, &f.color, &camera, pose);
+            map.integrate(&TsdfFrame {
+                depth: &f.depth,
+                color: &f.color,
+                labels: None,
+                camera: &camera,
+                world_from_camera: pose,
+            });
         }
-        // A held-out frame: its measured surface points should sit at sdf ~ 0 in the map.
+        // A held-out frame: its measured surface points should sit at sdf ~ 0 in the map, and
+        // rays cast into the map should find the measured depth.
         let pose = poses[31];
         let f = render_frame(&scene, &camera, &pose, None, 1, 31);
-        let mut errors: Vec<f32> = (0..f.depth.len())
+        let samples: Vec<usize> = (0..f.depth.len())
             .step_by(53)
             .filter(|&i| f.depth[i] > 0.0)
-            .filter_map(|i| {
+            .collect();
+        let mut sdf_errors: Vec<f32> = samples
+            .iter()
+            .filter_map(|&i| {
                 let p = pose.transform_point3(camera.unproject(
                     (i % 640) as f32,
                     (i / 640) as f32,
@@ -217,12 +447,48 @@ mod tests {
                 map.sdf_at(p).map(f32::abs)
             })
             .collect();
-        assert!(errors.len() > 3000, "{} observed samples", errors.len());
-        errors.sort_by(f32::total_cmp);
-        let median = errors[errors.len() / 2];
-        assert!(
-            median < 0.005,
-            "median |sdf| on held-out surface points: {median} m"
-        );
+        assert!(sdf_errors.len() > 3000, "{} observed samples", sdf_errors.len());
+        let median = crate::map::median(&mut sdf_errors);
+        assert!(median < 0.005, "median |sdf| on held-out surface points: {median} m");
+        let mut depth_errors: Vec<f32> = samples
+            .iter()
+            .filter_map(|&i| {
+                map.raycast_depth(&camera, &pose, (i % 640) as f32, (i / 640) as f32)
+                    .map(|d| (d - f.depth[i]).abs())
+            })
+            .collect();
+        assert!(depth_errors.len() as f32 > 0.9 * samples.len() as f32);
+        let median = crate::map::median(&mut depth_errors);
+        assert!(median < 0.005, "median |raycast - measured depth|: {median} m");
+    }
+
+    #[test]
+    fn the_label_vote_follows_the_majority_and_relabel_renames() {
+        let camera = Pinhole {
+            width: 8,
+            height: 8,
+            fx: 8.0,
+            fy: 8.0,
+            cx: 3.5,
+            cy: 3.5,
+        };
+        let depth = vec![1.0f32; 64];
+        let pose = Affine3A::IDENTITY;
+        let mut map = TsdfMap::new(0.05);
+        for label in [3, 3, 5, 3, 5, 5, 5, 5] {
+            let labels = vec![label; 64];
+            map.integrate(&TsdfFrame {
+                depth: &depth,
+                color: &[],
+                labels: Some(&labels),
+                camera: &camera,
+                world_from_camera: &pose,
+            });
+        }
+        let surface = map.voxel_at(Vec3::new(0.0, 0.0, 1.01)).expect("observed");
+        assert_eq!(surface.label, 5);
+        map.relabel(&[0, 1, 2, 3, 4, 9]);
+        let surface = map.voxel_at(Vec3::new(0.0, 0.0, 1.01)).expect("observed");
+        assert_eq!(surface.label, 9);
     }
 }
