@@ -1,8 +1,10 @@
 //! The volumetric map: a hashed TSDF of voxel blocks with a segment label per voxel, and the
 //! labelled marching cubes that turns it into meshes.
 
+pub mod mesh;
 pub mod tsdf;
 
+pub use mesh::{LabelledMesh, extract_mesh};
 pub use tsdf::{BLOCK_SIDE, SegmentLabel, TsdfFrame, TsdfMap, Voxel};
 
 /// Median of `values` (reordered in place); 0 when empty.

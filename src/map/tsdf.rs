@@ -165,12 +165,7 @@ impl TsdfMap {
         let keys = self.touched_blocks(frame);
         let mut touched = vec![false; self.blocks.len() + keys.len()];
         for key in keys {
-            let next = self.blocks.len() as u32;
-            let slot = *self.index.entry(key).or_insert(next);
-            if slot == next {
-                self.blocks.push(Block::new(key));
-            }
-            touched[slot as usize] = true;
+            touched[self.ensure_block(key)] = true;
         }
         let integrator = Integrator {
             camera: *frame.camera,
@@ -192,6 +187,16 @@ impl TsdfMap {
         work.par_iter_mut()
             .with_min_len(4)
             .for_each(|block| integrator.block(block));
+    }
+
+    /// The arena slot of block `key`, allocating an unobserved block when it is new.
+    pub fn ensure_block(&mut self, key: IVec3) -> usize {
+        let next = self.blocks.len() as u32;
+        let slot = *self.index.entry(key).or_insert(next);
+        if slot == next {
+            self.blocks.push(Block::new(key));
+        }
+        slot as usize
     }
 
     /// Replaces voxel labels: `relabel[l]` is the new label of `l` (labels past its end stay).
