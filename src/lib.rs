@@ -13,6 +13,7 @@ pub mod graph;
 pub mod io;
 pub mod kinematics;
 pub mod map;
+pub mod panoptic;
 pub mod pipeline;
 pub mod progress;
 pub mod render;

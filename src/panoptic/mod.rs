@@ -1,0 +1,13 @@
+//! Volumetric panoptic mapping (Han et al., Sect. 3, on the Voxblox++ architecture): geometric
+//! segmentation fused with panoptic masks, association to global segment labels, joint
+//! instance fusion Phi(l, c, p), regularisation, and extraction of scene entities.
+
+pub mod entities;
+pub mod fusion;
+pub mod geometric;
+pub mod instances;
+pub mod mapper;
+
+pub use entities::{ClassIds, ExtractionParams, PanopticEntity, PanopticScene, extract_entities};
+pub use instances::InstanceFusion;
+pub use mapper::{MapperFrame, MapperParams, PanopticMapper, SegmentedFrame, segment_frame};
