@@ -8,6 +8,7 @@ pub mod cad;
 pub mod classes;
 pub mod components;
 pub mod error;
+pub mod eval;
 pub mod geometry;
 pub mod graph;
 pub mod io;
@@ -32,6 +33,7 @@ impl PluginGroup for ReconstructionPlugins {
         PluginGroupBuilder::start::<Self>()
             .add(systems::StagesPlugin)
             .add(systems::IngestPlugin)
+            .add(systems::PanopticMappingPlugin)
     }
 }
 

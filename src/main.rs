@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use iscene::error::IsceneError;
+use iscene::panoptic::InstanceFusion;
 use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
 use iscene::render::{RenderOptions, render_sequence};
 use iscene::scene::SceneSpec;
@@ -36,6 +37,12 @@ enum Command {
     },
     /// Reconstruct a scene from a specification (rendered first), a sequence folder or a TUM folder.
     Reconstruct(ReconstructArgs),
+    /// Score a reconstruction against a rendered sequence's ground truth; one JSON object on stdout.
+    Eval {
+        dir: PathBuf,
+        #[arg(long)]
+        gt: PathBuf,
+    },
     /// The CAD database.
     Cad {
         #[command(subcommand)]
@@ -57,6 +64,15 @@ struct ReconstructArgs {
     voxel: f32,
     #[arg(long, value_enum, default_value_t = Segmentation::Oracle)]
     segmentation: Segmentation,
+    /// Map like this baseline instead of the joint fusion (for the ablation).
+    #[arg(long, value_enum)]
+    baseline: Option<Baseline>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Baseline {
+    #[value(name = "voxblox++")]
+    VoxbloxPlusPlus,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -140,6 +156,14 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 into.display()
             );
         }
+        Some(Command::Eval { dir, gt }) => {
+            let report = iscene::eval::evaluate_reconstruction(&dir, &gt)?;
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&report)
+                    .map_err(|e| IsceneError::Internal(e.to_string()))?
+            );
+        }
         command => {
             let args = match command {
                 Some(Command::Reconstruct(args)) => args,
@@ -149,6 +173,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     frames: None,
                     voxel: 0.02,
                     segmentation: Segmentation::Oracle,
+                    baseline: None,
                 },
             };
             let out = args.out.unwrap_or_else(|| {
@@ -170,6 +195,10 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 frames: args.frames,
                 voxel: args.voxel,
                 segmentation,
+                fusion: match args.baseline {
+                    None => InstanceFusion::Joint,
+                    Some(Baseline::VoxbloxPlusPlus) => InstanceFusion::Voxblox,
+                },
                 progress: interactive,
             };
             let r = reconstruct(&options)?;

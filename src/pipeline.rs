@@ -14,17 +14,14 @@ use crate::io::sequence::SequenceFormat;
 use crate::io::write_sequence::write_text;
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
+use crate::io::panoptic_dir::{PanopticIndex, write_panoptic};
+use crate::panoptic::{InstanceFusion, MapperParams};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
+use crate::systems::panoptic_mapping::{MappingConfig, PanopticMap, PanopticSurface};
 use crate::systems::stages::StageMarks;
 use crate::systems::{Reconstruct, ReconstructionStage};
 
-/// Which segmentation service labels the frames.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SegmentationChoice {
-    Oracle,
-    Onnx,
-    None,
-}
+pub use crate::segmentation::SegmentationChoice;
 
 #[derive(Clone, Debug)]
 pub struct ReconstructOptions {
@@ -35,6 +32,8 @@ pub struct ReconstructOptions {
     pub frames: Option<(usize, Option<usize>, usize)>,
     pub voxel: f32,
     pub segmentation: SegmentationChoice,
+    /// Joint fusion, or the Voxblox++ baseline.
+    pub fusion: InstanceFusion,
     pub progress: bool,
 }
 
@@ -47,6 +46,7 @@ pub struct ReconstructReport {
     pub ingest: IngestReport,
     pub entities: usize,
     pub relations: usize,
+    pub panoptic: Option<PanopticReport>,
     /// Stages that ran, with wall-clock seconds; rendering and writing are listed too.
     pub timings: Vec<(String, f64)>,
     /// Stages of the pipeline that have no implementation yet and did not run.
@@ -54,8 +54,34 @@ pub struct ReconstructReport {
     pub outputs: Vec<String>,
 }
 
+/// What the panoptic map holds.
+#[derive(Clone, Debug, Serialize)]
+pub struct PanopticReport {
+    pub fusion: String,
+    pub voxel_size_m: f32,
+    pub blocks: usize,
+    pub map_memory_mb: f64,
+    pub label_merges: usize,
+    pub instance_merges: usize,
+    pub surface_voxels: usize,
+    /// Entity id, class and surface voxels.
+    pub entities: Vec<(String, String, usize)>,
+}
+
 /// Stages with systems in this build.
-const BUILT_STAGES: [ReconstructionStage; 1] = [ReconstructionStage::Ingest];
+const BUILT_STAGES: [ReconstructionStage; 4] = [
+    ReconstructionStage::Ingest,
+    ReconstructionStage::Segment,
+    ReconstructionStage::Integrate,
+    ReconstructionStage::Extract,
+];
+
+fn fusion_name(fusion: InstanceFusion) -> &'static str {
+    match fusion {
+        InstanceFusion::Joint => "joint",
+        InstanceFusion::Voxblox => "voxblox++",
+    }
+}
 
 fn spec_fingerprint(text: &str) -> String {
     use sha2::Digest;
@@ -138,18 +164,8 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             .into());
         }
     }
-    match options.segmentation {
-        SegmentationChoice::Oracle if sequence.labels.is_none() => {
-            return Err(InputError::missing(sequence_dir.join("labels.json"), "--segmentation oracle needs ground-truth labels; use --segmentation none (or onnx) for real data").into());
-        }
-        SegmentationChoice::Onnx => {
-            return Err(InputError::invalid(
-                "--segmentation onnx",
-                "the onnx backend is not built yet; use oracle (rendered input) or none",
-            )
-            .into());
-        }
-        _ => {}
+    if options.segmentation == SegmentationChoice::Oracle && sequence.labels.is_none() {
+        return Err(InputError::missing(sequence_dir.join("labels.json"), "--segmentation oracle needs ground-truth labels; use --segmentation none (or onnx) for real data").into());
     }
     let format = match sequence.format {
         SequenceFormat::Native => "native",
@@ -160,9 +176,14 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     let mut app = App::new();
     app.add_plugins(crate::ReconstructionPlugins);
     app.insert_resource(InputSequence(sequence));
+    app.insert_resource(MappingConfig {
+        params: MapperParams::new(options.voxel, options.fusion),
+        segmentation: options.segmentation,
+        progress: options.progress,
+    });
     app.world_mut().run_schedule(Reconstruct);
     if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
-        return Err(err.into());
+        return Err(err);
     }
     let ingest = app
         .world()
@@ -179,20 +200,52 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
 
     let write_start = Instant::now();
     let staged = StagedDir::new(&options.out)?;
+    let mut outputs = vec!["report.json".to_string()];
+    let mut panoptic = None;
+    if let (Some(map), Some(surface)) = (
+        app.world().get_resource::<PanopticMap>(),
+        app.world().get_resource::<PanopticSurface>(),
+    ) {
+        let index = PanopticIndex {
+            voxel_size: options.voxel,
+            fusion: fusion_name(options.fusion).into(),
+            entities: surface.entities.clone(),
+        };
+        outputs.extend(write_panoptic(
+            &staged.path().join("panoptic"),
+            &index,
+            &surface.voxels,
+        )?);
+        panoptic = Some(PanopticReport {
+            fusion: index.fusion.clone(),
+            voxel_size_m: options.voxel,
+            blocks: map.0.tsdf.blocks.len(),
+            map_memory_mb: map.0.tsdf.memory_bytes() as f64 / 1e6,
+            label_merges: map.0.label_merges,
+            instance_merges: map.0.instance_merges,
+            surface_voxels: surface.voxels.len(),
+            entities: surface
+                .entities
+                .iter()
+                .map(|e| (e.id.clone(), e.class.clone(), e.surface_voxels))
+                .collect(),
+        });
+    }
     let mut report = ReconstructReport {
         input: sequence_dir,
         format: format.into(),
         rendered,
         ingest,
-        entities: 0,
+        entities: panoptic.as_ref().map_or(0, |p| p.entities.len()),
         relations: 0,
+        panoptic,
         timings,
         stages_not_built: ReconstructionStage::ALL
             .iter()
             .filter(|s| !BUILT_STAGES.contains(s))
             .map(|s| s.name().to_string())
             .collect(),
-        outputs: vec!["report.json".into()],
+        outputs,
     };
     report
         .timings

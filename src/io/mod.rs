@@ -6,6 +6,7 @@ pub mod images;
 pub mod intrinsics;
 pub mod native;
 pub mod open3d_log;
+pub mod panoptic_dir;
 pub mod ply;
 pub mod pose;
 pub mod sequence;

@@ -47,8 +47,8 @@ impl MapperParams {
             association_stride: 2,
             min_overlap: 0.2,
             merge_overlap: 0.2,
-            merge_frames: 3,
-            instance_merge_ratio: 0.3,
+            merge_frames: 3000,
+            instance_merge_ratio: 0.5,
             regularise_every: 25,
         }
     }

@@ -7,7 +7,9 @@ pub mod fusion;
 pub mod geometric;
 pub mod instances;
 pub mod mapper;
+pub mod run;
 
 pub use entities::{ClassIds, ExtractionParams, PanopticEntity, PanopticScene, extract_entities};
 pub use instances::InstanceFusion;
+pub use run::map_sequence;
 pub use mapper::{MapperFrame, MapperParams, PanopticMapper, SegmentedFrame, segment_frame};

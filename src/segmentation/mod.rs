@@ -36,3 +36,14 @@ pub trait SegmentationService: Send + Sync {
     fn segment(&self, frame: &crate::io::Frame)
     -> Result<PanopticFrame, crate::error::IsceneError>;
 }
+
+/// Which segmentation service labels the frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SegmentationChoice {
+    /// Ground truth of a rendered sequence through the noise model it was rendered with.
+    Oracle,
+    /// Pretrained networks through ONNX Runtime.
+    Onnx,
+    /// Geometry only: segments without classes.
+    None,
+}

@@ -18,7 +18,27 @@ pub struct OracleSegmentation {
     seed: u64,
 }
 
+/// The part of `gt/render.json` the oracle needs: the segmentation noise the scene asked for.
+#[derive(serde::Deserialize)]
+struct RenderRecord {
+    seed: u64,
+    segmentation_noise: Option<SegmentationNoise>,
+}
+
 impl OracleSegmentation {
+    /// An oracle with the noise model and seed the sequence was rendered with (`gt/render.json`);
+    /// the realistic preset when the sequence does not say.
+    pub fn for_sequence(sequence: &Sequence) -> Result<Self, InputError> {
+        let path = sequence.root.join("gt").join("render.json");
+        if !path.is_file() {
+            return Self::new(sequence, Some(SegmentationNoise::REALISTIC), 0);
+        }
+        let text = std::fs::read_to_string(&path).map_err(|e| InputError::io(&path, &e))?;
+        let record: RenderRecord = serde_json::from_str(&text)
+            .map_err(|e| InputError::invalid(&path, format!("not a render record: {e}")))?;
+        Self::new(sequence, record.segmentation_noise, record.seed)
+    }
+
     /// An oracle for `sequence`, which must carry ground-truth labels (labels.json and label images).
     pub fn new(
         sequence: &Sequence,

@@ -29,9 +29,10 @@ pub struct IngestReport {
     pub has_ground_truth_labels: bool,
 }
 
-/// The first bad-input error of a stage, for the caller to report (exit code 2).
+/// The first error of a stage, for the caller to report (bad input: exit code 2); later stages
+/// do nothing once it is set.
 #[derive(Resource, Default)]
-pub struct StageError(pub Option<InputError>);
+pub struct StageError(pub Option<crate::error::IsceneError>);
 
 /// Reads and checks all frames; pure function behind the system.
 pub fn ingest(sequence: &Sequence) -> Result<IngestReport, InputError> {
@@ -83,7 +84,7 @@ pub fn ingest_system(
 ) {
     match ingest(&sequence.0) {
         Ok(report) => commands.insert_resource(report),
-        Err(e) => error.0 = Some(e),
+        Err(e) => error.0 = Some(e.into()),
     }
 }
 

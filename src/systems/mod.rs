@@ -2,8 +2,10 @@
 //! algorithm, and write components. `stages` fixes their order.
 
 pub mod ingest;
+pub mod panoptic_mapping;
 pub mod scene_graph;
 pub mod stages;
 
 pub use ingest::IngestPlugin;
+pub use panoptic_mapping::PanopticMappingPlugin;
 pub use stages::{Reconstruct, ReconstructionStage, StagesPlugin};

@@ -1,0 +1,117 @@
+//! The `panoptic/` folder of a reconstruction: `entities.json` (one record per scene entity),
+//! `<id>.ply` (its segment mesh) and `surface_voxels.ply` (every surface voxel centre with the
+//! index of its entity plus one, 0 = none; what `iscene eval` scores).
+
+use std::path::Path;
+
+use glam::Vec3;
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{
+    Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType,
+    ScalarType,
+};
+use ply_rs_bw::writer::Writer;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{InputError, IsceneError};
+use crate::io::ply::mesh_ply_bytes;
+use crate::io::write_sequence::write_text;
+use crate::panoptic::PanopticEntity;
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PanopticIndex {
+    pub voxel_size: f32,
+    /// `joint` or `voxblox++`.
+    pub fusion: String,
+    pub entities: Vec<PanopticEntity>,
+}
+
+/// A colour per class name, stable across runs.
+fn class_color(class: &str) -> [f32; 3] {
+    let h = crate::scene::placement::stable_hash(0, class);
+    [
+        0.25 + 0.7 * ((h & 0xff) as f32 / 255.0),
+        0.25 + 0.7 * (((h >> 8) & 0xff) as f32 / 255.0),
+        0.25 + 0.7 * (((h >> 16) & 0xff) as f32 / 255.0),
+    ]
+}
+
+pub fn write_panoptic(
+    dir: &Path,
+    index: &PanopticIndex,
+    surface_voxels: &[(Vec3, u32)],
+) -> Result<Vec<String>, IsceneError> {
+    std::fs::create_dir_all(dir).map_err(|e| IsceneError::io(dir.display().to_string(), e))?;
+    let mut written = Vec::new();
+    for e in &index.entities {
+        let bytes = mesh_ply_bytes(&e.mesh, class_color(&e.class)).map_err(IsceneError::Internal)?;
+        let path = dir.join(format!("{}.ply", e.id));
+        std::fs::write(&path, bytes).map_err(|err| IsceneError::io(path.display().to_string(), err))?;
+        written.push(format!("panoptic/{}.ply", e.id));
+    }
+    let path = dir.join("surface_voxels.ply");
+    std::fs::write(&path, labelled_points_ply_bytes(surface_voxels)?)
+        .map_err(|err| IsceneError::io(path.display().to_string(), err))?;
+    write_text(
+        &dir.join("entities.json"),
+        &serde_json::to_string_pretty(index).map_err(|e| IsceneError::Internal(e.to_string()))?,
+    )?;
+    written.extend(["panoptic/surface_voxels.ply".into(), "panoptic/entities.json".into()]);
+    Ok(written)
+}
+
+fn labelled_points_ply_bytes(points: &[(Vec3, u32)]) -> Result<Vec<u8>, IsceneError> {
+    let mut ply = Ply::<DefaultElement>::new();
+    ply.header.encoding = Encoding::BinaryLittleEndian;
+    ply.header.comments.push("surface voxels of the panoptic map; entity = index in entities.json + 1, 0 = none".into());
+    let mut vertex = ElementDef::new("vertex".into());
+    for name in ["x", "y", "z"] {
+        vertex.properties.add(PropertyDef::new(name.into(), PropertyType::Scalar(ScalarType::Float)));
+    }
+    vertex.properties.add(PropertyDef::new("entity".into(), PropertyType::Scalar(ScalarType::UInt)));
+    ply.header.elements.add(vertex);
+    let vertices = points
+        .iter()
+        .map(|(p, e)| {
+            let mut v = DefaultElement::new();
+            v.insert("x".into(), Property::Float(p.x));
+            v.insert("y".into(), Property::Float(p.y));
+            v.insert("z".into(), Property::Float(p.z));
+            v.insert("entity".into(), Property::UInt(*e));
+            v
+        })
+        .collect();
+    ply.payload.insert("vertex".into(), vertices);
+    let mut bytes = Vec::new();
+    Writer::new()
+        .write_ply(&mut bytes, &mut ply)
+        .map_err(|e| IsceneError::Internal(e.to_string()))?;
+    Ok(bytes)
+}
+
+/// Reads `entities.json` and `surface_voxels.ply` of a reconstruction's `panoptic/` folder.
+pub fn read_panoptic(dir: &Path) -> Result<(PanopticIndex, Vec<(Vec3, u32)>), InputError> {
+    let index_path = dir.join("entities.json");
+    let text = std::fs::read_to_string(&index_path).map_err(|e| InputError::io(&index_path, &e))?;
+    let index: PanopticIndex = serde_json::from_str(&text)
+        .map_err(|e| InputError::invalid(&index_path, format!("not a panoptic index: {e}")))?;
+    let path = dir.join("surface_voxels.ply");
+    let file = std::fs::File::open(&path).map_err(|e| InputError::io(&path, &e))?;
+    let ply = Parser::<DefaultElement>::new()
+        .read_ply(&mut std::io::BufReader::new(file))
+        .map_err(|e| InputError::invalid(&path, format!("not a PLY point set: {e}")))?;
+    let mut points = Vec::new();
+    for v in ply.payload.get("vertex").map(Vec::as_slice).unwrap_or_default() {
+        let (Some(Property::Float(x)), Some(Property::Float(y)), Some(Property::Float(z)), Some(Property::UInt(e))) =
+            (v.get("x"), v.get("y"), v.get("z"), v.get("entity"))
+        else {
+            return Err(InputError::invalid(&path, "vertex without float x, y, z and uint entity"));
+        };
+        if *e as usize > index.entities.len() || !(x.is_finite() && y.is_finite() && z.is_finite()) {
+            return Err(InputError::invalid(&path, format!("bad voxel ({x}, {y}, {z}) entity {e}")));
+        }
+        points.push((Vec3::new(*x, *y, *z), *e));
+    }
+    Ok((index, points))
+}

@@ -1,0 +1,60 @@
+//! Maps a whole sequence: frames are read, segmented and fused with their masks a few at a
+//! time in parallel, then associated and integrated in order.
+
+use rayon::prelude::*;
+
+use crate::error::IsceneError;
+use crate::io::Sequence;
+use crate::panoptic::entities::ClassIds;
+use crate::panoptic::mapper::{MapperFrame, MapperParams, PanopticMapper, segment_frame};
+use crate::segmentation::SegmentationService;
+
+pub fn map_sequence(
+    sequence: &Sequence,
+    service: Option<&dyn SegmentationService>,
+    params: &MapperParams,
+    progress: &indicatif::ProgressBar,
+) -> Result<PanopticMapper, IsceneError> {
+    let classes = ClassIds::builtin();
+    let class_id = |name: &str| classes.id(name);
+    let mut mapper = PanopticMapper::new(params.clone());
+    let n = sequence.frames.len();
+    // Enough frames in flight to keep every core busy with the per-frame work.
+    let batch = 2 * rayon::current_num_threads().max(1);
+    for start in (0..n).step_by(batch) {
+        let prepared: Vec<_> = (start..(start + batch).min(n))
+            .into_par_iter()
+            .map(|i| -> Result<_, IsceneError> {
+                let frame = sequence.load_frame(i)?;
+                let masks = service.map(|s| s.segment(&frame)).transpose()?;
+                let segmented = segment_frame(
+                    &MapperFrame {
+                        depth: &frame.depth,
+                        color: &frame.color,
+                        camera: &frame.camera,
+                        world_from_camera: &frame.world_from_camera,
+                    },
+                    masks.as_ref(),
+                    &class_id,
+                    params,
+                );
+                Ok((frame, segmented))
+            })
+            .collect();
+        for item in prepared {
+            let (frame, segmented) = item?;
+            mapper.integrate(
+                &MapperFrame {
+                    depth: &frame.depth,
+                    color: &frame.color,
+                    camera: &frame.camera,
+                    world_from_camera: &frame.world_from_camera,
+                },
+                &segmented,
+            );
+            progress.inc(1);
+        }
+    }
+    mapper.regularise();
+    Ok(mapper)
+}

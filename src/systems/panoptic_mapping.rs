@@ -1,0 +1,131 @@
+//! The panoptic mapping stages: choose the segmentation service (Segment), fuse every frame
+//! into the panoptic map (Integrate), and spawn one scene entity per object and layout piece
+//! with its panoptic identity and segment mesh (Extract).
+
+use bevy::prelude::*;
+
+use crate::components::{Panoptic, SceneEntity, SegmentMesh};
+use crate::error::InputError;
+use crate::panoptic::{
+    ClassIds, ExtractionParams, MapperParams, PanopticEntity, PanopticMapper, extract_entities,
+    map_sequence,
+};
+use crate::segmentation::oracle::OracleSegmentation;
+use crate::segmentation::{SegmentationChoice, SegmentationService};
+use crate::systems::ingest::{InputSequence, StageError};
+
+/// How this reconstruction maps.
+#[derive(Resource, Clone, Debug)]
+pub struct MappingConfig {
+    pub params: MapperParams,
+    pub segmentation: SegmentationChoice,
+    pub progress: bool,
+}
+
+/// The segmentation service the Segment stage chose; `None` maps geometry only.
+#[derive(Resource)]
+pub struct Segmenter(pub Option<Box<dyn SegmentationService>>);
+
+/// The panoptic map after integration.
+#[derive(Resource)]
+pub struct PanopticMap(pub PanopticMapper);
+
+/// What the Extract stage found, for export and evaluation: the entities in spawn order and
+/// every surface voxel with its entity index plus one.
+#[derive(Resource, Default)]
+pub struct PanopticSurface {
+    pub entities: Vec<PanopticEntity>,
+    pub voxels: Vec<(Vec3, u32)>,
+}
+
+fn choose_segmenter(
+    mut commands: Commands,
+    config: Res<MappingConfig>,
+    sequence: Res<InputSequence>,
+    mut error: ResMut<StageError>,
+) {
+    if error.0.is_some() {
+        return;
+    }
+    let service: Result<Option<Box<dyn SegmentationService>>, InputError> =
+        match config.segmentation {
+            SegmentationChoice::Oracle => OracleSegmentation::for_sequence(&sequence.0)
+                .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>)),
+            SegmentationChoice::None => Ok(None),
+            SegmentationChoice::Onnx => Err(InputError::invalid(
+                "--segmentation onnx",
+                "the onnx backend is not built yet; use oracle (rendered input) or none",
+            )),
+        };
+    match service {
+        Ok(s) => commands.insert_resource(Segmenter(s)),
+        Err(e) => error.0 = Some(e.into()),
+    }
+}
+
+fn integrate_frames(
+    mut commands: Commands,
+    config: Res<MappingConfig>,
+    sequence: Res<InputSequence>,
+    segmenter: Option<Res<Segmenter>>,
+    mut error: ResMut<StageError>,
+) {
+    let Some(segmenter) = segmenter.filter(|_| error.0.is_none()) else {
+        return;
+    };
+    let bar = crate::progress::bar(sequence.0.frames.len() as u64, "mapping", config.progress);
+    match map_sequence(
+        &sequence.0,
+        segmenter.0.as_deref(),
+        &config.params,
+        &bar,
+    ) {
+        Ok(mapper) => commands.insert_resource(PanopticMap(mapper)),
+        Err(e) => error.0 = Some(e),
+    }
+    bar.finish_and_clear();
+}
+
+fn spawn_entities(mut commands: Commands, map: Option<Res<PanopticMap>>) {
+    let Some(map) = map else {
+        return;
+    };
+    let scene = extract_entities(
+        &map.0.tsdf,
+        &map.0.instances,
+        &ClassIds::builtin(),
+        &ExtractionParams::default(),
+    );
+    for e in &scene.entities {
+        commands.spawn((
+            SceneEntity(e.id.clone()),
+            Panoptic {
+                instance: e.instance,
+                class: e.class.clone(),
+                kind: e.kind,
+            },
+            SegmentMesh(e.mesh.clone()),
+        ));
+    }
+    commands.insert_resource(PanopticSurface {
+        entities: scene.entities,
+        voxels: scene.surface_voxels,
+    });
+}
+
+/// Adds the Segment, Integrate and Extract systems.
+pub struct PanopticMappingPlugin;
+
+impl Plugin for PanopticMappingPlugin {
+    fn build(&self, app: &mut App) {
+        use crate::systems::ReconstructionStage as Stage;
+        app.add_systems(
+            crate::systems::Reconstruct,
+            (
+                choose_segmenter.in_set(Stage::Segment),
+                integrate_frames.in_set(Stage::Integrate),
+                spawn_entities.in_set(Stage::Extract),
+            ),
+        );
+    }
+}
