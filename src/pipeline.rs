@@ -63,6 +63,7 @@ pub struct PanopticReport {
     pub map_memory_mb: f64,
     pub label_merges: usize,
     pub instance_merges: usize,
+    pub instance_splits: usize,
     pub surface_voxels: usize,
     /// Entity id, class and surface voxels.
     pub entities: Vec<(String, String, usize)>,
@@ -223,6 +224,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             map_memory_mb: map.0.tsdf.memory_bytes() as f64 / 1e6,
             label_merges: map.0.label_merges,
             instance_merges: map.0.instance_merges,
+            instance_splits: map.0.instance_splits,
             surface_voxels: surface.voxels.len(),
             entities: surface
                 .entities

@@ -63,8 +63,10 @@ pub struct ExtractionParams {
     pub surface_band: f32,
     /// Voxels observed with less weight than this are left out.
     pub min_weight: f32,
-    /// Entities with fewer surface voxels are dropped.
+    /// Entities with fewer surface voxels are dropped...
     pub min_surface_voxels: usize,
+    /// ...and layout with fewer than this (a wall is large; a small piece is a misassigned one).
+    pub min_layout_voxels: usize,
 }
 
 impl Default for ExtractionParams {
@@ -73,6 +75,7 @@ impl Default for ExtractionParams {
             surface_band: 0.75,
             min_weight: 2.0,
             min_surface_voxels: 25,
+            min_layout_voxels: 400,
         }
     }
 }
@@ -139,11 +142,15 @@ pub fn extract_entities(
     let mut entities: Vec<PanopticEntity> = Vec::new();
     let mut per_class_count: BTreeMap<String, usize> = BTreeMap::new();
     for ((class_id, instance), g) in groups {
-        if g.voxels < params.min_surface_voxels {
-            continue;
-        }
         let class = classes.name(class_id).to_string();
         let kind = table.get(&class).map_or(EntityKind::Rigid, |c| c.kind);
+        let min = match kind {
+            EntityKind::Layout => params.min_layout_voxels,
+            _ => params.min_surface_voxels,
+        };
+        if g.voxels < min {
+            continue;
+        }
         let n = per_class_count.entry(class.clone()).or_default();
         let id = match class.as_str() {
             "floor" | "ceiling" => class.clone(),

@@ -37,7 +37,7 @@ impl Default for FusionParams {
         Self {
             assign_fraction: 0.3,
             contained_fraction: 0.8,
-            covering_fraction: 0.25,
+            covering_fraction: 0.1,
             min_cut_pixels: 80,
             cluster_cell: 0.05,
             refine: true,

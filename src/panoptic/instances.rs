@@ -49,6 +49,10 @@ pub struct InstanceCounts {
     phi: BTreeMap<(SegmentLabel, ClassId, InstanceId), u32>,
     /// Voxblox only: (l, p) instance counts.
     instance_only: BTreeMap<(SegmentLabel, InstanceId), u32>,
+    /// Joint only: frames in which two labels (smaller first) were seen in different masks of
+    /// one class, and in the same mask. Labels seen apart more than together are two objects.
+    apart: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
+    together: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     next_instance: InstanceId,
 }
 
@@ -58,6 +62,8 @@ impl InstanceCounts {
             mode,
             phi: BTreeMap::new(),
             instance_only: BTreeMap::new(),
+            apart: BTreeMap::new(),
+            together: BTreeMap::new(),
             next_instance: 1,
         }
     }
@@ -103,6 +109,9 @@ impl InstanceCounts {
                 })
             })
             .collect();
+        if self.mode == InstanceFusion::Joint {
+            self.count_co_observations(masks);
+        }
         for (mask, &p) in masks.iter().zip(&instances) {
             for &l in &mask.labels {
                 match self.mode {
@@ -117,8 +126,70 @@ impl InstanceCounts {
         instances
     }
 
+    fn count_co_observations(&mut self, masks: &[MaskObservation]) {
+        for (a, ma) in masks.iter().enumerate() {
+            for (b, mb) in masks.iter().enumerate().skip(a) {
+                if ma.class != mb.class {
+                    continue;
+                }
+                for &la in &ma.labels {
+                    for &lb in &mb.labels {
+                        // Within one mask each unordered pair once.
+                        if la == lb || (a == b && la > lb) {
+                            continue;
+                        }
+                        let key = (la.min(lb), la.max(lb));
+                        let table = if a == b { &mut self.together } else { &mut self.apart };
+                        *table.entry(key).or_default() += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Undoes wrong merges: when two labels resolved to one instance were seen in different masks
+    /// of their class more often than in one (at least `min_apart` times), the label with fewer
+    /// votes moves to a new instance. An instance born from a merged mask thus splits once the
+    /// objects are seen apart. Returns the number of splits.
+    pub fn split_instances(&mut self, min_apart: u32) -> usize {
+        if self.mode != InstanceFusion::Joint {
+            return 0;
+        }
+        let mut splits = 0;
+        let pairs: Vec<((SegmentLabel, SegmentLabel), u32)> =
+            self.apart.iter().map(|(k, v)| (*k, *v)).collect();
+        for ((la, lb), apart) in pairs {
+            let together = self.together.get(&(la, lb)).copied().unwrap_or(0);
+            if apart < min_apart || apart <= together {
+                continue;
+            }
+            let (Some(ia), Some(ib)) = (self.identity(la), self.identity(lb)) else {
+                continue;
+            };
+            if (ia.class, ia.instance) != (ib.class, ib.instance) {
+                continue;
+            }
+            let (mover, id) = if (ia.votes, lb) > (ib.votes, la) { (lb, ib) } else { (la, ia) };
+            let n = self.phi.remove(&(mover, id.class, id.instance)).unwrap_or(0);
+            let fresh = self.next_instance;
+            self.next_instance += 1;
+            self.phi.insert((mover, id.class, fresh), n);
+            splits += 1;
+        }
+        splits
+    }
+
     /// Moves every count of label `from` onto label `into`.
     pub fn merge_labels(&mut self, from: SegmentLabel, into: SegmentLabel) {
+        for table in [&mut self.apart, &mut self.together] {
+            let old = std::mem::take(table);
+            for ((a, b), n) in old {
+                let (a, b) = (if a == from { into } else { a }, if b == from { into } else { b });
+                if a != b {
+                    *table.entry((a.min(b), a.max(b))).or_default() += n;
+                }
+            }
+        }
         let moved: Vec<_> = self
             .phi
             .range((from, 0, 0)..=(from, ClassId::MAX, InstanceId::MAX))
@@ -184,6 +255,15 @@ impl InstanceCounts {
             }
             merges += 1;
         }
+    }
+
+    /// Every (class, instance, count) vote of label `l` (joint: Phi(l, ., .); baseline: the
+    /// semantic counts with instance 0).
+    pub fn votes(&self, l: SegmentLabel) -> Vec<(ClassId, InstanceId, u32)> {
+        self.phi
+            .range((l, 0, 0)..=(l, ClassId::MAX, InstanceId::MAX))
+            .map(|((_, c, p), n)| (*c, *p, *n))
+            .collect()
     }
 
     /// class = argmax_c sum_p Phi(l, c, p); instance = argmax_p Phi(l, class, p) (joint), or the
@@ -273,6 +353,25 @@ mod tests {
         counts.merge_labels(12, 10);
         assert_eq!(counts.identity(12), None);
         assert_eq!(counts.identity(10).map(|i| i.votes), Some(3));
+    }
+
+    #[test]
+    fn an_instance_born_of_a_merged_mask_splits_when_its_labels_are_seen_apart() {
+        let mut counts = InstanceCounts::new(InstanceFusion::Joint);
+        // Two walls under one mask at first, then seen alone, then apart in one frame twice.
+        counts.observe_frame(&[mask(1, &[10, 11])]);
+        for _ in 0..3 {
+            counts.observe_frame(&[mask(1, &[10])]);
+        }
+        counts.observe_frame(&[mask(1, &[11])]);
+        counts.observe_frame(&[mask(1, &[10]), mask(1, &[11])]);
+        counts.observe_frame(&[mask(1, &[10]), mask(1, &[11])]);
+        assert_eq!(counts.split_instances(2), 1);
+        let (a, b) = (counts.identity(10).expect("a"), counts.identity(11).expect("b"));
+        assert_ne!(a.instance, b.instance);
+        // Once apart, they stay apart.
+        let next = counts.observe_frame(&[mask(1, &[10]), mask(1, &[11])]);
+        assert_eq!(next, vec![a.instance, b.instance]);
     }
 
     #[test]

@@ -30,6 +30,9 @@ pub struct MapperParams {
     pub merge_frames: u32,
     /// Eq. 5's m_th.
     pub instance_merge_ratio: f32,
+    /// Labels of one instance seen in different masks this often (and more often than in one)
+    /// are split apart.
+    pub min_apart_frames: u32,
     /// Regularise every this many frames (and once at the end).
     pub regularise_every: usize,
 }
@@ -49,6 +52,7 @@ impl MapperParams {
             merge_overlap: 0.2,
             merge_frames: 3000,
             instance_merge_ratio: 0.5,
+            min_apart_frames: 2,
             regularise_every: 25,
         }
     }
@@ -116,6 +120,7 @@ pub struct PanopticMapper {
     frames: usize,
     pub label_merges: usize,
     pub instance_merges: usize,
+    pub instance_splits: usize,
 }
 
 impl PanopticMapper {
@@ -129,6 +134,7 @@ impl PanopticMapper {
             frames: 0,
             label_merges: 0,
             instance_merges: 0,
+            instance_splits: 0,
         }
     }
 
@@ -303,6 +309,7 @@ impl PanopticMapper {
                 .filter(|(l, r)| **r != *l as SegmentLabel)
                 .count();
         }
+        self.instance_splits += self.instances.split_instances(self.params.min_apart_frames);
         self.instance_merges += self
             .instances
             .merge_instances(self.params.instance_merge_ratio);
