@@ -126,6 +126,11 @@ impl InstanceCounts {
         instances
     }
 
+    /// Whether labels `a` and `b` were ever seen in different masks of one class in a frame.
+    pub fn seen_apart(&self, a: SegmentLabel, b: SegmentLabel) -> bool {
+        self.apart.contains_key(&(a.min(b), a.max(b)))
+    }
+
     fn count_co_observations(&mut self, masks: &[MaskObservation]) {
         for (a, ma) in masks.iter().enumerate() {
             for (b, mb) in masks.iter().enumerate().skip(a) {

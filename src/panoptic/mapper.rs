@@ -50,7 +50,7 @@ impl MapperParams {
             association_stride: 2,
             min_overlap: 0.2,
             merge_overlap: 0.2,
-            merge_frames: 3000,
+            merge_frames: 3,
             instance_merge_ratio: 0.5,
             min_apart_frames: 2,
             regularise_every: 25,
@@ -281,7 +281,8 @@ impl PanopticMapper {
         let mut parent: Vec<SegmentLabel> = (0..self.next_label).collect();
         let mut merged = 0;
         for (&(a, b), &n) in &self.pair_counts {
-            if n >= self.params.merge_frames {
+            // Never merge what a segmenter saw as two objects (flush cabinet fronts, for one).
+            if n >= self.params.merge_frames && !self.instances.seen_apart(a, b) {
                 crate::panoptic::geometric::union(&mut parent, a, b);
                 merged += 1;
             }
