@@ -47,9 +47,15 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
     let mut truth = Vec::new();
     let mut meshes = Vec::new();
     for entry in labels.by_instance().values() {
-        let path = gt.join("gt").join("meshes").join(format!("{}.ply", entry.entity));
+        let path = gt
+            .join("gt")
+            .join("meshes")
+            .join(format!("{}.ply", entry.entity));
         if !path.is_file() {
-            return Err(InputError::missing(&path, "ground-truth mesh of a labelled entity"));
+            return Err(InputError::missing(
+                &path,
+                "ground-truth mesh of a labelled entity",
+            ));
         }
         meshes.push(read_mesh_ply(&path)?);
         truth.push(Segment {
@@ -80,7 +86,9 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
         .collect();
     let table = ClassTable::builtin();
     let panoptic = evaluate(&truth_of, &pred_of, &truth, &pred, |class| {
-        table.get(class).is_some_and(|c| c.kind != EntityKind::Layout)
+        table
+            .get(class)
+            .is_some_and(|c| c.kind != EntityKind::Layout)
     });
     Ok(EvalReport {
         panoptic,

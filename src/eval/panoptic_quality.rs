@@ -84,12 +84,11 @@ pub fn evaluate(
     let mut matched_truth = vec![false; truth.len() + 1];
     let mut matched_pred = vec![false; pred.len() + 1];
     let mut iou_sum: BTreeMap<String, f64> = BTreeMap::new();
-    for (&(t, p), _) in &intersection {
+    for &(t, p) in intersection.keys() {
         if truth[t as usize - 1].class != pred[p as usize - 1].class {
             continue;
         }
         let value = iou(t, p);
-        if std::env::var("ISCENE_DEBUG_EVAL").is_ok() { eprintln!("truth {t} {} pred {p} {} iou {value:.3} inter {} sizes {} {}", truth[t as usize-1].class, pred[p as usize-1].class, intersection[&(t,p)], truth_size[t as usize], pred_size[p as usize]); }
         if value > 0.5 {
             matched_truth[t as usize] = true;
             matched_pred[p as usize] = true;
@@ -100,10 +99,7 @@ pub fn evaluate(
     }
     for t in 1..=truth.len() {
         if present_truth(t) && !matched_truth[t] {
-            per_class
-                .entry(truth[t - 1].class.clone())
-                .or_default()
-                .fn_ += 1;
+            per_class.entry(truth[t - 1].class.clone()).or_default().fn_ += 1;
         }
     }
     for p in 1..=pred.len() {

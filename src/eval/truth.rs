@@ -25,8 +25,12 @@ impl<'a> NearestMesh<'a> {
         for (m, mesh) in meshes.iter().enumerate() {
             for t in 0..mesh.triangles.len() {
                 let [a, b, c] = mesh.triangle(t);
-                let lo = ((a.min(b).min(c) - Vec3::splat(cell)) / cell).floor().as_ivec3();
-                let hi = ((a.max(b).max(c) + Vec3::splat(cell)) / cell).floor().as_ivec3();
+                let lo = ((a.min(b).min(c) - Vec3::splat(cell)) / cell)
+                    .floor()
+                    .as_ivec3();
+                let hi = ((a.max(b).max(c) + Vec3::splat(cell)) / cell)
+                    .floor()
+                    .as_ivec3();
                 for z in lo.z..=hi.z {
                     for y in lo.y..=hi.y {
                         for x in lo.x..=hi.x {

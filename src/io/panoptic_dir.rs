@@ -45,9 +45,11 @@ pub fn write_panoptic(
     std::fs::create_dir_all(dir).map_err(|e| IsceneError::io(dir.display().to_string(), e))?;
     let mut written = Vec::new();
     for e in &index.entities {
-        let bytes = mesh_ply_bytes(&e.mesh, class_color(&e.class)).map_err(IsceneError::Internal)?;
+        let bytes =
+            mesh_ply_bytes(&e.mesh, class_color(&e.class)).map_err(IsceneError::Internal)?;
         let path = dir.join(format!("{}.ply", e.id));
-        std::fs::write(&path, bytes).map_err(|err| IsceneError::io(path.display().to_string(), err))?;
+        std::fs::write(&path, bytes)
+            .map_err(|err| IsceneError::io(path.display().to_string(), err))?;
         written.push(format!("panoptic/{}.ply", e.id));
     }
     let path = dir.join("surface_voxels.ply");
@@ -57,19 +59,30 @@ pub fn write_panoptic(
         &dir.join("entities.json"),
         &serde_json::to_string_pretty(index).map_err(|e| IsceneError::Internal(e.to_string()))?,
     )?;
-    written.extend(["panoptic/surface_voxels.ply".into(), "panoptic/entities.json".into()]);
+    written.extend([
+        "panoptic/surface_voxels.ply".into(),
+        "panoptic/entities.json".into(),
+    ]);
     Ok(written)
 }
 
 fn labelled_points_ply_bytes(points: &[(Vec3, u32)]) -> Result<Vec<u8>, IsceneError> {
     let mut ply = Ply::<DefaultElement>::new();
     ply.header.encoding = Encoding::BinaryLittleEndian;
-    ply.header.comments.push("surface voxels of the panoptic map; entity = index in entities.json + 1, 0 = none".into());
+    ply.header.comments.push(
+        "surface voxels of the panoptic map; entity = index in entities.json + 1, 0 = none".into(),
+    );
     let mut vertex = ElementDef::new("vertex".into());
     for name in ["x", "y", "z"] {
-        vertex.properties.add(PropertyDef::new(name.into(), PropertyType::Scalar(ScalarType::Float)));
+        vertex.properties.add(PropertyDef::new(
+            name.into(),
+            PropertyType::Scalar(ScalarType::Float),
+        ));
     }
-    vertex.properties.add(PropertyDef::new("entity".into(), PropertyType::Scalar(ScalarType::UInt)));
+    vertex.properties.add(PropertyDef::new(
+        "entity".into(),
+        PropertyType::Scalar(ScalarType::UInt),
+    ));
     ply.header.elements.add(vertex);
     let vertices = points
         .iter()
@@ -102,14 +115,30 @@ pub fn read_panoptic(dir: &Path) -> Result<(PanopticIndex, Vec<(Vec3, u32)>), In
         .read_ply(&mut std::io::BufReader::new(file))
         .map_err(|e| InputError::invalid(&path, format!("not a PLY point set: {e}")))?;
     let mut points = Vec::new();
-    for v in ply.payload.get("vertex").map(Vec::as_slice).unwrap_or_default() {
-        let (Some(Property::Float(x)), Some(Property::Float(y)), Some(Property::Float(z)), Some(Property::UInt(e))) =
-            (v.get("x"), v.get("y"), v.get("z"), v.get("entity"))
+    for v in ply
+        .payload
+        .get("vertex")
+        .map(Vec::as_slice)
+        .unwrap_or_default()
+    {
+        let (
+            Some(Property::Float(x)),
+            Some(Property::Float(y)),
+            Some(Property::Float(z)),
+            Some(Property::UInt(e)),
+        ) = (v.get("x"), v.get("y"), v.get("z"), v.get("entity"))
         else {
-            return Err(InputError::invalid(&path, "vertex without float x, y, z and uint entity"));
+            return Err(InputError::invalid(
+                &path,
+                "vertex without float x, y, z and uint entity",
+            ));
         };
-        if *e as usize > index.entities.len() || !(x.is_finite() && y.is_finite() && z.is_finite()) {
-            return Err(InputError::invalid(&path, format!("bad voxel ({x}, {y}, {z}) entity {e}")));
+        if *e as usize > index.entities.len() || !(x.is_finite() && y.is_finite() && z.is_finite())
+        {
+            return Err(InputError::invalid(
+                &path,
+                format!("bad voxel ({x}, {y}, {z}) entity {e}"),
+            ));
         }
         points.push((Vec3::new(*x, *y, *z), *e));
     }

@@ -72,9 +72,12 @@ impl LabelledMesh {
 /// A vertex on the cube edge that starts at voxel `origin` and runs along `axis` (0 = x).
 type EdgeKey = (IVec3, u8);
 
+/// A triangle before welding: its vertices' edge keys and positions, and its label.
+type LooseTriangle = ([EdgeKey; 3], [Vec3; 3], SegmentLabel);
+
 /// Extracts the surface where every cube corner has weight of at least `min_weight`.
 pub fn extract_mesh(map: &TsdfMap, min_weight: f32) -> LabelledMesh {
-    let per_block: Vec<Vec<([EdgeKey; 3], [Vec3; 3], SegmentLabel)>> = map
+    let per_block: Vec<Vec<LooseTriangle>> = map
         .blocks
         .par_iter()
         .map(|block| block_triangles(map, block.key, min_weight))
@@ -102,11 +105,7 @@ pub fn extract_mesh(map: &TsdfMap, min_weight: f32) -> LabelledMesh {
     out
 }
 
-fn block_triangles(
-    map: &TsdfMap,
-    key: IVec3,
-    min_weight: f32,
-) -> Vec<([EdgeKey; 3], [Vec3; 3], SegmentLabel)> {
+fn block_triangles(map: &TsdfMap, key: IVec3, min_weight: f32) -> Vec<LooseTriangle> {
     let mut triangles = Vec::new();
     let base = key * BLOCK_SIDE as i32;
     let mut corners: [Voxel; 8] = [Voxel::default(); 8];
@@ -213,7 +212,10 @@ mod tests {
         let out = extract_mesh(&map, 0.5);
         let area = out.mesh.area();
         let expected = 4.0 * std::f32::consts::PI * radius * radius;
-        assert!((area / expected - 1.0).abs() < 0.02, "area {area} vs {expected}");
+        assert!(
+            (area / expected - 1.0).abs() < 0.02,
+            "area {area} vs {expected}"
+        );
         // Closed and consistently oriented: every directed edge appears once and its reverse once.
         let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
         for t in &out.mesh.triangles {

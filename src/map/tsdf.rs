@@ -322,7 +322,12 @@ impl Integrator<'_> {
             Vec3::from(r.z_axis) * vs,
         );
         let (w, h) = (self.camera.width as i32, self.camera.height as i32);
-        let (fx, fy, cx, cy) = (self.camera.fx, self.camera.fy, self.camera.cx, self.camera.cy);
+        let (fx, fy, cx, cy) = (
+            self.camera.fx,
+            self.camera.fy,
+            self.camera.cx,
+            self.camera.cy,
+        );
         let with_color = self.color.len() == self.depth.len() * 3;
         let mut index = 0;
         for z in 0..BLOCK_SIDE {
@@ -452,9 +457,16 @@ mod tests {
                 map.sdf_at(p).map(f32::abs)
             })
             .collect();
-        assert!(sdf_errors.len() > 3000, "{} observed samples", sdf_errors.len());
+        assert!(
+            sdf_errors.len() > 3000,
+            "{} observed samples",
+            sdf_errors.len()
+        );
         let median = crate::map::median(&mut sdf_errors);
-        assert!(median < 0.005, "median |sdf| on held-out surface points: {median} m");
+        assert!(
+            median < 0.005,
+            "median |sdf| on held-out surface points: {median} m"
+        );
         let mut depth_errors: Vec<f32> = samples
             .iter()
             .filter_map(|&i| {
@@ -464,7 +476,10 @@ mod tests {
             .collect();
         assert!(depth_errors.len() as f32 > 0.9 * samples.len() as f32);
         let median = crate::map::median(&mut depth_errors);
-        assert!(median < 0.005, "median |raycast - measured depth|: {median} m");
+        assert!(
+            median < 0.005,
+            "median |raycast - measured depth|: {median} m"
+        );
     }
 
     #[test]

@@ -128,13 +128,11 @@ pub fn extract_entities(
         } else {
             identity.instance
         };
-        let g = groups
-            .entry((identity.class, instance))
-            .or_insert(Group {
-                labels: Vec::new(),
-                voxels: 0,
-                weighted_support: 0.0,
-            });
+        let g = groups.entry((identity.class, instance)).or_insert(Group {
+            labels: Vec::new(),
+            voxels: 0,
+            weighted_support: 0.0,
+        });
         g.labels.push(l);
         g.voxels += n;
         g.weighted_support += identity.support * n as f32;

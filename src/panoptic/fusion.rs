@@ -287,7 +287,10 @@ mod tests {
         // The far part alone would take mask 1 (40 of 100 pixels >= 30 %).
         let fused = fuse_masks(&g, &m, &params());
         assert_eq!(fused.segments[0].mask, Some(1));
-        assert_eq!(fused.segments[1].mask, None, "far floor lost the chair mask");
+        assert_eq!(
+            fused.segments[1].mask, None,
+            "far floor lost the chair mask"
+        );
         m.segment_of_pixel.iter_mut().for_each(|x| *x = 1);
         let unrefined = fuse_masks(
             &g,

@@ -236,12 +236,22 @@ mod tests {
         let mut pure = 0usize;
         let mut total = 0usize;
         for k in [3, 17, 29] {
-            let f = render_frame(&scene, &camera, &poses[k], Some(&crate::render::noise::DepthNoise::KINECT), 5, k);
+            let f = render_frame(
+                &scene,
+                &camera,
+                &poses[k],
+                Some(&crate::render::noise::DepthNoise::KINECT),
+                5,
+                k,
+            );
             let seg = segment_depth(&f.depth, &camera, &GeometricParams::default());
             assert!(seg.count >= 5, "only {} segments", seg.count);
             let valid = f.depth.iter().filter(|d| **d > 0.0).count();
             let covered = seg.segment_of_pixel.iter().filter(|s| **s != 0).count();
-            assert!(covered as f64 > 0.7 * valid as f64, "{covered} of {valid} pixels segmented");
+            assert!(
+                covered as f64 > 0.7 * valid as f64,
+                "{covered} of {valid} pixels segmented"
+            );
             for id in 1..=seg.count {
                 let mut counts = std::collections::BTreeMap::<u16, usize>::new();
                 for (i, &s) in seg.segment_of_pixel.iter().enumerate() {
@@ -256,6 +266,9 @@ mod tests {
             }
         }
         let purity = pure as f64 / total as f64;
-        assert!(purity > 0.93, "pixel purity of geometric segments {purity:.3}");
+        assert!(
+            purity > 0.93,
+            "pixel purity of geometric segments {purity:.3}"
+        );
     }
 }

@@ -15,6 +15,8 @@ use crate::map::SegmentLabel;
 
 pub type ClassId = u16;
 pub type InstanceId = u32;
+/// An instance of a class.
+type InstanceKey = (ClassId, InstanceId);
 
 /// A mask of the current frame, after its segments got their labels.
 #[derive(Clone, Debug)]
@@ -77,7 +79,10 @@ impl InstanceCounts {
             for &l in &mask.labels {
                 match self.mode {
                     InstanceFusion::Joint => {
-                        for ((_, _, p), n) in self.phi.range((l, mask.class, 0)..=(l, mask.class, u32::MAX)) {
+                        for ((_, _, p), n) in self
+                            .phi
+                            .range((l, mask.class, 0)..=(l, mask.class, u32::MAX))
+                        {
                             *score.entry(*p).or_default() += n;
                         }
                     }
@@ -144,7 +149,11 @@ impl InstanceCounts {
                             continue;
                         }
                         let key = (la.min(lb), la.max(lb));
-                        let table = if a == b { &mut self.together } else { &mut self.apart };
+                        let table = if a == b {
+                            &mut self.together
+                        } else {
+                            &mut self.apart
+                        };
                         *table.entry(key).or_default() += 1;
                     }
                 }
@@ -174,8 +183,15 @@ impl InstanceCounts {
             if (ia.class, ia.instance) != (ib.class, ib.instance) {
                 continue;
             }
-            let (mover, id) = if (ia.votes, lb) > (ib.votes, la) { (lb, ib) } else { (la, ia) };
-            let n = self.phi.remove(&(mover, id.class, id.instance)).unwrap_or(0);
+            let (mover, id) = if (ia.votes, lb) > (ib.votes, la) {
+                (lb, ib)
+            } else {
+                (la, ia)
+            };
+            let n = self
+                .phi
+                .remove(&(mover, id.class, id.instance))
+                .unwrap_or(0);
             let fresh = self.next_instance;
             self.next_instance += 1;
             self.phi.insert((mover, id.class, fresh), n);
@@ -189,7 +205,10 @@ impl InstanceCounts {
         for table in [&mut self.apart, &mut self.together] {
             let old = std::mem::take(table);
             for ((a, b), n) in old {
-                let (a, b) = (if a == from { into } else { a }, if b == from { into } else { b });
+                let (a, b) = (
+                    if a == from { into } else { a },
+                    if b == from { into } else { b },
+                );
                 if a != b {
                     *table.entry((a.min(b), a.max(b))).or_default() += n;
                 }
@@ -230,7 +249,7 @@ impl InstanceCounts {
                 table.entry((c, p)).or_default().insert(l, n);
             }
             let keys: Vec<_> = table.keys().copied().collect();
-            let mut best: Option<(f32, (ClassId, InstanceId), (ClassId, InstanceId))> = None;
+            let mut best: Option<(f32, InstanceKey, InstanceKey)> = None;
             for (i, a) in keys.iter().enumerate() {
                 for b in keys[i + 1..].iter().take_while(|b| b.0 == a.0) {
                     let (ta, tb) = (&table[a], &table[b]);
@@ -275,7 +294,10 @@ impl InstanceCounts {
     /// separately counted majorities (baseline). `None` for labels no mask ever covered.
     pub fn identity(&self, l: SegmentLabel) -> Option<LabelIdentity> {
         let mut per_class: BTreeMap<ClassId, u32> = BTreeMap::new();
-        for ((_, c, _), n) in self.phi.range((l, 0, 0)..=(l, ClassId::MAX, InstanceId::MAX)) {
+        for ((_, c, _), n) in self
+            .phi
+            .range((l, 0, 0)..=(l, ClassId::MAX, InstanceId::MAX))
+        {
             *per_class.entry(*c).or_default() += n;
         }
         let total: u32 = per_class.values().sum();
@@ -372,7 +394,10 @@ mod tests {
         counts.observe_frame(&[mask(1, &[10]), mask(1, &[11])]);
         counts.observe_frame(&[mask(1, &[10]), mask(1, &[11])]);
         assert_eq!(counts.split_instances(2), 1);
-        let (a, b) = (counts.identity(10).expect("a"), counts.identity(11).expect("b"));
+        let (a, b) = (
+            counts.identity(10).expect("a"),
+            counts.identity(11).expect("b"),
+        );
         assert_ne!(a.instance, b.instance);
         // Once apart, they stay apart.
         let next = counts.observe_frame(&[mask(1, &[10]), mask(1, &[11])]);

@@ -181,7 +181,7 @@ impl PanopticMapper {
             world_from_camera: frame.world_from_camera,
         });
         self.frames += 1;
-        if self.frames % self.params.regularise_every == 0 {
+        if self.frames.is_multiple_of(self.params.regularise_every) {
             self.regularise();
         }
     }
@@ -210,9 +210,14 @@ impl PanopticMapper {
                         }
                         let entry = &mut acc[s as usize - 1];
                         entry.1 += 1;
-                        let point = frame.world_from_camera.transform_point3(
-                            frame.camera.unproject(u as f32, v as f32, frame.depth[i]),
-                        );
+                        let point =
+                            frame
+                                .world_from_camera
+                                .transform_point3(frame.camera.unproject(
+                                    u as f32,
+                                    v as f32,
+                                    frame.depth[i],
+                                ));
                         if let Some(voxel) = tsdf.voxel_at(point)
                             && voxel.label != 0
                             && voxel.weight > 0.0
@@ -253,7 +258,8 @@ impl PanopticMapper {
                 used.insert(l);
             }
         }
-        let min_samples = (self.params.geometric.min_pixels as usize / (stride * stride)) as u32 / 2;
+        let min_samples =
+            (self.params.geometric.min_pixels as usize / (stride * stride)) as u32 / 2;
         for (s, label) in label_of.iter_mut().enumerate() {
             if *label == 0 && samples[s].1 >= min_samples.max(1) {
                 *label = self.next_label;
@@ -268,7 +274,10 @@ impl PanopticMapper {
             }
             for (&l, &c) in counts {
                 if l != own && c as f32 >= self.params.merge_overlap * *sampled as f32 {
-                    *self.pair_counts.entry((own.min(l), own.max(l))).or_default() += 1;
+                    *self
+                        .pair_counts
+                        .entry((own.min(l), own.max(l)))
+                        .or_default() += 1;
                 }
             }
         }
@@ -301,7 +310,10 @@ impl PanopticMapper {
             for ((a, b), n) in old {
                 let (ra, rb) = (roots[a as usize], roots[b as usize]);
                 if ra != rb {
-                    *self.pair_counts.entry((ra.min(rb), ra.max(rb))).or_default() += n;
+                    *self
+                        .pair_counts
+                        .entry((ra.min(rb), ra.max(rb)))
+                        .or_default() += n;
                 }
             }
             self.label_merges += roots

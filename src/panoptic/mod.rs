@@ -11,5 +11,5 @@ pub mod run;
 
 pub use entities::{ClassIds, ExtractionParams, PanopticEntity, PanopticScene, extract_entities};
 pub use instances::InstanceFusion;
-pub use run::map_sequence;
 pub use mapper::{MapperFrame, MapperParams, PanopticMapper, SegmentedFrame, segment_frame};
+pub use run::map_sequence;

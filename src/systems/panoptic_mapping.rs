@@ -22,6 +22,17 @@ pub struct MappingConfig {
     pub progress: bool,
 }
 
+impl Default for MappingConfig {
+    /// Joint fusion at 2 cm with the oracle segmentation, quiet.
+    fn default() -> Self {
+        Self {
+            params: MapperParams::new(0.02, crate::panoptic::InstanceFusion::Joint),
+            segmentation: SegmentationChoice::Oracle,
+            progress: false,
+        }
+    }
+}
+
 /// The segmentation service the Segment stage chose; `None` maps geometry only.
 #[derive(Resource)]
 pub struct Segmenter(pub Option<Box<dyn SegmentationService>>);
@@ -74,12 +85,7 @@ fn integrate_frames(
         return;
     };
     let bar = crate::progress::bar(sequence.0.frames.len() as u64, "mapping", config.progress);
-    match map_sequence(
-        &sequence.0,
-        segmenter.0.as_deref(),
-        &config.params,
-        &bar,
-    ) {
+    match map_sequence(&sequence.0, segmenter.0.as_deref(), &config.params, &bar) {
         Ok(mapper) => commands.insert_resource(PanopticMap(mapper)),
         Err(e) => error.0 = Some(e),
     }
@@ -119,7 +125,7 @@ pub struct PanopticMappingPlugin;
 impl Plugin for PanopticMappingPlugin {
     fn build(&self, app: &mut App) {
         use crate::systems::ReconstructionStage as Stage;
-        app.add_systems(
+        app.init_resource::<MappingConfig>().add_systems(
             crate::systems::Reconstruct,
             (
                 choose_segmenter.in_set(Stage::Segment),
