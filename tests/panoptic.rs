@@ -108,15 +108,18 @@ fn eval_names_what_is_missing_and_exits_2() {
     common::render_scene("bedroom", &seq, 2, true);
     let empty = dir.path().join("empty");
     std::fs::create_dir_all(&empty).expect("mkdir");
-    let (code, _, stderr) = common::iscene(
-        &[
-            "eval",
-            empty.to_str().expect("utf8"),
-            "--gt",
-            seq.to_str().expect("utf8"),
-        ],
-        dir.path(),
-    );
+    let eval = || {
+        common::iscene(
+            &[
+                "eval",
+                empty.to_str().expect("utf8"),
+                "--gt",
+                seq.to_str().expect("utf8"),
+            ],
+            dir.path(),
+        )
+    };
+    let (code, _, stderr) = eval();
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("entities.json"), "{stderr}");
     // A malformed index is named too.
@@ -126,15 +129,7 @@ fn eval_names_what_is_missing_and_exits_2() {
         "{\"voxel_size\": 0.02}",
     )
     .expect("write");
-    let (code, _, stderr) = common::iscene(
-        &[
-            "eval",
-            empty.to_str().expect("utf8"),
-            "--gt",
-            seq.to_str().expect("utf8"),
-        ],
-        dir.path(),
-    );
+    let (code, _, stderr) = eval();
     assert_eq!(code, 2, "{stderr}");
     assert!(
         stderr.contains("entities.json") && stderr.contains("panoptic index"),
