@@ -50,20 +50,32 @@ pub struct LabelledMesh {
 impl LabelledMesh {
     /// The sub-mesh of the triangles whose label satisfies `keep`, with its own compact vertices.
     pub fn select(&self, keep: impl Fn(SegmentLabel) -> bool) -> TriMesh {
-        let mut remap: HashMap<u32, u32, FixedState> = HashMap::default();
-        let mut out = TriMesh::default();
+        self.split(1, |l| keep(l).then_some(0))
+            .pop()
+            .unwrap_or_default()
+    }
+
+    /// `groups` sub-meshes in one pass: triangle t goes to `group_of(its label)` (none: dropped).
+    pub fn split(
+        &self,
+        groups: usize,
+        group_of: impl Fn(SegmentLabel) -> Option<usize>,
+    ) -> Vec<TriMesh> {
+        let mut remaps: Vec<HashMap<u32, u32, FixedState>> = vec![HashMap::default(); groups];
+        let mut out = vec![TriMesh::default(); groups];
         for (tri, &label) in self.mesh.triangles.iter().zip(&self.triangle_labels) {
-            if !keep(label) {
+            let Some(g) = group_of(label).filter(|&g| g < groups) else {
                 continue;
-            }
+            };
+            let (remap, mesh) = (&mut remaps[g], &mut out[g]);
             let mut new = [0u32; 3];
             for (slot, &v) in new.iter_mut().zip(tri) {
                 *slot = *remap.entry(v).or_insert_with(|| {
-                    out.positions.push(self.mesh.positions[v as usize]);
-                    out.positions.len() as u32 - 1
+                    mesh.positions.push(self.mesh.positions[v as usize]);
+                    mesh.positions.len() as u32 - 1
                 });
             }
-            out.triangles.push(new);
+            mesh.triangles.push(new);
         }
         out
     }
@@ -168,7 +180,7 @@ fn block_triangles(map: &TsdfMap, key: IVec3, min_weight: f32) -> Vec<LooseTrian
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::map::tsdf::BLOCK_VOXELS;
+    use crate::map::tsdf::{BLOCK_VOXELS, voxel_local};
 
     /// A map holding the exact signed distance of a sphere, labelled by the side of x = 0.
     fn sphere_map(center: Vec3, radius: f32) -> TsdfMap {
@@ -186,11 +198,7 @@ mod tests {
         let truncation = map.truncation;
         for block in &mut map.blocks {
             for i in 0..BLOCK_VOXELS {
-                let local = IVec3::new(
-                    (i % BLOCK_SIDE) as i32,
-                    ((i / BLOCK_SIDE) % BLOCK_SIDE) as i32,
-                    (i / (BLOCK_SIDE * BLOCK_SIDE)) as i32,
-                );
+                let local = voxel_local(i);
                 let p = ((block.key * BLOCK_SIDE as i32 + local).as_vec3() + 0.5) * vs;
                 let sdf = (p.distance(center) - radius).clamp(-truncation, truncation);
                 block.voxels[i] = Voxel {

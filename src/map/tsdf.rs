@@ -53,6 +53,15 @@ pub fn voxel_index(local: IVec3) -> usize {
     local.x as usize + BLOCK_SIDE * (local.y as usize + BLOCK_SIDE * local.z as usize)
 }
 
+/// Local coordinates of the voxel at slot `index` of its block (the inverse of `voxel_index`).
+pub fn voxel_local(index: usize) -> IVec3 {
+    IVec3::new(
+        (index % BLOCK_SIDE) as i32,
+        ((index / BLOCK_SIDE) % BLOCK_SIDE) as i32,
+        (index / (BLOCK_SIDE * BLOCK_SIDE)) as i32,
+    )
+}
+
 /// One frame to fuse: depth in metres along the optical axis (0 = none), optional row-major RGB
 /// (empty = none) and optional per-pixel global segment labels.
 pub struct TsdfFrame<'a> {

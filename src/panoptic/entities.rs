@@ -87,11 +87,7 @@ pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, S
     for block in &map.blocks {
         for (i, v) in block.voxels.iter().enumerate() {
             if v.weight >= params.min_weight && v.sdf.abs() < band {
-                let local = IVec3::new(
-                    (i % crate::map::BLOCK_SIDE) as i32,
-                    ((i / crate::map::BLOCK_SIDE) % crate::map::BLOCK_SIDE) as i32,
-                    (i / (crate::map::BLOCK_SIDE * crate::map::BLOCK_SIDE)) as i32,
-                );
+                let local = crate::map::tsdf::voxel_local(i);
                 out.push((block.key * crate::map::BLOCK_SIDE as i32 + local, v.label));
             }
         }
@@ -173,9 +169,11 @@ pub fn extract_entities(
             entity_of_label.insert(l, k as u32 + 1);
         }
     }
-    let mesh = extract_mesh(map, params.min_weight);
-    for (k, e) in entities.iter_mut().enumerate() {
-        e.mesh = mesh.select(|l| entity_of_label.get(&l) == Some(&(k as u32 + 1)));
+    let meshes = extract_mesh(map, params.min_weight).split(entities.len(), |l| {
+        entity_of_label.get(&l).map(|&e| e as usize - 1)
+    });
+    for (e, mesh) in entities.iter_mut().zip(meshes) {
+        e.mesh = mesh;
     }
     let surface_voxels = voxels
         .into_iter()

@@ -252,6 +252,14 @@ mod tests {
         }
     }
 
+    /// The Voxblox++ baseline's fusion: no cut-outs, no clustering.
+    fn unrefined_params() -> FusionParams {
+        FusionParams {
+            refine: false,
+            ..params()
+        }
+    }
+
     #[test]
     fn a_mask_inside_a_segment_is_cut_out() {
         // Mask 1 (table) over the left half, mask 2 (book) a 3x3 patch inside it.
@@ -268,14 +276,7 @@ mod tests {
         assert_eq!(fused.segments[2].mask, Some(2));
         assert_eq!(fused.segments[2].pixels, 9);
         assert_eq!(fused.segment_of_pixel[3 * 20 + 3], 3);
-        let unrefined = fuse_masks(
-            &g,
-            &m,
-            &FusionParams {
-                refine: false,
-                ..params()
-            },
-        );
+        let unrefined = fuse_masks(&g, &m, &unrefined_params());
         assert_eq!(unrefined.segments.len(), 2);
     }
 
@@ -292,14 +293,7 @@ mod tests {
             "far floor lost the chair mask"
         );
         m.segment_of_pixel.iter_mut().for_each(|x| *x = 1);
-        let unrefined = fuse_masks(
-            &g,
-            &m,
-            &FusionParams {
-                refine: false,
-                ..params()
-            },
-        );
+        let unrefined = fuse_masks(&g, &m, &unrefined_params());
         assert_eq!(unrefined.segments[1].mask, Some(1));
     }
 }
