@@ -43,6 +43,11 @@ enum Command {
         #[arg(long)]
         gt: PathBuf,
     },
+    /// Benchmarks that print their figures as one JSON object on stdout.
+    Bench {
+        #[command(subcommand)]
+        command: BenchCommand,
+    },
     /// The CAD database.
     Cad {
         #[command(subcommand)]
@@ -80,6 +85,28 @@ enum Segmentation {
     Oracle,
     Onnx,
     None,
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// TSDF integration speed, map memory and depth agreement on held-out frames of a sequence.
+    Tsdf {
+        sequence: PathBuf,
+        /// Frames to use as A:B[:STEP].
+        #[arg(long, value_parser = parse_frames, default_value = "0:300")]
+        frames: (usize, Option<usize>, usize),
+        #[arg(long, default_value_t = 0.02)]
+        voxel: f32,
+        /// Leave every N-th frame out of the fusion and raycast the map at it (0: fuse all).
+        #[arg(long, default_value_t = 0)]
+        holdout: usize,
+        /// Also fuse a segment label per pixel (geometric segments), as the panoptic mapper does.
+        #[arg(long)]
+        labels: bool,
+        /// Write the map's mesh here (PLY).
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand)]
@@ -156,13 +183,30 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 into.display()
             );
         }
+        Some(Command::Bench {
+            command:
+                BenchCommand::Tsdf {
+                    sequence,
+                    frames,
+                    voxel,
+                    holdout,
+                    labels,
+                    mesh,
+                },
+        }) => {
+            let report = iscene::bench::bench_tsdf(&iscene::bench::TsdfBenchOptions {
+                sequence,
+                frames,
+                voxel,
+                holdout_every: holdout,
+                labels,
+                mesh,
+            })?;
+            print_json(&report)?;
+        }
         Some(Command::Eval { dir, gt }) => {
             let report = iscene::eval::evaluate_reconstruction(&dir, &gt)?;
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&report)
-                    .map_err(|e| IsceneError::Internal(e.to_string()))?
-            );
+            print_json(&report)?;
         }
         command => {
             let args = match command {
@@ -230,6 +274,14 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
             println!("wrote {}: {}", out.display(), r.outputs.join(", "));
         }
     }
+    Ok(())
+}
+
+#[expect(clippy::print_stdout, reason = "machine-readable results go to stdout")]
+fn print_json(value: &impl serde::Serialize) -> Result<(), IsceneError> {
+    let text =
+        serde_json::to_string_pretty(value).map_err(|e| IsceneError::Internal(e.to_string()))?;
+    println!("{text}");
     Ok(())
 }
 

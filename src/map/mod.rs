@@ -1,6 +1,7 @@
 //! The volumetric map: a hashed TSDF of voxel blocks with a segment label per voxel, and the
 //! labelled marching cubes that turns it into meshes.
 
+pub mod agreement;
 pub mod mesh;
 pub mod tsdf;
 

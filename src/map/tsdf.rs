@@ -127,7 +127,7 @@ impl TsdfMap {
         let camera = frame.camera;
         let (w, h) = (camera.width as usize, camera.height as usize);
         let footprint_at_max_range = self.max_ray_length / camera.fx;
-        let stride = ((self.block_size() / (4.0 * footprint_at_max_range)) as usize).clamp(1, 8);
+        let stride = ((self.block_size() / (2.0 * footprint_at_max_range)) as usize).clamp(1, 8);
         let inv_block = 1.0 / self.block_size();
         let step = 0.5 * self.block_size();
         let (truncation, max_ray_length) = (self.truncation, self.max_ray_length);
@@ -338,46 +338,61 @@ impl Integrator<'_> {
             self.camera.cy,
         );
         let with_color = self.color.len() == self.depth.len() * 3;
-        let mut index = 0;
+        let (wf, hf) = (w as f32, h as f32);
         for z in 0..BLOCK_SIDE {
             for y in 0..BLOCK_SIDE {
-                let mut p = p0 + dz * z as f32 + dy * y as f32;
-                for _ in 0..BLOCK_SIDE {
-                    let here = p;
-                    let slot = index;
-                    p += dx;
-                    index += 1;
-                    if here.z <= 0.05 {
-                        continue;
-                    }
+                let row = p0 + dz * z as f32 + dy * y as f32;
+                // A row of voxels in two passes: first every pixel index (no branch on data), then
+                // the fusion. The depth loads of a row are independent, so their cache misses
+                // overlap instead of each waiting behind a mispredicted branch.
+                let mut pixels = [0usize; BLOCK_SIDE];
+                let mut voxel_z = [0.0; BLOCK_SIDE];
+                for (x, (pixel, vz)) in pixels.iter_mut().zip(&mut voxel_z).enumerate() {
+                    let here = row + dx * x as f32;
                     let inv_z = 1.0 / here.z;
-                    // Nearest pixel; `as i32` truncates towards zero, hence the +0.5 and the >= 0 test
-                    // on the shifted value.
+                    // Nearest pixel: the +0.5 rounds (truncating casts); a voxel outside the image
+                    // gets pixel 0 and an infinite depth, so it never fuses.
                     let uf = fx * here.x * inv_z + cx + 0.5;
                     let vf = fy * here.y * inv_z + cy + 0.5;
-                    if uf < 0.0 || vf < 0.0 {
-                        continue;
-                    }
-                    let (u, v) = (uf as i32, vf as i32);
-                    if u >= w || v >= h {
-                        continue;
-                    }
-                    let pixel = (v * w + u) as usize;
-                    let d = self.depth[pixel];
+                    let inside =
+                        (here.z > 0.05) & (uf >= 0.0) & (vf >= 0.0) & (uf < wf) & (vf < hf);
+                    let index = vf as i32 * w + uf as i32;
+                    *pixel = if inside { index as usize } else { 0 };
+                    *vz = if inside { here.z } else { f32::INFINITY };
+                }
+                let depths = pixels.map(|pixel| self.depth[pixel]);
+                let labels = self.labels.map(|labels| pixels.map(|pixel| labels[pixel]));
+                let colors = with_color.then(|| {
+                    pixels.map(|pixel| {
+                        let c = &self.color[3 * pixel..3 * pixel + 3];
+                        [c[0], c[1], c[2]]
+                    })
+                });
+                let slots = (z * BLOCK_SIDE + y) * BLOCK_SIDE;
+                for x in 0..BLOCK_SIDE {
+                    let d = depths[x];
                     if d <= 0.0 || d > self.max_ray_length {
                         continue;
                     }
-                    let sdf = d - here.z;
+                    // Outside the image `voxel_z` is infinite, so the voxel counts as occluded.
+                    let sdf = d - voxel_z[x];
                     if sdf < -self.truncation {
                         continue;
                     }
-                    self.fuse(&mut block.voxels[slot], sdf, pixel, with_color);
+                    let label = labels.map_or(0, |l| l[x]);
+                    self.fuse(
+                        &mut block.voxels[slots + x],
+                        sdf,
+                        colors.map(|c| c[x]),
+                        label,
+                    );
                 }
             }
         }
     }
 
-    fn fuse(&self, voxel: &mut Voxel, sdf: f32, pixel: usize, with_color: bool) {
+    /// Fuses one measurement into `voxel`; `label` 0 means the pixel has none.
+    fn fuse(&self, voxel: &mut Voxel, sdf: f32, color: Option<[u8; 3]>, label: SegmentLabel) {
         // Full weight in front of and at the surface, falling linearly to zero at the back of the
         // truncation band (Voxblox's drop-off).
         let weight = if sdf >= -self.voxel_size {
@@ -391,22 +406,20 @@ impl Integrator<'_> {
         let total = voxel.weight + weight;
         let share = weight / total;
         voxel.sdf += (sdf.min(self.truncation) - voxel.sdf) * share;
-        if with_color {
-            let c = &self.color[3 * pixel..3 * pixel + 3];
-            for (old, &new) in voxel.color.iter_mut().zip(c) {
+        voxel.weight = total.min(self.max_weight);
+        // Free space in front of the band (clamped distance) shows on no surface: its colour and
+        // label never matter, so only voxels within the band take them.
+        if sdf >= self.truncation {
+            return;
+        }
+        if let Some(c) = color {
+            for (old, new) in voxel.color.iter_mut().zip(c) {
                 let o = f32::from(*old);
                 *old = (o + (f32::from(new) - o) * share + 0.5) as u8;
             }
         }
-        voxel.weight = total.min(self.max_weight);
-        // Labels vote only near the surface, where the voxel belongs to what the pixel sees.
-        if let Some(labels) = self.labels
-            && sdf < self.truncation
-        {
-            let label = labels[pixel];
-            if label == 0 {
-                return;
-            }
+        // Labels vote only within the band, where the voxel belongs to what the pixel sees.
+        if label != 0 {
             if voxel.label == label {
                 voxel.label_weight = (voxel.label_weight + weight).min(self.max_weight);
             } else if voxel.label_weight <= weight {
