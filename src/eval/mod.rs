@@ -59,6 +59,7 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
         }
         meshes.push(read_mesh_ply(&path)?);
         truth.push(Segment {
+            name: entry.entity.clone(),
             class: entry.class.clone(),
             score: 1.0,
         });
@@ -80,6 +81,7 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
         .entities
         .iter()
         .map(|e| Segment {
+            name: e.id.clone(),
             class: e.class.clone(),
             score: e.score,
         })

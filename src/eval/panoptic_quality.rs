@@ -10,9 +10,10 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-/// One segment: its class and, for predictions, a confidence.
+/// One segment: its name (entity id), class and, for predictions, a confidence.
 #[derive(Clone, Debug)]
 pub struct Segment {
+    pub name: String,
     pub class: String,
     pub score: f32,
 }
@@ -39,6 +40,23 @@ pub struct PanopticMetrics {
     pub instance_ap50: BTreeMap<String, f64>,
     pub evaluated_voxels: usize,
     pub void_voxels: usize,
+    /// Every truth segment with its best-overlapping prediction, then every counted prediction
+    /// that matched nothing with its best-overlapping truth: where the mistakes are.
+    pub matches: Vec<SegmentMatch>,
+}
+
+/// One segment of one side and the segment of the other side it overlaps most.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct SegmentMatch {
+    pub truth: Option<String>,
+    pub truth_class: Option<String>,
+    pub prediction: Option<String>,
+    pub prediction_class: Option<String>,
+    pub truth_voxels: usize,
+    pub prediction_voxels: usize,
+    pub iou: f64,
+    /// A true positive: same class and IoU above 0.5.
+    pub matched: bool,
 }
 
 /// `truth_of[v]` and `pred_of[v]`: segment index plus one per voxel (0 = void / none).
@@ -164,6 +182,49 @@ pub fn evaluate(
         }
         instance_ap50.insert(class.to_string(), average_precision(&hits, truths.len()));
     }
+    let best_pred = |t: u32| {
+        intersection
+            .range((t, 0)..=(t, u32::MAX))
+            .map(|(&(_, p), _)| (p, iou(t, p)))
+            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+    };
+    let best_truth = |p: u32| {
+        intersection
+            .iter()
+            .filter(|(k, _)| k.1 == p)
+            .map(|(&(t, _), _)| (t, iou(t, p)))
+            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+    };
+    let entry = |t: Option<(u32, f64)>, p: Option<u32>, matched: bool| {
+        let (t, value) = t.map_or((None, 0.0), |(t, v)| (Some(t), v));
+        SegmentMatch {
+            truth: t.map(|t| truth[t as usize - 1].name.clone()),
+            truth_class: t.map(|t| truth[t as usize - 1].class.clone()),
+            prediction: p.map(|p| pred[p as usize - 1].name.clone()),
+            prediction_class: p.map(|p| pred[p as usize - 1].class.clone()),
+            truth_voxels: t.map_or(0, |t| truth_size[t as usize]),
+            prediction_voxels: p.map_or(0, |p| pred_size[p as usize]),
+            iou: value,
+            matched,
+        }
+    };
+    let mut matches = Vec::new();
+    for t in (1..=truth.len() as u32).filter(|&t| present_truth(t as usize)) {
+        let best = best_pred(t);
+        let same_class = best.is_some_and(|(p, v)| {
+            v > 0.5 && pred[p as usize - 1].class == truth[t as usize - 1].class
+        });
+        matches.push(entry(
+            best.map(|(_, v)| (t, v)).or(Some((t, 0.0))),
+            best.map(|(p, _)| p),
+            same_class,
+        ));
+    }
+    for p in
+        (1..=pred.len() as u32).filter(|&p| counted_pred(p as usize) && !matched_pred[p as usize])
+    {
+        matches.push(entry(best_truth(p), Some(p), false));
+    }
     let instance_map50 = if instance_ap50.is_empty() {
         0.0
     } else {
@@ -178,6 +239,7 @@ pub fn evaluate(
         instance_ap50,
         evaluated_voxels: truth_of.len() - void,
         void_voxels: void,
+        matches,
     }
 }
 
@@ -208,6 +270,7 @@ mod tests {
 
     fn seg(class: &str, score: f32) -> Segment {
         Segment {
+            name: class.to_string(),
             class: class.into(),
             score,
         }

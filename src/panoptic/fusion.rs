@@ -4,7 +4,9 @@
 //! 1. A geometric segment takes the mask it overlaps most, when that mask covers enough of it.
 //! 2. A mask that lies inside a larger segment (the keyboard on the desk), or that covers a large
 //!    part of a segment assigned to another mask, is cut out of it as a segment of its own.
-//! 3. Per mask, segments that are not near each other in 3D are clustered and only the largest
+//! 3. Pixels of a mask that no geometric segment holds (objects too small to segment, surfaces
+//!    seen so obliquely that depth jumps cut every pixel apart) form one more segment of that mask.
+//! 4. Per mask, segments that are not near each other in 3D are clustered and only the largest
 //!    cluster keeps the mask (the floor seen through a chair is not the chair); the rest become
 //!    background.
 
@@ -26,9 +28,11 @@ pub struct FusionParams {
     pub covering_fraction: f32,
     /// Cut-outs smaller than this (pixels) are not made.
     pub min_cut_pixels: u32,
+    /// Step 3 makes no segment of fewer pixels than this.
+    pub min_remainder_pixels: u32,
     /// Cell size (metres) of the grid that decides whether two segments of a mask touch.
     pub cluster_cell: f32,
-    /// The refinements of steps 2 and 3 (off for the Voxblox++ baseline).
+    /// The refinements of steps 2 to 4 (off for the Voxblox++ baseline).
     pub refine: bool,
 }
 
@@ -39,6 +43,7 @@ impl Default for FusionParams {
             contained_fraction: 0.8,
             covering_fraction: 0.1,
             min_cut_pixels: 80,
+            min_remainder_pixels: 12,
             cluster_cell: 0.05,
             refine: true,
         }
@@ -117,13 +122,42 @@ pub fn fuse_masks(
             mask: Some(*m),
         });
     }
+    // Step 3: per mask, its measured pixels outside every geometric segment.
+    let mut remainder_of: BTreeMap<u16, u32> = BTreeMap::new();
+    if params.refine {
+        let mut remainder_pixels: BTreeMap<u16, u32> = BTreeMap::new();
+        for ((&g, &m), p) in geometry
+            .segment_of_pixel
+            .iter()
+            .zip(&masks.segment_of_pixel)
+            .zip(&geometry.points)
+        {
+            if g == 0 && m != 0 && p.z > 0.0 {
+                *remainder_pixels.entry(m).or_default() += 1;
+            }
+        }
+        for (m, pixels) in remainder_pixels {
+            if pixels >= params.min_remainder_pixels {
+                segments.push(FrameSegment {
+                    pixels,
+                    mask: Some(m),
+                });
+                remainder_of.insert(m, segments.len() as u32);
+            }
+        }
+    }
     let segment_of_pixel: Vec<u32> = geometry
         .segment_of_pixel
         .iter()
         .zip(&masks.segment_of_pixel)
-        .map(|(&g, &m)| {
+        .zip(&geometry.points)
+        .map(|((&g, &m), p)| {
             if g == 0 {
-                0
+                if p.z > 0.0 {
+                    remainder_of.get(&m).copied().unwrap_or(0)
+                } else {
+                    0
+                }
             } else {
                 cut_of.get(&(g, m)).copied().unwrap_or(g)
             }
@@ -139,7 +173,7 @@ pub fn fuse_masks(
     fused
 }
 
-/// Step 3: segments of one mask that do not touch in 3D form clusters; all but the largest
+/// Step 4: segments of one mask that do not touch in 3D form clusters; all but the largest
 /// cluster (by pixels) lose the mask.
 fn keep_largest_cluster_per_mask(
     fused: &mut FusedFrame,
@@ -295,5 +329,38 @@ mod tests {
         m.segment_of_pixel.iter_mut().for_each(|x| *x = 1);
         let unrefined = fuse_masks(&g, &m, &unrefined_params());
         assert_eq!(unrefined.segments[1].mask, Some(1));
+    }
+
+    #[test]
+    fn masked_pixels_outside_every_segment_become_a_segment_of_their_mask() {
+        // A book (mask 2) on the desk too small for the geometric segmentation: its pixels have
+        // no segment; one pixel of it has no depth either.
+        let (mut g, m) = frame(|u, v| match (u, v) {
+            (2..=5, 2..=5) => 2,
+            (0..=9, _) => 1,
+            _ => 0,
+        });
+        for v in 2..=5 {
+            for u in 2..=5 {
+                g.segment_of_pixel[v * 20 + u] = 0;
+            }
+        }
+        g.points[2 * 20 + 2] = Vec3::ZERO;
+        let fused = fuse_masks(&g, &m, &params());
+        let book = fused.segment_of_pixel[3 * 20 + 3];
+        assert_eq!(book as usize, fused.segments.len(), "the last segment");
+        assert_eq!(fused.segments[book as usize - 1].mask, Some(2));
+        assert_eq!(fused.segments[book as usize - 1].pixels, 15);
+        assert_eq!(fused.segment_of_pixel[2 * 20 + 2], 0, "no depth, no segment");
+        assert_eq!(fused.segments[0].mask, Some(1), "the desk keeps its mask");
+        // Fewer pixels than the minimum make no segment; the baseline makes none at all.
+        let strict = FusionParams {
+            min_remainder_pixels: 16,
+            ..params()
+        };
+        assert_eq!(fuse_masks(&g, &m, &strict).segment_of_pixel[3 * 20 + 3], 0);
+        let unrefined = fuse_masks(&g, &m, &unrefined_params());
+        assert_eq!(unrefined.segment_of_pixel[3 * 20 + 3], 0);
+        assert_eq!(unrefined.segments.len(), 2);
     }
 }

@@ -258,8 +258,10 @@ impl PanopticMapper {
                 used.insert(l);
             }
         }
+        // A segment worth a label: as small as fusion makes them (a cup far away is a few dozen
+        // pixels), at the sampling stride.
         let min_samples =
-            (self.params.geometric.min_pixels as usize / (stride * stride)) as u32 / 2;
+            (self.params.masks.min_remainder_pixels as usize / (stride * stride)) as u32;
         for (s, label) in label_of.iter_mut().enumerate() {
             if *label == 0 && samples[s].1 >= min_samples.max(1) {
                 *label = self.next_label;
