@@ -37,6 +37,44 @@ impl Plane {
     }
 }
 
+/// The least-squares plane of `points` (the normal is the covariance's direction of least
+/// spread), or `None` for fewer than three points or points on a line.
+pub fn fit_plane(points: &[Vec3]) -> Option<Plane> {
+    if points.len() < 3 {
+        return None;
+    }
+    let n = points.len() as f64;
+    let mean = points
+        .iter()
+        .fold(glam::DVec3::ZERO, |a, p| a + p.as_dvec3())
+        / n;
+    let mut cov = glam::DMat3::ZERO;
+    for p in points {
+        let d = p.as_dvec3() - mean;
+        cov += glam::DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+    }
+    // Inverse iteration converges on the smallest eigenvalue's vector at the rate of the ratio of
+    // the two smallest: fast for anything plane-like. A tiny ridge keeps the inverse finite for
+    // points exactly on a plane.
+    let ridge = 1e-12 * (cov.x_axis.x + cov.y_axis.y + cov.z_axis.z).max(1e-30);
+    let inverse = (cov + glam::DMat3::from_diagonal(glam::DVec3::splat(ridge))).inverse();
+    if !inverse.is_finite() {
+        return None;
+    }
+    let mut normal = glam::DVec3::new(0.577, 0.577, 0.577);
+    for _ in 0..32 {
+        normal = (inverse * normal).try_normalize()?;
+    }
+    // Points on a line leave two directions of no spread: no unique plane.
+    let spread = |v: glam::DVec3| v.dot(cov * v);
+    let second = normal.any_orthonormal_vector();
+    let third = normal.cross(second);
+    if spread(second).min(spread(third)) <= 1e-9 * (spread(second) + spread(third)) {
+        return None;
+    }
+    Some(Plane::from_point_normal(mean.as_vec3(), normal.as_vec3()))
+}
+
 /// The planes that carry the most surface area of `mesh`: triangles are grouped by normal (within
 /// about 2.5 degrees) and offset (within 1 cm); groups with at least `min_area` square metres are
 /// returned, largest first, at most `max_count`. This is the exact answer RANSAC estimates from data.
@@ -77,6 +115,35 @@ pub fn dominant_planes(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_noisy_tilted_plane_is_fitted_and_a_line_is_refused() {
+        let truth = Plane::from_point_normal(Vec3::new(0.3, -1.0, 2.0), Vec3::new(0.2, 1.0, 0.3));
+        let (u, v) = truth.normal.any_orthonormal_pair();
+        let mut points = Vec::new();
+        for i in 0..40 {
+            for j in 0..25 {
+                // Deterministic +-3 mm "noise" along the normal.
+                let noise = 0.003 * (((i * 7 + j * 13) % 5) as f32 - 2.0) / 2.0;
+                points.push(
+                    Vec3::new(0.3, -1.0, 2.0)
+                        + u * (i as f32 * 0.05)
+                        + v * (j as f32 * 0.04)
+                        + truth.normal * noise,
+                );
+            }
+        }
+        let fitted = fit_plane(&points).expect("a plane");
+        assert!(fitted.normal.dot(truth.normal).abs() > 0.9999);
+        assert!(
+            points
+                .iter()
+                .all(|p| fitted.signed_distance(*p).abs() < 0.005)
+        );
+        let line: Vec<Vec3> = (0..10).map(|i| Vec3::X * i as f32).collect();
+        assert_eq!(fit_plane(&line), None);
+        assert_eq!(fit_plane(&points[..2]), None);
+    }
     use crate::geometry::TriMesh;
 
     #[test]

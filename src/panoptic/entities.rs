@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::TriMesh;
+use crate::geometry::plane::{Plane, fit_plane};
 use crate::map::{SegmentLabel, TsdfMap, extract_mesh};
 use crate::panoptic::instances::{ClassId, InstanceCounts, InstanceId};
 
@@ -67,6 +68,8 @@ pub struct ExtractionParams {
     pub min_surface_voxels: usize,
     /// ...and layout with fewer than this (a wall is large; a small piece is a misassigned one).
     pub min_layout_voxels: usize,
+    /// Metres: a wall instance whose voxels lie this close to a larger wall's plane joins it.
+    pub coplanar_distance: f32,
 }
 
 impl Default for ExtractionParams {
@@ -76,6 +79,7 @@ impl Default for ExtractionParams {
             min_weight: 2.0,
             min_surface_voxels: 25,
             min_layout_voxels: 400,
+            coplanar_distance: 0.05,
         }
     }
 }
@@ -95,6 +99,69 @@ pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, S
     out
 }
 
+/// The labels of one (class, instance), with their surface voxels and vote support.
+struct Group {
+    labels: Vec<SegmentLabel>,
+    voxels: usize,
+    weighted_support: f32,
+}
+
+/// A wall is a plane: wall instances whose voxels lie on the plane of a larger wall instance are
+/// pieces of it (a wall seen in parts, a mask split by the segmenter) and join it.
+fn merge_coplanar_walls(
+    groups: &mut BTreeMap<(ClassId, InstanceId), Group>,
+    wall: ClassId,
+    voxels: &[(IVec3, SegmentLabel)],
+    map: &TsdfMap,
+    max_distance: f32,
+) {
+    let walls: Vec<(ClassId, InstanceId)> =
+        groups.keys().filter(|(c, _)| *c == wall).copied().collect();
+    if walls.len() < 2 {
+        return;
+    }
+    let mut group_of_label: BTreeMap<SegmentLabel, usize> = BTreeMap::new();
+    for (k, key) in walls.iter().enumerate() {
+        for &l in &groups[key].labels {
+            group_of_label.insert(l, k);
+        }
+    }
+    let mut points: Vec<Vec<Vec3>> = vec![Vec::new(); walls.len()];
+    for (v, l) in voxels {
+        if let Some(&k) = group_of_label.get(l) {
+            points[k].push(map.voxel_center(*v));
+        }
+    }
+    // Largest first, so pieces join the wall they belong to, never the other way round.
+    let mut order: Vec<usize> = (0..walls.len()).collect();
+    order.sort_by_key(|&k| (std::cmp::Reverse(points[k].len()), walls[k]));
+    let planes: Vec<Option<Plane>> = points.iter().map(|p| fit_plane(p)).collect();
+    let mut kept: Vec<usize> = Vec::new();
+    for &k in &order {
+        let host = kept.iter().copied().find(|&h| {
+            let (Some(a), Some(b)) = (planes[h], planes[k]) else {
+                return false;
+            };
+            let on_plane = points[k]
+                .iter()
+                .filter(|p| a.signed_distance(**p).abs() < max_distance)
+                .count();
+            a.normal.dot(b.normal).abs() > 0.95 && on_plane * 5 >= points[k].len() * 4
+        });
+        match host {
+            Some(h) => {
+                let piece = groups.remove(&walls[k]).expect("a wall group");
+                let into = groups.get_mut(&walls[h]).expect("a wall group");
+                into.labels.extend(piece.labels);
+                into.labels.sort_unstable();
+                into.voxels += piece.voxels;
+                into.weighted_support += piece.weighted_support;
+            }
+            None => kept.push(k),
+        }
+    }
+}
+
 pub fn extract_entities(
     map: &TsdfMap,
     instances: &InstanceCounts,
@@ -108,11 +175,6 @@ pub fn extract_entities(
         *voxels_of_label.entry(*l).or_default() += 1;
     }
     // Group labels by (class, instance); layout floor and ceiling are one entity each.
-    struct Group {
-        labels: Vec<SegmentLabel>,
-        voxels: usize,
-        weighted_support: f32,
-    }
     let mut groups: BTreeMap<(ClassId, InstanceId), Group> = BTreeMap::new();
     for (&l, &n) in voxels_of_label.iter().filter(|(l, _)| **l != 0) {
         let Some(identity) = instances.identity(l) else {
@@ -132,6 +194,9 @@ pub fn extract_entities(
         g.labels.push(l);
         g.voxels += n;
         g.weighted_support += identity.support * n as f32;
+    }
+    if let Some(wall) = classes.id("wall") {
+        merge_coplanar_walls(&mut groups, wall, &voxels, map, params.coplanar_distance);
     }
     let mut entities: Vec<PanopticEntity> = Vec::new();
     let mut per_class_count: BTreeMap<String, usize> = BTreeMap::new();
@@ -187,5 +252,47 @@ pub fn extract_entities(
     PanopticScene {
         entities,
         surface_voxels,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn group(labels: &[SegmentLabel], voxels: usize) -> Group {
+        Group {
+            labels: labels.to_vec(),
+            voxels,
+            weighted_support: voxels as f32,
+        }
+    }
+
+    #[test]
+    fn a_piece_on_a_larger_walls_plane_joins_it_and_the_opposite_wall_stays() {
+        let map = TsdfMap::new(0.02);
+        let mut voxels = Vec::new();
+        // Wall instance 1 (label 1): the plane x = 0, 2 m wide. Instance 2 (label 2): a piece of
+        // the same plane beside it. Instance 3 (label 3): the parallel wall at x = 4 m.
+        for y in 0..100 {
+            for z in 0..50 {
+                voxels.push((IVec3::new(0, y, z), 1));
+                if y < 30 {
+                    voxels.push((IVec3::new(1, y + 110, z), 2));
+                    voxels.push((IVec3::new(200, y, z), 3));
+                }
+            }
+        }
+        let mut groups = BTreeMap::from([
+            ((7, 1), group(&[1], 5000)),
+            ((7, 2), group(&[2], 1500)),
+            ((7, 3), group(&[3], 1500)),
+            ((2, 4), group(&[4], 10)),
+        ]);
+        merge_coplanar_walls(&mut groups, 7, &voxels, &map, 0.05);
+        assert_eq!(groups.len(), 3);
+        assert_eq!(groups[&(7, 1)].labels, vec![1, 2]);
+        assert_eq!(groups[&(7, 1)].voxels, 6500);
+        assert_eq!(groups[&(7, 3)].labels, vec![3]);
+        assert!(groups.contains_key(&(2, 4)), "other classes are untouched");
     }
 }

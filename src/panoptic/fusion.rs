@@ -351,7 +351,11 @@ mod tests {
         assert_eq!(book as usize, fused.segments.len(), "the last segment");
         assert_eq!(fused.segments[book as usize - 1].mask, Some(2));
         assert_eq!(fused.segments[book as usize - 1].pixels, 15);
-        assert_eq!(fused.segment_of_pixel[2 * 20 + 2], 0, "no depth, no segment");
+        assert_eq!(
+            fused.segment_of_pixel[2 * 20 + 2],
+            0,
+            "no depth, no segment"
+        );
         assert_eq!(fused.segments[0].mask, Some(1), "the desk keeps its mask");
         // Fewer pixels than the minimum make no segment; the baseline makes none at all.
         let strict = FusionParams {
