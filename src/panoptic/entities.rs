@@ -66,6 +66,10 @@ pub struct ExtractionParams {
     pub min_weight: f32,
     /// Entities with fewer surface voxels are dropped...
     pub min_surface_voxels: usize,
+    /// ...except small things (a class whose default size is below `small_object_size` metres in
+    /// every direction: a cup far away is a dozen voxels), which need this many...
+    pub min_small_object_voxels: usize,
+    pub small_object_size: f32,
     /// ...and layout with fewer than this (a wall is large; a small piece is a misassigned one).
     pub min_layout_voxels: usize,
     /// Metres: a wall instance whose voxels lie this close to a larger wall's plane joins it.
@@ -78,6 +82,8 @@ impl Default for ExtractionParams {
             surface_band: 0.75,
             min_weight: 2.0,
             min_surface_voxels: 25,
+            min_small_object_voxels: 12,
+            small_object_size: 0.3,
             min_layout_voxels: 400,
             coplanar_distance: 0.05,
         }
@@ -202,9 +208,12 @@ pub fn extract_entities(
     let mut per_class_count: BTreeMap<String, usize> = BTreeMap::new();
     for ((class_id, instance), g) in groups {
         let class = classes.name(class_id).to_string();
-        let kind = table.get(&class).map_or(EntityKind::Rigid, |c| c.kind);
+        let info = table.get(&class);
+        let kind = info.map_or(EntityKind::Rigid, |c| c.kind);
+        let small = info.is_some_and(|c| c.size.max_element() < params.small_object_size);
         let min = match kind {
             EntityKind::Layout => params.min_layout_voxels,
+            _ if small => params.min_small_object_voxels,
             _ => params.min_surface_voxels,
         };
         if g.voxels < min {
