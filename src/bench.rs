@@ -65,12 +65,12 @@ pub fn bench_tsdf(options: &TsdfBenchOptions) -> Result<TsdfBenchReport, IsceneE
     let (mut load_s, mut integrate_s, mut fused) = (0.0, 0.0, 0);
     // Frames are read (and segmented) a batch at a time in parallel, off the clock, so memory
     // stays bounded by the batch and the map.
-    for batch in (0..n).collect::<Vec<_>>().chunks(64) {
+    for start in (0..n).step_by(64) {
         let clock = Instant::now();
-        let frames = batch
-            .par_iter()
-            .filter(|&&i| !held_out(i))
-            .map(|&i| sequence.load_frame(i))
+        let frames = (start..(start + 64).min(n))
+            .into_par_iter()
+            .filter(|&i| !held_out(i))
+            .map(|i| sequence.load_frame(i))
             .collect::<Result<Vec<_>, _>>()?;
         let labels: Vec<Option<Vec<SegmentLabel>>> = frames
             .par_iter()

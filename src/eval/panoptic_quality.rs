@@ -215,7 +215,7 @@ pub fn evaluate(
             v > 0.5 && pred[p as usize - 1].class == truth[t as usize - 1].class
         });
         matches.push(entry(
-            best.map(|(_, v)| (t, v)).or(Some((t, 0.0))),
+            Some((t, best.map_or(0.0, |(_, v)| v))),
             best.map(|(p, _)| p),
             same_class,
         ));

@@ -74,17 +74,22 @@ pub fn fuse_masks(
     // overlap[g][m]: pixels of geometric segment g under mask m (0 = no mask).
     let mut overlap: Vec<BTreeMap<u16, u32>> = vec![BTreeMap::new(); n + 1];
     let mut mask_pixels: BTreeMap<u16, u32> = BTreeMap::new();
-    for (&g, &m) in geometry
+    // Per mask, its measured pixels outside every geometric segment (for step 3).
+    let mut remainder_pixels: BTreeMap<u16, u32> = BTreeMap::new();
+    for ((&g, &m), p) in geometry
         .segment_of_pixel
         .iter()
         .zip(&masks.segment_of_pixel)
+        .zip(&geometry.points)
     {
         if g != 0 {
             *overlap[g as usize].entry(m).or_default() += 1;
             *mask_pixels.entry(m).or_default() += 1;
+        } else if m != 0 && p.z > 0.0 {
+            *remainder_pixels.entry(m).or_default() += 1;
         }
     }
-    // Output segments: the geometric segments (indices 1..=n), then cut-outs.
+    // Output segments: the geometric segments (indices 1..=n), then cut-outs, then remainders.
     let mut segments: Vec<FrameSegment> = Vec::with_capacity(n);
     let mut cut_of: HashMap<(u32, u16), u32, FixedState> = HashMap::default();
     for (g, counts) in overlap.iter().enumerate().skip(1) {
@@ -122,20 +127,9 @@ pub fn fuse_masks(
             mask: Some(*m),
         });
     }
-    // Step 3: per mask, its measured pixels outside every geometric segment.
+    // Step 3: a mask's remainder pixels, when enough, are a segment of that mask.
     let mut remainder_of: BTreeMap<u16, u32> = BTreeMap::new();
     if params.refine {
-        let mut remainder_pixels: BTreeMap<u16, u32> = BTreeMap::new();
-        for ((&g, &m), p) in geometry
-            .segment_of_pixel
-            .iter()
-            .zip(&masks.segment_of_pixel)
-            .zip(&geometry.points)
-        {
-            if g == 0 && m != 0 && p.z > 0.0 {
-                *remainder_pixels.entry(m).or_default() += 1;
-            }
-        }
         for (m, pixels) in remainder_pixels {
             if pixels >= params.min_remainder_pixels {
                 segments.push(FrameSegment {
@@ -153,11 +147,12 @@ pub fn fuse_masks(
         .zip(&geometry.points)
         .map(|((&g, &m), p)| {
             if g == 0 {
-                if p.z > 0.0 {
-                    remainder_of.get(&m).copied().unwrap_or(0)
-                } else {
-                    0
-                }
+                let measured = p.z > 0.0;
+                remainder_of
+                    .get(&m)
+                    .copied()
+                    .filter(|_| measured)
+                    .unwrap_or(0)
             } else {
                 cut_of.get(&(g, m)).copied().unwrap_or(g)
             }
