@@ -11,6 +11,7 @@ use std::collections::{HashMap, HashSet};
 use foldhash::fast::FixedState;
 use glam::{Affine3A, IVec3, Vec3};
 use rayon::prelude::*;
+use wide::{CmpGe, CmpGt, CmpLe, CmpLt, f32x8};
 
 use crate::geometry::Pinhole;
 
@@ -330,60 +331,53 @@ impl Integrator<'_> {
             Vec3::from(r.y_axis) * vs,
             Vec3::from(r.z_axis) * vs,
         );
-        let (w, h) = (self.camera.width as i32, self.camera.height as i32);
-        let (fx, fy, cx, cy) = (
-            self.camera.fx,
-            self.camera.fy,
-            self.camera.cx,
-            self.camera.cy,
-        );
         let with_color = self.color.len() == self.depth.len() * 3;
-        let (wf, hf) = (w as f32, h as f32);
         for z in 0..BLOCK_SIDE {
             for y in 0..BLOCK_SIDE {
                 let row = p0 + dz * z as f32 + dy * y as f32;
-                // A row of voxels in two passes: first every pixel index (no branch on data), then
-                // the fusion. The depth loads of a row are independent, so their cache misses
-                // overlap instead of each waiting behind a mispredicted branch.
-                let mut pixels = [0usize; BLOCK_SIDE];
-                let mut voxel_z = [0.0; BLOCK_SIDE];
-                for (x, (pixel, vz)) in pixels.iter_mut().zip(&mut voxel_z).enumerate() {
-                    let here = row + dx * x as f32;
-                    let inv_z = 1.0 / here.z;
-                    // Nearest pixel: the +0.5 rounds (truncating casts); a voxel outside the image
-                    // gets pixel 0 and an infinite depth, so it never fuses.
-                    let uf = fx * here.x * inv_z + cx + 0.5;
-                    let vf = fy * here.y * inv_z + cy + 0.5;
-                    let inside =
-                        (here.z > 0.05) & (uf >= 0.0) & (vf >= 0.0) & (uf < wf) & (vf < hf);
-                    let index = vf as i32 * w + uf as i32;
-                    *pixel = if inside { index as usize } else { 0 };
-                    *vz = if inside { here.z } else { f32::INFINITY };
+                // A row of voxels at a time: project and test all eight without a branch on data
+                // (their depth loads are independent, so the cache misses overlap), then fuse only
+                // the voxels the test kept; a row wholly behind the surface or outside the image
+                // costs no label or colour load.
+                let (pixels, voxel_z) = self.project_row(row, dx);
+                let mut depths = [0.0; BLOCK_SIDE];
+                for (d, &pixel) in depths.iter_mut().zip(&pixels) {
+                    *d = self.depth[pixel];
                 }
-                let depths = pixels.map(|pixel| self.depth[pixel]);
-                let labels = self.labels.map(|labels| pixels.map(|pixel| labels[pixel]));
-                let colors = with_color.then(|| {
-                    pixels.map(|pixel| {
+                let d = f32x8::from(depths);
+                // Outside the image `voxel_z` is infinite, so the voxel counts as occluded.
+                let sdf = d - f32x8::from(voxel_z);
+                // Measured, in range, and in front of the back of the band (where the weight
+                // reaches zero).
+                let fused = d.cmp_gt(f32x8::ZERO)
+                    & d.cmp_le(f32x8::splat(self.max_ray_length))
+                    & sdf.cmp_gt(f32x8::splat(-self.truncation));
+                let mut lanes = fused.move_mask() as u32;
+                if lanes == 0 {
+                    continue;
+                }
+                // Full weight in front of and at the surface, falling linearly to zero at the
+                // back of the truncation band (Voxblox's drop-off).
+                let weight = ((sdf + f32x8::splat(self.truncation))
+                    * f32x8::splat(1.0 / (self.truncation - self.voxel_size)))
+                .min(f32x8::ONE)
+                .to_array();
+                let sdf = sdf.to_array();
+                let slots = (z * BLOCK_SIDE + y) * BLOCK_SIDE;
+                while lanes != 0 {
+                    let x = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let pixel = pixels[x];
+                    let color = with_color.then(|| {
                         let c = &self.color[3 * pixel..3 * pixel + 3];
                         [c[0], c[1], c[2]]
-                    })
-                });
-                let slots = (z * BLOCK_SIDE + y) * BLOCK_SIDE;
-                for x in 0..BLOCK_SIDE {
-                    let d = depths[x];
-                    if d <= 0.0 || d > self.max_ray_length {
-                        continue;
-                    }
-                    // Outside the image `voxel_z` is infinite, so the voxel counts as occluded.
-                    let sdf = d - voxel_z[x];
-                    if sdf < -self.truncation {
-                        continue;
-                    }
-                    let label = labels.map_or(0, |l| l[x]);
+                    });
+                    let label = self.labels.map_or(0, |labels| labels[pixel]);
                     self.fuse(
                         &mut block.voxels[slots + x],
-                        sdf,
-                        colors.map(|c| c[x]),
+                        sdf[x],
+                        weight[x],
+                        color,
                         label,
                     );
                 }
@@ -391,18 +385,45 @@ impl Integrator<'_> {
         }
     }
 
-    /// Fuses one measurement into `voxel`; `label` 0 means the pixel has none.
-    fn fuse(&self, voxel: &mut Voxel, sdf: f32, color: Option<[u8; 3]>, label: SegmentLabel) {
-        // Full weight in front of and at the surface, falling linearly to zero at the back of the
-        // truncation band (Voxblox's drop-off).
-        let weight = if sdf >= -self.voxel_size {
-            1.0
-        } else {
-            (self.truncation + sdf) / (self.truncation - self.voxel_size)
-        };
-        if weight <= 0.0 {
-            return;
-        }
+    /// The pixel each voxel of a block row lands on (nearest pixel) and the voxel's depth in the
+    /// camera; `row` is the first voxel's centre in the camera frame, `dx` the step to the next.
+    /// A voxel outside the image gets pixel 0 and an infinite depth, so it never fuses. The eight
+    /// voxels are one SIMD vector: no branch on data, one division per lane.
+    fn project_row(&self, row: Vec3, dx: Vec3) -> ([usize; BLOCK_SIDE], [f32; BLOCK_SIDE]) {
+        let c = &self.camera;
+        let (wf, hf) = (c.width as f32, c.height as f32);
+        let lane = f32x8::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        let x = f32x8::splat(dx.x).mul_add(lane, f32x8::splat(row.x));
+        let y = f32x8::splat(dx.y).mul_add(lane, f32x8::splat(row.y));
+        let z = f32x8::splat(dx.z).mul_add(lane, f32x8::splat(row.z));
+        let inv_z = f32x8::ONE / z;
+        // The +0.5 rounds to the nearest pixel under the truncating conversion below.
+        let u = (f32x8::splat(c.fx) * x).mul_add(inv_z, f32x8::splat(c.cx + 0.5));
+        let v = (f32x8::splat(c.fy) * y).mul_add(inv_z, f32x8::splat(c.cy + 0.5));
+        let inside = z.cmp_gt(f32x8::splat(0.05))
+            & u.cmp_ge(f32x8::ZERO)
+            & v.cmp_ge(f32x8::ZERO)
+            & u.cmp_lt(f32x8::splat(wf))
+            & v.cmp_lt(f32x8::splat(hf));
+        // Row-major index in f32 (exact below 2^24 pixels) after flooring both coordinates;
+        // lanes outside the image may convert to anything, the mask zeroes them.
+        let (ui, vi) = (u.fast_trunc_int(), v.fast_trunc_int());
+        let index = vi.round_float().mul_add(f32x8::splat(wf), ui.round_float());
+        let index = inside.blend(index, f32x8::ZERO).fast_trunc_int();
+        let voxel_z = inside.blend(z, f32x8::splat(f32::INFINITY));
+        (index.to_array().map(|i| i as usize), voxel_z.to_array())
+    }
+
+    /// Fuses one measurement of weight `weight` (> 0) into `voxel`; `label` 0 means the pixel
+    /// has none.
+    fn fuse(
+        &self,
+        voxel: &mut Voxel,
+        sdf: f32,
+        weight: f32,
+        color: Option<[u8; 3]>,
+        label: SegmentLabel,
+    ) {
         let total = voxel.weight + weight;
         let share = weight / total;
         voxel.sdf += (sdf.min(self.truncation) - voxel.sdf) * share;
