@@ -106,6 +106,10 @@ enum BenchCommand {
         /// Write the map's mesh here (PLY).
         #[arg(long)]
         mesh: Option<PathBuf>,
+        /// Integrate the frames this many times into fresh maps and report the fastest run (a
+        /// shared machine's noise only ever slows a run down).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
     },
 }
 
@@ -192,6 +196,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     holdout,
                     labels,
                     mesh,
+                    runs,
                 },
         }) => {
             let report = iscene::bench::bench_tsdf(&iscene::bench::TsdfBenchOptions {
@@ -201,6 +206,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 holdout_every: holdout,
                 labels,
                 mesh,
+                runs: runs as usize,
             })?;
             print_json(&report)?;
         }

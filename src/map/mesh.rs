@@ -128,7 +128,7 @@ fn block_triangles(map: &TsdfMap, key: IVec3, min_weight: f32) -> Vec<LooseTrian
                 let mut cube_index = 0usize;
                 for (c, offset) in CORNERS.iter().enumerate() {
                     match map.voxel(origin + *offset) {
-                        Some(v) if v.weight >= min_weight => {
+                        Some(v) if v.is_observed() && v.weight() >= min_weight => {
                             corners[c] = *v;
                             if v.sdf < 0.0 {
                                 cube_index |= 1 << c;
@@ -201,13 +201,8 @@ mod tests {
                 let local = voxel_local(i);
                 let p = ((block.key * BLOCK_SIDE as i32 + local).as_vec3() + 0.5) * vs;
                 let sdf = (p.distance(center) - radius).clamp(-truncation, truncation);
-                block.voxels[i] = Voxel {
-                    sdf,
-                    weight: 1.0,
-                    color: [0; 3],
-                    label: if p.x < center.x { 1 } else { 2 },
-                    label_weight: 1.0,
-                };
+                let label = if p.x < center.x { 1 } else { 2 };
+                block.voxels[i] = Voxel::observed(sdf, 1.0, [0; 3], label);
             }
         }
         map

@@ -22,17 +22,58 @@ pub const BLOCK_VOXELS: usize = BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE;
 /// A global segment label; 0 = none.
 pub type SegmentLabel = u32;
 
+/// Weights are stored in fixed point, this many steps per unit of weight: a voxel stays 16 bytes,
+/// four to a cache line (integration streams every voxel of a touched block through the cache),
+/// and 1/64 is far finer than the weight drop-off needs.
+const WEIGHT_STEPS: f32 = 64.0;
+
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Voxel {
     /// Signed distance in metres (see the module docs for the sign).
     pub sdf: f32,
-    /// Accumulated integration weight; 0 = never observed.
-    pub weight: f32,
-    pub color: [u8; 3],
+    /// Accumulated integration weight in steps of 1/`WEIGHT_STEPS`; 0 = never observed.
+    weight: u16,
+    /// How far `label` leads the vote (Voxblox++'s label confidence), in weight steps.
+    label_weight: u16,
     /// The segment label that won the vote so far; 0 = none.
     pub label: SegmentLabel,
-    /// How far `label` leads the vote (Voxblox++'s label confidence).
-    pub label_weight: f32,
+    pub color: [u8; 3],
+}
+
+const _: () = assert!(std::mem::size_of::<Voxel>() == 16);
+
+impl Voxel {
+    /// A voxel observed with `weight`, its label leading the vote by the same weight.
+    pub fn observed(sdf: f32, weight: f32, color: [u8; 3], label: SegmentLabel) -> Self {
+        let steps = weight_steps(weight);
+        Self {
+            sdf,
+            weight: steps,
+            label_weight: steps,
+            label,
+            color,
+        }
+    }
+
+    /// Accumulated integration weight; 0 = never observed.
+    pub fn weight(&self) -> f32 {
+        f32::from(self.weight) / WEIGHT_STEPS
+    }
+
+    pub fn is_observed(&self) -> bool {
+        self.weight > 0
+    }
+
+    /// How far `label` leads the vote.
+    pub fn label_weight(&self) -> f32 {
+        f32::from(self.label_weight) / WEIGHT_STEPS
+    }
+}
+
+/// `weight` in fixed-point steps, at least one step (a measurement that fuses counts) and at
+/// most what a `u16` holds.
+fn weight_steps(weight: f32) -> u16 {
+    (weight * WEIGHT_STEPS + 0.5).clamp(1.0, f32::from(u16::MAX)) as u16
 }
 
 pub struct Block {
@@ -92,7 +133,8 @@ pub struct TsdfMap {
     pub truncation: f32,
     /// Measurements farther than this from the camera are not integrated.
     pub max_ray_length: f32,
-    /// Running averages stop growing their weight here, so the map can still change.
+    /// Running averages stop growing their weight here, so the map can still change (at most
+    /// 1023: weights are 16-bit fixed point).
     pub max_weight: f32,
     /// Blocks in the order they were first touched.
     pub blocks: Vec<Block>,
@@ -186,7 +228,7 @@ impl TsdfMap {
             voxel_size: self.voxel_size,
             truncation: self.truncation,
             max_ray_length: self.max_ray_length,
-            max_weight: self.max_weight,
+            max_weight: weight_steps(self.max_weight),
         };
         let mut work: Vec<&mut Block> = self
             .blocks
@@ -257,7 +299,7 @@ impl TsdfMap {
         let mut value = 0.0;
         for c in 0..8 {
             let offset = IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-            let v = self.voxel(corner + offset).filter(|v| v.weight > 0.0)?;
+            let v = self.voxel(corner + offset).filter(|v| v.is_observed())?;
             let wx = if c & 1 == 1 { f.x } else { 1.0 - f.x };
             let wy = if c & 2 == 2 { f.y } else { 1.0 - f.y };
             let wz = if c & 4 == 4 { f.z } else { 1.0 - f.z };
@@ -314,7 +356,8 @@ struct Integrator<'a> {
     voxel_size: f32,
     truncation: f32,
     max_ray_length: f32,
-    max_weight: f32,
+    /// In weight steps.
+    max_weight: u16,
 }
 
 impl Integrator<'_> {
@@ -346,7 +389,7 @@ impl Integrator<'_> {
                 }
                 let d = f32x8::from(depths);
                 // Outside the image `voxel_z` is infinite, so the voxel counts as occluded.
-                let sdf = d - f32x8::from(voxel_z);
+                let sdf = d - voxel_z;
                 // Measured, in range, and in front of the back of the band (where the weight
                 // reaches zero).
                 let fused = d.cmp_gt(f32x8::ZERO)
@@ -356,12 +399,20 @@ impl Integrator<'_> {
                 if lanes == 0 {
                     continue;
                 }
-                // Full weight in front of and at the surface, falling linearly to zero at the
-                // back of the truncation band (Voxblox's drop-off).
+                // Full weight in front of the surface and through the front half of the band
+                // behind it, where a depth sensor's noise still puts the surface, then falling
+                // linearly to zero at the back of the band (Voxblox's drop-off, which starts one
+                // voxel behind: on 7-Scenes at 1 cm that fused 0.1 mm less accurately than
+                // Open3D's constant weight, this 0.04 mm more accurately).
                 let weight = ((sdf + f32x8::splat(self.truncation))
-                    * f32x8::splat(1.0 / (self.truncation - self.voxel_size)))
-                .min(f32x8::ONE)
-                .to_array();
+                    * f32x8::splat(2.0 / self.truncation))
+                .min(f32x8::ONE);
+                // In fixed-point steps, rounded, at least one (a measurement that fuses counts).
+                let weight = weight
+                    .mul_add(f32x8::splat(WEIGHT_STEPS), f32x8::splat(0.5))
+                    .max(f32x8::ONE)
+                    .fast_trunc_int()
+                    .to_array();
                 let sdf = sdf.to_array();
                 let slots = (z * BLOCK_SIDE + y) * BLOCK_SIDE;
                 while lanes != 0 {
@@ -376,7 +427,7 @@ impl Integrator<'_> {
                     self.fuse(
                         &mut block.voxels[slots + x],
                         sdf[x],
-                        weight[x],
+                        weight[x] as u16,
                         color,
                         label,
                     );
@@ -389,7 +440,7 @@ impl Integrator<'_> {
     /// camera; `row` is the first voxel's centre in the camera frame, `dx` the step to the next.
     /// A voxel outside the image gets pixel 0 and an infinite depth, so it never fuses. The eight
     /// voxels are one SIMD vector: no branch on data, one division per lane.
-    fn project_row(&self, row: Vec3, dx: Vec3) -> ([usize; BLOCK_SIDE], [f32; BLOCK_SIDE]) {
+    fn project_row(&self, row: Vec3, dx: Vec3) -> ([usize; BLOCK_SIDE], f32x8) {
         let c = &self.camera;
         let (wf, hf) = (c.width as f32, c.height as f32);
         let lane = f32x8::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
@@ -411,23 +462,24 @@ impl Integrator<'_> {
         let index = vi.round_float().mul_add(f32x8::splat(wf), ui.round_float());
         let index = inside.blend(index, f32x8::ZERO).fast_trunc_int();
         let voxel_z = inside.blend(z, f32x8::splat(f32::INFINITY));
-        (index.to_array().map(|i| i as usize), voxel_z.to_array())
+        (index.to_array().map(|i| i as usize), voxel_z)
     }
 
-    /// Fuses one measurement of weight `weight` (> 0) into `voxel`; `label` 0 means the pixel
-    /// has none.
+    /// Fuses one measurement of `weight` steps (1 to `WEIGHT_STEPS`) into `voxel`; `label` 0
+    /// means the pixel has none.
     fn fuse(
         &self,
         voxel: &mut Voxel,
         sdf: f32,
-        weight: f32,
+        weight: u16,
         color: Option<[u8; 3]>,
         label: SegmentLabel,
     ) {
-        let total = voxel.weight + weight;
-        let share = weight / total;
+        // In u32 the sum cannot overflow; the cap brings it back into a u16.
+        let total = u32::from(voxel.weight) + u32::from(weight);
+        let share = f32::from(weight) / total as f32;
         voxel.sdf += (sdf.min(self.truncation) - voxel.sdf) * share;
-        voxel.weight = total.min(self.max_weight);
+        voxel.weight = total.min(u32::from(self.max_weight)) as u16;
         // Free space in front of the band (clamped distance) shows on no surface: its colour and
         // label never matter, so only voxels within the band take them.
         if sdf >= self.truncation {
@@ -442,7 +494,8 @@ impl Integrator<'_> {
         // Labels vote only within the band, where the voxel belongs to what the pixel sees.
         if label != 0 {
             if voxel.label == label {
-                voxel.label_weight = (voxel.label_weight + weight).min(self.max_weight);
+                voxel.label_weight = (u32::from(voxel.label_weight) + u32::from(weight))
+                    .min(u32::from(self.max_weight)) as u16;
             } else if voxel.label_weight <= weight {
                 voxel.label = label;
                 voxel.label_weight = weight;

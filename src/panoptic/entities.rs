@@ -96,7 +96,7 @@ pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, S
     let mut out = Vec::new();
     for block in &map.blocks {
         for (i, v) in block.voxels.iter().enumerate() {
-            if v.weight >= params.min_weight && v.sdf.abs() < band {
+            if v.weight() >= params.min_weight && v.sdf.abs() < band {
                 let local = crate::map::tsdf::voxel_local(i);
                 out.push((block.key * crate::map::BLOCK_SIDE as i32 + local, v.label));
             }

@@ -220,7 +220,7 @@ impl PanopticMapper {
                                 ));
                         if let Some(voxel) = tsdf.voxel_at(point)
                             && voxel.label != 0
-                            && voxel.weight > 0.0
+                            && voxel.is_observed()
                             && voxel.sdf.abs() < near_surface
                         {
                             *entry.0.entry(voxel.label).or_default() += 1;
