@@ -25,7 +25,7 @@ fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usiz
 
 /// The office with realistic depth and segmentation noise, every second frame of 200: the joint
 /// fusion reaches issue 3's bar (PQ >= 0.75, instance mAP@0.5 >= 0.80; measured on this run:
-/// PQ 0.846, mAP 0.889) and beats the Voxblox++ baseline (PQ 0.508) by a wide margin.
+/// PQ 0.864, mAP 0.889) and beats the Voxblox++ baseline (PQ 0.523) by a wide margin.
 #[test]
 fn joint_fusion_recovers_the_office_layout_and_objects() {
     let dir = tempfile::tempdir().expect("tempdir");
