@@ -3,6 +3,8 @@
 use glam::{Affine3A, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::geometry::min_area_rect::min_area_rect;
+
 /// A box whose z axis is the world's up axis. `size` is the full extent along the box's own axes;
 /// `yaw` (radians) turns the box's x axis counter-clockwise from the world's x axis.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -69,6 +71,25 @@ impl GravityBox {
         })
     }
 
+    /// The gravity-aligned box of least volume around `points_in_world`: the minimum-area
+    /// rectangle of their footprint on the floor, z from their extremes. `None` without a finite
+    /// point.
+    pub fn minimal(points_in_world: &[Vec3]) -> Option<GravityBox> {
+        let footprint: Vec<glam::Vec2> = points_in_world.iter().map(|p| p.truncate()).collect();
+        let rect = min_area_rect(&footprint)?;
+        let (lo, hi) = points_in_world
+            .iter()
+            .filter(|p| p.is_finite())
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.z), hi.max(p.z))
+            });
+        Some(GravityBox {
+            center: rect.center.extend(0.5 * (lo + hi)),
+            yaw: rect.angle,
+            size: rect.size.extend(hi - lo),
+        })
+    }
+
     /// Whether two boxes overlap once each is grown by `margin` (separating axes in the floor plane
     /// plus the z interval: both boxes share the z axis, so four axes decide).
     pub fn overlaps(&self, other: &GravityBox, margin: f32) -> bool {
@@ -113,6 +134,23 @@ mod tests {
             prop_assert!((again.center - b.center).length() < 1e-3);
             prop_assert!((again.size - b.size).abs().max_element() < 1e-3);
             prop_assert!(b.overlaps(&again, 0.0));
+        }
+
+        /// The minimal box of a turned box's corners (plus points inside) is that box.
+        #[test]
+        fn the_minimal_box_of_a_box_is_itself(
+            cx in -5.0f32..5.0, cy in -5.0f32..5.0, cz in 0.0f32..2.0,
+            sx in 0.05f32..3.0, sy in 0.05f32..3.0, sz in 0.05f32..3.0, yaw in -3.1f32..3.1,
+        ) {
+            let b = GravityBox { center: Vec3::new(cx, cy, cz), yaw, size: Vec3::new(sx, sy, sz) };
+            let mut points = b.corners().to_vec();
+            points.push(b.center);
+            let m = GravityBox::minimal(&points).expect("points");
+            prop_assert!((m.volume() - b.volume()).abs() < 1e-3 * (1.0 + b.volume()));
+            prop_assert!((m.center - b.center).length() < 1e-3);
+            for c in b.corners() {
+                prop_assert!(m.contains(c, 1e-3));
+            }
         }
 
         #[test]

@@ -2,9 +2,11 @@
 
 pub mod gravity_box;
 pub mod mesh;
+pub mod min_area_rect;
 pub mod pinhole;
 pub mod plane;
 pub mod point_triangle;
+pub mod ransac;
 
 pub use gravity_box::GravityBox;
 pub use mesh::TriMesh;
