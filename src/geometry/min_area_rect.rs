@@ -30,10 +30,15 @@ pub fn convex_hull(points: &[Vec2]) -> Vec<Vec2> {
     }
     let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
     let mut hull: Vec<Vec2> = Vec::with_capacity(2 * sorted.len());
-    for pass in [&sorted[..], &sorted.iter().rev().copied().collect::<Vec<_>>()[..]] {
+    for pass in [
+        &sorted[..],
+        &sorted.iter().rev().copied().collect::<Vec<_>>()[..],
+    ] {
         let start = hull.len();
         for &p in pass {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
                 hull.pop();
             }
             hull.push(p);
@@ -112,7 +117,10 @@ mod tests {
         points.extend((0..10).map(|i| Vec2::new(0.1 * i as f32, 0.3)));
         let hull = convex_hull(&points);
         assert_eq!(hull.len(), 4);
-        let area: f32 = (0..4).map(|i| hull[i].perp_dot(hull[(i + 1) % 4])).sum::<f32>() * 0.5;
+        let area: f32 = (0..4)
+            .map(|i| hull[i].perp_dot(hull[(i + 1) % 4]))
+            .sum::<f32>()
+            * 0.5;
         assert!((area - 1.0).abs() < 1e-6, "counter-clockwise, area {area}");
     }
 
@@ -120,7 +128,9 @@ mod tests {
     fn degenerate_input_gives_a_flat_rectangle_or_none() {
         assert_eq!(min_area_rect(&[]), None);
         assert_eq!(min_area_rect(&[Vec2::NAN]), None);
-        let line: Vec<Vec2> = (0..5).map(|i| Vec2::new(i as f32, 2.0 * i as f32)).collect();
+        let line: Vec<Vec2> = (0..5)
+            .map(|i| Vec2::new(i as f32, 2.0 * i as f32))
+            .collect();
         let r = min_area_rect(&line).expect("a line");
         assert!(r.area().abs() < 1e-5);
         assert!((r.size.max_element() - 80f32.sqrt()).abs() < 1e-4);

@@ -60,11 +60,19 @@ pub fn ransac_planes(points: &[Vec3], params: &RansacParams) -> Vec<DetectedPlan
         let near = |plane: &Plane, i: &u32| {
             plane.signed_distance(points[*i as usize]).abs() <= params.inlier_distance
         };
-        let inliers: Vec<u32> = remaining.iter().copied().filter(|i| near(&candidate, i)).collect();
+        let inliers: Vec<u32> = remaining
+            .iter()
+            .copied()
+            .filter(|i| near(&candidate, i))
+            .collect();
         // Least squares on the inliers, then the inliers of the refined plane.
         let inlier_points: Vec<Vec3> = inliers.iter().map(|&i| points[i as usize]).collect();
         let plane = fit_plane(&inlier_points).unwrap_or(candidate);
-        let inliers: Vec<u32> = remaining.iter().copied().filter(|i| near(&plane, i)).collect();
+        let inliers: Vec<u32> = remaining
+            .iter()
+            .copied()
+            .filter(|i| near(&plane, i))
+            .collect();
         if inliers.len() < min_inliers {
             break;
         }
@@ -76,7 +84,7 @@ pub fn ransac_planes(points: &[Vec3], params: &RansacParams) -> Vec<DetectedPlan
             extent,
         });
     }
-    planes.sort_by(|a, b| b.inliers.len().cmp(&a.inliers.len()));
+    planes.sort_by_key(|p| std::cmp::Reverse(p.inliers.len()));
     planes
 }
 
@@ -87,7 +95,8 @@ fn best_candidate(
     params: &RansacParams,
     rng: &mut ChaCha8Rng,
 ) -> Option<Plane> {
-    let pick = |rng: &mut ChaCha8Rng| points[remaining[rng.random_range(0..remaining.len())] as usize];
+    let pick =
+        |rng: &mut ChaCha8Rng| points[remaining[rng.random_range(0..remaining.len())] as usize];
     let sample: Vec<Vec3> = if remaining.len() <= params.score_sample {
         remaining.iter().map(|&i| points[i as usize]).collect()
     } else {
@@ -136,19 +145,31 @@ mod tests {
         let n = |l: f32| (l / step) as usize;
         for i in 0..=n(size.x) {
             for j in 0..=n(size.y) {
-                points.push(Vec3::new(i as f32 * step, j as f32 * step, size.z + noise()));
+                points.push(Vec3::new(
+                    i as f32 * step,
+                    j as f32 * step,
+                    size.z + noise(),
+                ));
             }
         }
         for i in 0..=n(size.x) {
             for k in 0..n(size.z) {
                 points.push(Vec3::new(i as f32 * step, noise(), k as f32 * step));
-                points.push(Vec3::new(i as f32 * step, size.y + noise(), k as f32 * step));
+                points.push(Vec3::new(
+                    i as f32 * step,
+                    size.y + noise(),
+                    k as f32 * step,
+                ));
             }
         }
         for j in 0..=n(size.y) {
             for k in 0..n(size.z) {
                 points.push(Vec3::new(noise(), j as f32 * step, k as f32 * step));
-                points.push(Vec3::new(size.x + noise(), j as f32 * step, k as f32 * step));
+                points.push(Vec3::new(
+                    size.x + noise(),
+                    j as f32 * step,
+                    k as f32 * step,
+                ));
             }
         }
         points
@@ -159,11 +180,23 @@ mod tests {
         let size = Vec3::new(0.8, 0.5, 0.3);
         let points = open_box(size);
         let planes = ransac_planes(&points, &RansacParams::default());
-        assert_eq!(planes.len(), 5, "{:?}", planes.iter().map(|p| p.plane).collect::<Vec<_>>());
+        assert_eq!(
+            planes.len(),
+            5,
+            "{:?}",
+            planes.iter().map(|p| p.plane).collect::<Vec<_>>()
+        );
         let top = &planes[0];
-        assert!(top.plane.normal.z.abs() > 0.999, "largest face first: the top");
+        assert!(
+            top.plane.normal.z.abs() > 0.999,
+            "largest face first: the top"
+        );
         assert!((top.plane.signed_distance(Vec3::new(0.4, 0.25, size.z))).abs() < 0.002);
-        assert!((top.extent - size.x * size.y).abs() < 0.02, "extent {}", top.extent);
+        assert!(
+            (top.extent - size.x * size.y).abs() < 0.02,
+            "extent {}",
+            top.extent
+        );
         for p in &planes[1..] {
             assert!(p.plane.normal.z.abs() < 0.01, "sides are vertical");
         }
@@ -175,7 +208,10 @@ mod tests {
     fn the_same_seed_gives_the_same_planes_and_scattered_points_give_none() {
         let points = open_box(Vec3::new(0.4, 0.3, 0.2));
         let params = RansacParams::default();
-        assert_eq!(ransac_planes(&points, &params), ransac_planes(&points, &params));
+        assert_eq!(
+            ransac_planes(&points, &params),
+            ransac_planes(&points, &params)
+        );
         let mut s = 1u32;
         let scattered: Vec<Vec3> = (0..200)
             .map(|_| {

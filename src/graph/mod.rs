@@ -1,5 +1,8 @@
 //! The contact graph: scene entities as nodes, support and proximal relations as edges.
 
+pub mod build;
 pub mod contact_graph;
+pub mod proximal;
+pub mod support;
 
 pub use contact_graph::{BoxJson, CadPlacement, ContactGraph, GraphEdge, GraphNode};

@@ -9,11 +9,10 @@ use serde::{Deserialize, Serialize};
 use crate::classes::EntityKind;
 use crate::geometry::plane::dominant_planes;
 use crate::geometry::{GravityBox, TriMesh};
+use crate::graph::proximal::proximal_edges;
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
 use crate::scene::world::{SceneWorld, Support};
 
-/// Boxes closer than this (metres) count as touching for proximal edges.
-pub const PROXIMAL_MARGIN: f32 = 0.02;
 /// Smallest surface, in square metres, that is listed as a plane of an object.
 const MIN_PLANE_AREA: f32 = 0.01;
 const MAX_PLANES: usize = 8;
@@ -91,7 +90,7 @@ impl SceneWorld {
         let mut boxes = Vec::new();
         for (i, l) in self.layout.iter().enumerate() {
             let b = self.layout_box(i);
-            boxes.push((l.id.clone(), b, l.class));
+            boxes.push(b);
             nodes.push(GraphNode {
                 id: l.id.clone(),
                 class: l.class.into(),
@@ -104,7 +103,7 @@ impl SceneWorld {
         }
         for o in &self.objects {
             let b = o.gravity_box();
-            boxes.push((o.id.clone(), b, "object"));
+            boxes.push(b);
             let planes = dominant_planes(&o.world_mesh(), MIN_PLANE_AREA, MAX_PLANES)
                 .into_iter()
                 .map(|(p, _)| p.to_array())
@@ -136,37 +135,20 @@ impl SceneWorld {
                 child: o.id.clone(),
             });
         }
-        let supports: Vec<(String, String)> = edges
+        let supports: Vec<(&str, &str)> = edges
             .iter()
             .filter_map(|e| match e {
-                GraphEdge::Support { parent, child } => Some((parent.clone(), child.clone())),
+                GraphEdge::Support { parent, child } => Some((parent.as_str(), child.as_str())),
                 GraphEdge::Proximal { .. } => None,
             })
             .collect();
-        let related = |a: &str, b: &str| {
-            supports
-                .iter()
-                .any(|(p, c)| (p == a && c == b) || (p == b && c == a))
-        };
-        for (i, (a, box_a, kind_a)) in boxes.iter().enumerate() {
-            for (b, box_b, kind_b) in &boxes[i + 1..] {
-                // Floor and ceiling only ever support; walls are proximal to what stands against them.
-                let skip = |k: &str| k == "floor" || k == "ceiling";
-                if skip(kind_a)
-                    || skip(kind_b)
-                    || (*kind_a == "wall" && *kind_b == "wall")
-                    || related(a, b)
-                {
-                    continue;
-                }
-                if box_a.overlaps(box_b, PROXIMAL_MARGIN) {
-                    edges.push(GraphEdge::Proximal {
-                        a: a.clone(),
-                        b: b.clone(),
-                    });
-                }
-            }
-        }
+        let boxed: Vec<(&str, GravityBox, &str)> = nodes
+            .iter()
+            .zip(&boxes)
+            .map(|(n, b)| (n.id.as_str(), *b, n.class.as_str()))
+            .collect();
+        let proximal = proximal_edges(&boxed, &supports);
+        edges.extend(proximal);
         ContactGraph { nodes, edges }
     }
 }

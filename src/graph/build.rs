@@ -1,0 +1,231 @@
+//! The contact graph of a set of scene entities (meshes in a gravity-aligned world): a
+//! gravity-aligned minimal box and surface planes per entity, support bottom-up, boxes refined so
+//! every support holds, then proximal relations.
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::classes::{ClassTable, EntityKind};
+use crate::geometry::plane::fit_plane;
+use crate::geometry::ransac::{RansacParams, ransac_planes};
+use crate::geometry::{GravityBox, Plane, TriMesh};
+use crate::graph::proximal::proximal_edges;
+use crate::graph::support::{SupportChoice, SupportEntity, SupportParams, infer_supports, rest_on};
+use crate::graph::{ContactGraph, GraphEdge, GraphNode};
+
+/// Layout boxes are slabs this thick behind their surface (as in the ground truth).
+pub const LAYOUT_THICKNESS: f32 = 0.1;
+
+/// One scene entity as the contact graph sees it.
+pub struct GraphEntity<'a> {
+    pub id: &'a str,
+    pub class: &'a str,
+    pub kind: EntityKind,
+    /// World frame, z up.
+    pub mesh: &'a TriMesh,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct ContactGraphParams {
+    pub ransac: RansacParams,
+    pub support: SupportParams,
+    /// Surface points are at most this far apart (metres): mesh vertices, plus samples inside
+    /// triangles larger than this (a CAD table top is two triangles).
+    pub sample_spacing: f32,
+}
+
+impl Default for ContactGraphParams {
+    fn default() -> Self {
+        Self {
+            ransac: RansacParams::default(),
+            support: SupportParams::default(),
+            sample_spacing: 0.02,
+        }
+    }
+}
+
+/// An entity's geometry for the graph: surface points, box, planes.
+struct Shape {
+    points: Vec<Vec3>,
+    bbox: GravityBox,
+    planes: Vec<Plane>,
+}
+
+/// Builds the contact graph of `entities`; entities without a usable surface (fewer than three
+/// points) are left out.
+pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams) -> ContactGraph {
+    let room_center = room_center(entities);
+    let shaped: Vec<(usize, Shape)> = entities
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, e)| shape_of(e, room_center, params).map(|s| (i, s)))
+        .collect();
+    let table = ClassTable::builtin();
+    let support_input: Vec<SupportEntity> = shaped
+        .iter()
+        .map(|(i, s)| SupportEntity {
+            class: entities[*i].class,
+            kind: entities[*i].kind,
+            movable: table.get(entities[*i].class).is_some_and(|c| c.movable),
+            bbox: s.bbox,
+            planes: &s.planes,
+            vertices: &s.points,
+        })
+        .collect();
+    let supports = infer_supports(&support_input, &params.support);
+
+    let mut boxes: Vec<GravityBox> = shaped.iter().map(|(_, s)| s.bbox).collect();
+    let mut planes: Vec<Vec<Plane>> = shaped.iter().map(|(_, s)| s.planes.clone()).collect();
+    let mut support_edges = Vec::new();
+    for (child, choice) in supports.iter().enumerate() {
+        let Some(choice) = choice else { continue };
+        let parent = match *choice {
+            SupportChoice::Below {
+                parent,
+                plane,
+                registered,
+                ..
+            } => {
+                boxes[child] = rest_on(&boxes[child], &plane);
+                if registered {
+                    planes[parent].push(plane);
+                }
+                parent
+            }
+            SupportChoice::Wall { parent } => parent,
+        };
+        support_edges.push((parent, child));
+    }
+
+    let id = |k: usize| entities[shaped[k].0].id;
+    let class = |k: usize| entities[shaped[k].0].class;
+    let supports_by_id: Vec<(&str, &str)> =
+        support_edges.iter().map(|&(p, c)| (id(p), id(c))).collect();
+    let boxed: Vec<(&str, GravityBox, &str)> = (0..shaped.len())
+        .map(|k| (id(k), boxes[k], class(k)))
+        .collect();
+    let mut edges: Vec<GraphEdge> = supports_by_id
+        .iter()
+        .map(|&(parent, child)| GraphEdge::Support {
+            parent: parent.to_string(),
+            child: child.to_string(),
+        })
+        .collect();
+    edges.extend(proximal_edges(&boxed, &supports_by_id));
+    let nodes = (0..shaped.len())
+        .map(|k| GraphNode {
+            id: id(k).to_string(),
+            class: class(k).to_string(),
+            kind: entities[shaped[k].0].kind,
+            bbox: boxes[k].into(),
+            planes: planes[k].iter().map(Plane::to_array).collect(),
+            cad: None,
+            joints: BTreeMap::new(),
+        })
+        .collect();
+    ContactGraph { nodes, edges }
+}
+
+/// The middle of the room: the centre of the floor if there is one, else of everything.
+fn room_center(entities: &[GraphEntity]) -> Vec3 {
+    let mean = |meshes: &mut dyn Iterator<Item = &TriMesh>| {
+        let (sum, n) = meshes
+            .flat_map(|m| m.positions.iter())
+            .fold((Vec3::ZERO, 0usize), |(s, n), p| (s + *p, n + 1));
+        (n > 0).then(|| sum / n as f32)
+    };
+    mean(
+        &mut entities
+            .iter()
+            .filter(|e| e.class == "floor")
+            .map(|e| e.mesh),
+    )
+    .or_else(|| mean(&mut entities.iter().map(|e| e.mesh)))
+    .unwrap_or(Vec3::ZERO)
+}
+
+fn shape_of(entity: &GraphEntity, room_center: Vec3, params: &ContactGraphParams) -> Option<Shape> {
+    let points = surface_points(entity.mesh, params.sample_spacing);
+    if points.len() < 3 {
+        return None;
+    }
+    if entity.kind == EntityKind::Layout {
+        let plane = layout_plane(entity.class, &points, room_center)?;
+        let behind = -plane.normal * LAYOUT_THICKNESS;
+        let slab: Vec<Vec3> = points.iter().flat_map(|p| [*p, *p + behind]).collect();
+        let bbox = if entity.class == "wall" {
+            GravityBox::enclosing(&slab, plane.normal.y.atan2(plane.normal.x))?
+        } else {
+            GravityBox::minimal(&slab)?
+        };
+        return Some(Shape {
+            points,
+            bbox,
+            planes: vec![plane],
+        });
+    }
+    let bbox = GravityBox::minimal(&points)?;
+    let planes = ransac_planes(&points, &params.ransac)
+        .into_iter()
+        .map(|p| p.plane)
+        .collect();
+    Some(Shape {
+        points,
+        bbox,
+        planes,
+    })
+}
+
+/// The layout piece's plane, facing into the room: the floor's up, the ceiling's down, a wall's
+/// towards the room's centre.
+fn layout_plane(class: &str, points: &[Vec3], room_center: Vec3) -> Option<Plane> {
+    let plane = fit_plane(points)?;
+    let facing = match class {
+        "floor" => Vec3::Z,
+        "ceiling" => -Vec3::Z,
+        _ => {
+            let centroid = points.iter().copied().sum::<Vec3>() / points.len() as f32;
+            (room_center - centroid).with_z(0.0)
+        }
+    };
+    Some(if plane.normal.dot(facing) < 0.0 {
+        Plane {
+            normal: -plane.normal,
+            offset: -plane.offset,
+        }
+    } else {
+        plane
+    })
+}
+
+/// The mesh's vertices, plus points on a barycentric grid inside every triangle with an edge
+/// longer than `spacing`, so no two neighbouring surface points are farther apart than that.
+pub fn surface_points(mesh: &TriMesh, spacing: f32) -> Vec<Vec3> {
+    let mut points: Vec<Vec3> = mesh
+        .positions
+        .iter()
+        .copied()
+        .filter(|p| p.is_finite())
+        .collect();
+    for t in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.triangle(t);
+        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+        if !longest.is_finite() || longest <= spacing {
+            continue;
+        }
+        let k = (longest / spacing).ceil() as usize;
+        for i in 0..=k {
+            for j in 0..=(k - i) {
+                // Corners are vertices already.
+                if (i == k) || (j == k) || (i == 0 && j == 0) {
+                    continue;
+                }
+                let (u, v) = (i as f32 / k as f32, j as f32 / k as f32);
+                points.push(a + (b - a) * u + (c - a) * v);
+            }
+        }
+    }
+    points
+}

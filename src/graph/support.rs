@@ -1,0 +1,433 @@
+//! Support relations, bottom-up (Han et al., Sect. 2): every object finds what holds it up
+//! against gravity, from below if anything can, else from a wall it touches; then its box is
+//! refined so the support holds exactly. The world is gravity-aligned: z up, floor at z = 0.
+
+use glam::{Vec2, Vec3};
+
+use crate::classes::EntityKind;
+use crate::geometry::{GravityBox, Plane};
+
+#[derive(Clone, Copy, Debug)]
+pub struct SupportParams {
+    /// A plane supports when its normal is this close to up (n . g <= -this, g = -z).
+    pub up_normal: f32,
+    /// A supporting plane may lie at most this far above the child's bottom (noise).
+    pub above_tolerance: f32,
+    /// Largest gap (metres) between a child's bottom and the plane that holds it; farther down,
+    /// a plane does not hold the child (a wall cabinet does not stand on the cabinet under it).
+    pub max_gap: f32,
+    /// Share of the child's bottom area that must rest on the parent (stable support).
+    pub min_area: f32,
+    /// Parent vertices this close to a plane (metres) count as its surface.
+    pub plane_band: f32,
+    /// Cell of the grid on which surface area is counted (metres).
+    pub area_cell: f32,
+    /// A child this close to a wall (metres) touches it.
+    pub wall_touch: f32,
+}
+
+impl Default for SupportParams {
+    fn default() -> Self {
+        Self {
+            up_normal: 0.9,
+            above_tolerance: 0.04,
+            max_gap: 0.1,
+            min_area: 0.5,
+            plane_band: 0.03,
+            area_cell: 0.02,
+            wall_touch: 0.05,
+        }
+    }
+}
+
+/// What support inference needs of one entity.
+pub struct SupportEntity<'a> {
+    pub class: &'a str,
+    pub kind: EntityKind,
+    /// Movable things (floating joint: cups, chairs) stand on something; only fixed ones hang.
+    pub movable: bool,
+    pub bbox: GravityBox,
+    pub planes: &'a [Plane],
+    /// Mesh vertices, world frame.
+    pub vertices: &'a [Vec3],
+}
+
+/// Who holds an entity, and the surface it rests on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SupportChoice {
+    /// Rests on `plane` of `parent` (an index into the entities), `score` = (1 - min(1, D)) A.
+    Below {
+        parent: usize,
+        plane: Plane,
+        score: f32,
+        /// The plane was not seen on the parent: the child's bottom stands in for it (an
+        /// occluded table top), and belongs to the parent's planes from now on.
+        registered: bool,
+    },
+    /// Hangs on the wall `parent`.
+    Wall { parent: usize },
+}
+
+/// The support of every entity (`None` for layout and for objects nothing holds), in input order.
+pub fn infer_supports(
+    entities: &[SupportEntity],
+    params: &SupportParams,
+) -> Vec<Option<SupportChoice>> {
+    entities
+        .iter()
+        .enumerate()
+        .map(|(i, e)| (e.kind != EntityKind::Layout).then(|| support_of(i, entities, params))?)
+        .collect()
+}
+
+fn support_of(
+    child: usize,
+    entities: &[SupportEntity],
+    params: &SupportParams,
+) -> Option<SupportChoice> {
+    let c = &entities[child];
+    let bottom = c.bbox.bottom_z();
+    let footprint = Footprint::of(&c.bbox);
+    let mut best: Option<SupportChoice> = None;
+    let mut consider = |choice: SupportChoice| {
+        let score = |s: &SupportChoice| match s {
+            SupportChoice::Below { score, .. } => *score,
+            SupportChoice::Wall { .. } => 0.0,
+        };
+        if best.as_ref().is_none_or(|b| score(&choice) > score(b)) {
+            best = Some(choice);
+        }
+    };
+    for (p, parent) in entities.iter().enumerate() {
+        if p == child || parent.bbox.bottom_z() >= bottom || parent.class == "ceiling" {
+            continue;
+        }
+        // The floor is seen only around what stands on it: its extent, not its vertices, says
+        // where it holds.
+        let layout_floor = parent.class == "floor";
+        for plane in parent
+            .planes
+            .iter()
+            .filter(|pl| pl.normal.z >= params.up_normal)
+        {
+            let height = plane_height(plane, c.bbox.center.truncate());
+            if height > bottom + params.above_tolerance {
+                continue;
+            }
+            let gap = bottom - height;
+            if gap > params.max_gap && !layout_floor {
+                continue;
+            }
+            let area = if layout_floor {
+                footprint.overlap_with_box(&parent.bbox)
+            } else {
+                footprint.covered_by(
+                    parent
+                        .vertices
+                        .iter()
+                        .filter(|v| plane.signed_distance(**v).abs() <= params.plane_band),
+                    params.area_cell,
+                )
+            };
+            if area >= params.min_area {
+                consider(SupportChoice::Below {
+                    parent: p,
+                    plane: *plane,
+                    score: (1.0 - gap.clamp(0.0, 1.0)) * area,
+                    registered: false,
+                });
+            }
+        }
+    }
+    if let Some(found @ SupportChoice::Below { plane, parent, .. }) = best {
+        // Standing on the floor from high up means nothing near was found below: a wall the
+        // child touches carries it instead (a wall cabinet above a counter).
+        let hanging = entities[parent].class == "floor"
+            && bottom - plane_height(&plane, c.bbox.center.truncate()) > params.max_gap;
+        if !hanging {
+            return Some(found);
+        }
+    }
+    // No plane RANSAC listed holds the child. A parent's surface right under it may still do: a
+    // shelf inside a cabinet (too small among the cabinet's planes), or a table top seen only
+    // around what stands on it. Its height becomes a plane of the parent.
+    let mut local: Option<(usize, f32, f32)> = None;
+    for (p, parent) in entities.iter().enumerate() {
+        if p == child || parent.kind == EntityKind::Layout || parent.bbox.bottom_z() >= bottom {
+            continue;
+        }
+        let mut under: Vec<&Vec3> = parent
+            .vertices
+            .iter()
+            .filter(|v| v.z >= bottom - params.max_gap && v.z <= bottom + params.above_tolerance)
+            .filter(|v| footprint.contains(v.truncate()))
+            .collect();
+        let area = footprint.covered_by(under.iter().copied(), params.area_cell);
+        if area < params.min_area {
+            continue;
+        }
+        under.sort_by(|a, b| a.z.total_cmp(&b.z));
+        let height = under[under.len() / 2].z;
+        if local.is_none_or(|(_, h, _)| height > h) {
+            local = Some((p, height, area));
+        }
+    }
+    if let Some((parent, height, area)) = local {
+        return Some(SupportChoice::Below {
+            parent,
+            plane: Plane::from_point_normal(Vec3::new(0.0, 0.0, height), Vec3::Z),
+            score: (1.0 - (bottom - height).abs().min(1.0)) * area,
+            registered: true,
+        });
+    }
+    // Nothing of a parent was seen under the child: a parent whose box top meets the child's
+    // bottom and whose footprint holds it lends its top (the table top hidden by what is on it).
+    let mut occluded: Option<(usize, f32)> = None;
+    for (p, parent) in entities.iter().enumerate() {
+        if p == child || parent.kind == EntityKind::Layout {
+            continue;
+        }
+        let top = parent.bbox.top_z();
+        if (top - bottom).abs() > params.max_gap || parent.bbox.bottom_z() >= bottom {
+            continue;
+        }
+        if footprint.overlap_with_box(&parent.bbox) >= params.min_area
+            && occluded.is_none_or(|(_, t)| top > t)
+        {
+            occluded = Some((p, top));
+        }
+    }
+    if let Some((parent, top)) = occluded {
+        let area = footprint.overlap_with_box(&entities[parent].bbox);
+        return Some(SupportChoice::Below {
+            parent,
+            plane: Plane::from_point_normal(Vec3::new(0.0, 0.0, top), Vec3::Z),
+            score: (1.0 - (bottom - top).abs().min(1.0)) * area,
+            registered: true,
+        });
+    }
+    let wall = entities.iter().enumerate().find(|(_, w)| {
+        !c.movable && w.class == "wall" && w.bbox.overlaps(&c.bbox, params.wall_touch)
+    });
+    if let Some((parent, _)) = wall {
+        return Some(SupportChoice::Wall { parent });
+    }
+    // Nothing better: the floor, however far below (legs that were never seen).
+    best
+}
+
+/// Height of `plane` above the floor point `xy` (planes here are near horizontal).
+pub fn plane_height(plane: &Plane, xy: Vec2) -> f32 {
+    -(plane.normal.x * xy.x + plane.normal.y * xy.y + plane.offset) / plane.normal.z
+}
+
+/// The child's bottom rectangle, sampled on a grid to measure what covers it.
+struct Footprint {
+    bbox: GravityBox,
+}
+
+impl Footprint {
+    fn of(bbox: &GravityBox) -> Self {
+        Self { bbox: *bbox }
+    }
+
+    fn area(&self) -> f32 {
+        self.bbox.size.x * self.bbox.size.y
+    }
+
+    fn contains(&self, p: Vec2) -> bool {
+        let l = self.local(p);
+        l.x.abs() <= 0.5 * self.bbox.size.x && l.y.abs() <= 0.5 * self.bbox.size.y
+    }
+
+    fn local(&self, p: Vec2) -> Vec2 {
+        let axis = Vec2::from_angle(self.bbox.yaw);
+        let d = p - self.bbox.center.truncate();
+        Vec2::new(d.dot(axis), d.dot(axis.perp()))
+    }
+
+    /// Share of the footprint whose grid cells hold at least one of `points`.
+    fn covered_by<'p>(&self, points: impl Iterator<Item = &'p Vec3>, cell: f32) -> f32 {
+        let half = self.bbox.size.truncate() * 0.5;
+        let cells = (self.bbox.size.truncate() / cell)
+            .ceil()
+            .max(Vec2::ONE)
+            .as_uvec2();
+        let mut hit = vec![false; (cells.x * cells.y) as usize];
+        for p in points {
+            let l = self.local(p.truncate()) + half;
+            if l.x < 0.0 || l.y < 0.0 || l.x >= self.bbox.size.x || l.y >= self.bbox.size.y {
+                continue;
+            }
+            let (i, j) = ((l.x / cell) as u32, (l.y / cell) as u32);
+            hit[(j.min(cells.y - 1) * cells.x + i.min(cells.x - 1)) as usize] = true;
+        }
+        let covered = hit.iter().filter(|h| **h).count() as f32 * cell * cell;
+        (covered / self.area().max(1e-6)).min(1.0)
+    }
+
+    /// Share of the footprint inside `other`'s footprint, on an 8 x 8 sample grid.
+    fn overlap_with_box(&self, other: &GravityBox) -> f32 {
+        const N: usize = 8;
+        let axis = Vec2::from_angle(self.bbox.yaw);
+        let other_axis = Vec2::from_angle(other.yaw);
+        let mut inside = 0;
+        for i in 0..N {
+            for j in 0..N {
+                let u = ((i as f32 + 0.5) / N as f32 - 0.5) * self.bbox.size.x;
+                let v = ((j as f32 + 0.5) / N as f32 - 0.5) * self.bbox.size.y;
+                let p = self.bbox.center.truncate() + axis * u + axis.perp() * v;
+                let d = p - other.center.truncate();
+                if d.dot(other_axis).abs() <= 0.5 * other.size.x
+                    && d.dot(other_axis.perp()).abs() <= 0.5 * other.size.y
+                {
+                    inside += 1;
+                }
+            }
+        }
+        inside as f32 / (N * N) as f32
+    }
+}
+
+/// `bbox` stretched or trimmed so its bottom lies on `plane` (the chair whose legs were not
+/// seen reaches the floor; a box sunk into its table by noise is lifted out).
+pub fn rest_on(bbox: &GravityBox, plane: &Plane) -> GravityBox {
+    let height = plane_height(plane, bbox.center.truncate());
+    let top = bbox.top_z();
+    if top <= height {
+        return *bbox;
+    }
+    GravityBox {
+        center: bbox.center.truncate().extend(0.5 * (top + height)),
+        yaw: bbox.yaw,
+        size: bbox.size.truncate().extend(top - height),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn slab(center: Vec3, size: Vec3) -> GravityBox {
+        GravityBox {
+            center,
+            yaw: 0.0,
+            size,
+        }
+    }
+
+    /// Vertices on the top face of a box, 1 cm apart.
+    fn top_vertices(b: &GravityBox) -> Vec<Vec3> {
+        let mut v = Vec::new();
+        let n = (b.size.truncate() / 0.01).as_uvec2();
+        for i in 0..=n.x {
+            for j in 0..=n.y {
+                v.push(Vec3::new(
+                    b.center.x - 0.5 * b.size.x + i as f32 * 0.01,
+                    b.center.y - 0.5 * b.size.y + j as f32 * 0.01,
+                    b.top_z(),
+                ));
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn a_cup_rests_on_the_table_a_wall_cabinet_hangs_and_an_occluded_top_is_registered() {
+        let floor = slab(Vec3::new(2.0, 2.0, -0.05), Vec3::new(4.0, 4.0, 0.1));
+        let wall = slab(Vec3::new(2.0, 4.05, 1.3), Vec3::new(4.0, 0.1, 2.6));
+        let table = slab(Vec3::new(1.0, 1.0, 0.375), Vec3::new(1.2, 0.8, 0.75));
+        let cup = slab(Vec3::new(1.1, 0.9, 0.8), Vec3::new(0.08, 0.08, 0.1));
+        let base = slab(Vec3::new(2.5, 3.7, 0.45), Vec3::new(0.6, 0.6, 0.9));
+        let hanging = slab(Vec3::new(2.5, 3.8, 1.8), Vec3::new(0.6, 0.4, 0.7));
+        // A microwave whose cabinet's top was never seen (no vertices, no plane).
+        let cabinet = slab(Vec3::new(3.5, 1.0, 0.45), Vec3::new(0.6, 0.6, 0.9));
+        let microwave = slab(Vec3::new(3.5, 1.0, 1.05), Vec3::new(0.5, 0.4, 0.3));
+        let up = |b: &GravityBox| Plane::from_point_normal(Vec3::new(0.0, 0.0, b.top_z()), Vec3::Z);
+        let planes = [
+            vec![up(&floor)],
+            vec![Plane::from_point_normal(Vec3::new(0.0, 4.0, 0.0), -Vec3::Y)],
+            vec![up(&table)],
+            vec![up(&cup)],
+            vec![up(&base)],
+            vec![],
+            vec![],
+            vec![up(&microwave)],
+        ];
+        let vertices = [
+            vec![],
+            vec![],
+            top_vertices(&table),
+            top_vertices(&cup),
+            top_vertices(&base),
+            vec![],
+            vec![],
+            top_vertices(&microwave),
+        ];
+        let kinds = [EntityKind::Layout, EntityKind::Layout];
+        let boxes = [floor, wall, table, cup, base, hanging, cabinet, microwave];
+        let classes = [
+            "floor",
+            "wall",
+            "table",
+            "cup",
+            "cabinet",
+            "cabinet",
+            "cabinet",
+            "microwave",
+        ];
+        let entities: Vec<SupportEntity> = (0..boxes.len())
+            .map(|i| SupportEntity {
+                class: classes[i],
+                kind: kinds.get(i).copied().unwrap_or(EntityKind::Rigid),
+                movable: classes[i] == "cup",
+                bbox: boxes[i],
+                planes: &planes[i],
+                vertices: &vertices[i],
+            })
+            .collect();
+        let supports = infer_supports(&entities, &SupportParams::default());
+        let parent = |i: usize| match supports[i] {
+            Some(SupportChoice::Below { parent, .. }) | Some(SupportChoice::Wall { parent }) => {
+                Some(parent)
+            }
+            None => None,
+        };
+        assert_eq!(parent(0), None);
+        assert_eq!(parent(1), None);
+        assert_eq!(parent(2), Some(0), "table on the floor");
+        assert_eq!(parent(3), Some(2), "cup on the table");
+        assert_eq!(parent(4), Some(0), "base cabinet on the floor");
+        assert_eq!(
+            supports[5],
+            Some(SupportChoice::Wall { parent: 1 }),
+            "wall cabinet on the wall"
+        );
+        assert_eq!(parent(6), Some(0));
+        assert!(
+            matches!(
+                supports[7],
+                Some(SupportChoice::Below {
+                    parent: 6,
+                    registered: true,
+                    ..
+                })
+            ),
+            "{:?}",
+            supports[7]
+        );
+    }
+
+    #[test]
+    fn a_floating_box_is_stretched_down_to_its_plane() {
+        let b = slab(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.5, 0.5, 0.4));
+        let r = rest_on(&b, &Plane::from_point_normal(Vec3::ZERO, Vec3::Z));
+        assert!((r.bottom_z()).abs() < 1e-6 && (r.top_z() - 0.8).abs() < 1e-6);
+        let sunk = slab(Vec3::new(0.0, 0.0, 0.74), Vec3::new(0.1, 0.1, 0.1));
+        let lifted = rest_on(
+            &sunk,
+            &Plane::from_point_normal(Vec3::new(0.0, 0.0, 0.75), Vec3::Z),
+        );
+        assert!((lifted.bottom_z() - 0.75).abs() < 1e-6 && (lifted.top_z() - 0.79).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,70 @@
+//! The contact graph built from the ground-truth meshes of every rendered scene is the scene's own
+//! graph: every support parent and every proximal pair.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph};
+use iscene::graph::{ContactGraph, GraphEdge};
+use iscene::scene::{SceneSpec, SceneWorld};
+
+type Pairs = BTreeSet<(String, String)>;
+
+/// Support edges as (parent, child), proximal pairs with their ids in order.
+fn edge_sets(g: &ContactGraph) -> (Pairs, Pairs) {
+    let mut support = BTreeSet::new();
+    let mut proximal = BTreeSet::new();
+    for e in &g.edges {
+        match e {
+            GraphEdge::Support { parent, child } => {
+                support.insert((parent.clone(), child.clone()));
+            }
+            GraphEdge::Proximal { a, b } => {
+                proximal.insert((a.clone().min(b.clone()), a.clone().max(b.clone())));
+            }
+        }
+    }
+    (support, proximal)
+}
+
+#[test]
+fn the_graph_of_ground_truth_meshes_is_the_scenes_graph() {
+    let mut failures = Vec::new();
+    for name in ["kitchen", "office", "living_room", "bedroom"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.json"));
+        let text = std::fs::read_to_string(&path).expect("scene file");
+        let spec = SceneSpec::parse(&text, &path).expect("spec");
+        let world = SceneWorld::from_spec(&spec, &path).expect("world");
+        let truth = world.contact_graph();
+        let meshes = world.entity_meshes();
+        let entities: Vec<GraphEntity> = meshes
+            .iter()
+            .map(|(id, mesh, _)| {
+                let node = truth.node(id).expect("every mesh is a node");
+                GraphEntity {
+                    id,
+                    class: &node.class,
+                    kind: node.kind,
+                    mesh,
+                }
+            })
+            .collect();
+        let built = build_contact_graph(&entities, &ContactGraphParams::default());
+        built.check().expect("a valid graph");
+        let (support, proximal) = edge_sets(&built);
+        let (true_support, true_proximal) = edge_sets(&truth);
+        for e in true_support.difference(&support) {
+            failures.push(format!("{name}: missing support {e:?} (parent, child)"));
+        }
+        for e in support.difference(&true_support) {
+            failures.push(format!("{name}: wrong support {e:?}"));
+        }
+        for e in true_proximal.difference(&proximal) {
+            failures.push(format!("{name}: missing proximal {e:?}"));
+        }
+        for e in proximal.difference(&true_proximal) {
+            failures.push(format!("{name}: extra proximal {e:?}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
