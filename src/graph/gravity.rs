@@ -1,0 +1,95 @@
+//! Gravity and the aligned world: estimate the up direction from the dominant horizontal surfaces
+//! when the sequence does not give it, then rotate so z is up and translate so the floor is at
+//! z = 0. Never assumes the dataset's up axis.
+
+use glam::{Affine3A, Quat, Vec3};
+
+use crate::geometry::TriMesh;
+
+/// Cone half-angles (degrees) of the successive refinements of the up direction: wide enough at
+/// first to catch the floor from a hand-held camera's hint, narrow at the end to average only the
+/// truly horizontal surfaces.
+const CONES_DEG: [f32; 4] = [35.0, 15.0, 7.0, 3.0];
+
+/// The world's up direction from `mesh`: the area-weighted mean normal of the horizontal surfaces
+/// (floor, table tops, counters, and the ceiling turned over), found by narrowing cones around
+/// `hint_up`. `None` when no surface lies within the widest cone of the hint.
+pub fn estimate_up(mesh: &TriMesh, hint_up: Vec3) -> Option<Vec3> {
+    let mut up = hint_up.try_normalize()?;
+    // Unit normals turned into the hint's hemisphere (a ceiling faces down, a floor up), weighted
+    // by area.
+    let normals: Vec<(Vec3, f32)> = (0..mesh.triangles.len())
+        .filter_map(|t| {
+            let [a, b, c] = mesh.triangle(t);
+            let cross = (b - a).cross(c - a);
+            let area = 0.5 * cross.length();
+            let n = cross.try_normalize()?;
+            Some((if n.dot(up) < 0.0 { -n } else { n }, area))
+        })
+        .collect();
+    for cone in CONES_DEG {
+        let cos = cone.to_radians().cos();
+        let sum: Vec3 = normals
+            .iter()
+            .filter(|(n, _)| n.dot(up) >= cos)
+            .map(|(n, a)| *n * *a)
+            .sum();
+        up = sum.try_normalize()?;
+    }
+    Some(up)
+}
+
+/// A hand-held or robot camera is mostly upright: the mean of its image-up axis (OpenCV: -y) over
+/// the trajectory points roughly up.
+pub fn camera_up_hint(world_from_cameras: impl Iterator<Item = Affine3A>) -> Option<Vec3> {
+    world_from_cameras
+        .map(|p| -Vec3::from(p.matrix3.y_axis))
+        .sum::<Vec3>()
+        .try_normalize()
+}
+
+/// The rigid motion taking the world to the aligned frame: `up` to +z, and a floor at height
+/// `floor_height` along `up` to z = 0.
+pub fn aligned_from_world(up: Vec3, floor_height: f32) -> Affine3A {
+    let rotation = Quat::from_rotation_arc(up.normalize(), Vec3::Z);
+    Affine3A::from_rotation_translation(rotation, Vec3::new(0.0, 0.0, -floor_height))
+}
+
+/// Angle between two directions in degrees.
+pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
+    a.normalize().dot(b.normalize()).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_floor_and_a_table_give_up_despite_a_wide_hint_and_walls() {
+        let tilt = Quat::from_rotation_x(0.5) * Quat::from_rotation_y(-0.3);
+        let mut room = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.1), Vec3::new(5.0, 4.0, 0.0));
+        room.append(&TriMesh::cuboid(Vec3::new(1.0, 1.0, 0.7), Vec3::new(2.4, 1.8, 0.75)));
+        room.append(&TriMesh::cuboid(Vec3::new(0.0, 3.9, 0.0), Vec3::new(5.0, 4.0, 2.6)));
+        let tilted = room.transformed(&Affine3A::from_quat(tilt));
+        let truth = tilt * Vec3::Z;
+        let hint = Quat::from_rotation_z(0.4) * Quat::from_rotation_x(0.45) * truth;
+        assert!(angle_deg(hint, truth) > 20.0);
+        let up = estimate_up(&tilted, hint).expect("up");
+        assert!(angle_deg(up, truth) < 0.5, "off by {} degrees", angle_deg(up, truth));
+        let aligned = aligned_from_world(up, 0.0);
+        assert!((aligned.transform_vector3(truth) - Vec3::Z).length() < 0.01);
+    }
+
+    #[test]
+    fn an_upright_camera_hints_up() {
+        // OpenCV camera looking along +x of a z-up world: image down (+y) is world -z.
+        let world_from_camera = Affine3A::from_cols(
+            Vec3::new(0.0, -1.0, 0.0).into(),
+            Vec3::new(0.0, 0.0, -1.0).into(),
+            Vec3::new(1.0, 0.0, 0.0).into(),
+            Vec3::ZERO.into(),
+        );
+        let hint = camera_up_hint(std::iter::once(world_from_camera)).expect("hint");
+        assert!(angle_deg(hint, Vec3::Z) < 1e-3);
+    }
+}
