@@ -35,6 +35,7 @@ impl PluginGroup for ReconstructionPlugins {
             .add(systems::StagesPlugin)
             .add(systems::IngestPlugin)
             .add(systems::PanopticMappingPlugin)
+            .add(systems::ContactGraphPlugin)
     }
 }
 

@@ -72,6 +72,10 @@ struct ReconstructArgs {
     /// Map like this baseline instead of the joint fusion (for the ablation).
     #[arg(long, value_enum)]
     baseline: Option<Baseline>,
+    /// Estimate gravity from the map even when the sequence has a gravity file (which is then
+    /// only compared with, in report.json).
+    #[arg(long)]
+    estimate_gravity: bool,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -224,6 +228,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     voxel: 0.02,
                     segmentation: Segmentation::Oracle,
                     baseline: None,
+                    estimate_gravity: false,
                 },
             };
             let out = args.out.unwrap_or_else(|| {
@@ -249,6 +254,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     None => InstanceFusion::Joint,
                     Some(Baseline::VoxbloxPlusPlus) => InstanceFusion::Voxblox,
                 },
+                estimate_gravity: args.estimate_gravity,
                 progress: interactive,
             };
             let r = reconstruct(&options)?;

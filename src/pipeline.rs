@@ -16,6 +16,8 @@ use crate::io::write_sequence::write_text;
 use crate::panoptic::{InstanceFusion, MapperParams};
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
+use crate::graph::gravity::GravityReport;
+use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::panoptic_mapping::{MappingConfig, PanopticMap, PanopticSurface};
 use crate::systems::stages::StageMarks;
@@ -34,6 +36,8 @@ pub struct ReconstructOptions {
     pub segmentation: SegmentationChoice,
     /// Joint fusion, or the Voxblox++ baseline.
     pub fusion: InstanceFusion,
+    /// Ignore the sequence's gravity file and estimate gravity from the map.
+    pub estimate_gravity: bool,
     pub progress: bool,
 }
 
@@ -45,7 +49,9 @@ pub struct ReconstructReport {
     pub rendered: bool,
     pub ingest: IngestReport,
     pub entities: usize,
+    /// Support and proximal edges of the contact graph.
     pub relations: usize,
+    pub gravity: Option<GravityReport>,
     pub panoptic: Option<PanopticReport>,
     /// Stages that ran, with wall-clock seconds; rendering and writing are listed too.
     pub timings: Vec<(String, f64)>,
@@ -70,11 +76,12 @@ pub struct PanopticReport {
 }
 
 /// Stages with systems in this build.
-const BUILT_STAGES: [ReconstructionStage; 4] = [
+const BUILT_STAGES: [ReconstructionStage; 5] = [
     ReconstructionStage::Ingest,
     ReconstructionStage::Segment,
     ReconstructionStage::Integrate,
     ReconstructionStage::Extract,
+    ReconstructionStage::ContactGraph,
 ];
 
 fn fusion_name(fusion: InstanceFusion) -> &'static str {
@@ -182,6 +189,9 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         segmentation: options.segmentation,
         progress: options.progress,
     });
+    app.insert_resource(GravityConfig {
+        estimate: options.estimate_gravity,
+    });
     app.world_mut().run_schedule(Reconstruct);
     if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
         return Err(err);
@@ -233,13 +243,19 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
                 .collect(),
         });
     }
+    let contact_graph = app.world().get_resource::<SceneContactGraph>();
+    if let Some(scene) = contact_graph {
+        write_text(&staged.path().join("contact_graph.json"), &scene.graph.to_json())?;
+        outputs.push("contact_graph.json".into());
+    }
     let mut report = ReconstructReport {
         input: sequence_dir,
         format: format.into(),
         rendered,
         ingest,
         entities: panoptic.as_ref().map_or(0, |p| p.entities.len()),
-        relations: 0,
+        relations: contact_graph.map_or(0, |c| c.graph.edges.len()),
+        gravity: contact_graph.map(|c| c.gravity.clone()),
         panoptic,
         timings,
         stages_not_built: ReconstructionStage::ALL

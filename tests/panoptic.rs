@@ -17,6 +17,7 @@ fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usiz
         voxel: 0.02,
         segmentation: SegmentationChoice::Oracle,
         fusion,
+        estimate_gravity: false,
         progress: false,
     })
     .expect("reconstruct");

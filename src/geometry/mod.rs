@@ -1,5 +1,6 @@
 //! Plain geometric types shared by every stage: triangle meshes, gravity-aligned boxes, planes.
 
+pub mod clusters;
 pub mod gravity_box;
 pub mod mesh;
 pub mod min_area_rect;

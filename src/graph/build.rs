@@ -8,6 +8,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::classes::{ClassTable, EntityKind};
+use crate::geometry::clusters::largest_cluster;
 use crate::geometry::plane::fit_plane;
 use crate::geometry::ransac::{RansacParams, ransac_planes};
 use crate::geometry::{GravityBox, Plane, TriMesh};
@@ -34,6 +35,8 @@ pub struct ContactGraphParams {
     /// Surface points are at most this far apart (metres): mesh vertices, plus samples inside
     /// triangles larger than this (a CAD table top is two triangles).
     pub sample_spacing: f32,
+    /// Grid cell (metres) of the clustering that keeps an object's largest connected piece.
+    pub cluster_cell: f32,
 }
 
 impl Default for ContactGraphParams {
@@ -42,6 +45,7 @@ impl Default for ContactGraphParams {
             ransac: RansacParams::default(),
             support: SupportParams::default(),
             sample_spacing: 0.02,
+            cluster_cell: 0.06,
         }
     }
 }
@@ -152,9 +156,23 @@ fn shape_of(entity: &GraphEntity, room_center: Vec3, params: &ContactGraphParams
         return None;
     }
     if entity.kind == EntityKind::Layout {
-        let plane = layout_plane(entity.class, &points, room_center)?;
+        // The layout piece is its largest plane; voxels a noisy segmentation gave it elsewhere
+        // (a cabinet side labelled wall) would make its slab thick.
+        let main = ransac_planes(
+            &points,
+            &RansacParams {
+                max_planes: 1,
+                ..params.ransac
+            },
+        );
+        let inliers: Vec<Vec3> = match main.first() {
+            Some(p) => p.inliers.iter().map(|&i| points[i as usize]).collect(),
+            None => points,
+        };
+        let plane = layout_plane(entity.class, &inliers, room_center)?;
         let behind = -plane.normal * LAYOUT_THICKNESS;
-        let slab: Vec<Vec3> = points.iter().flat_map(|p| [*p, *p + behind]).collect();
+        let slab: Vec<Vec3> = inliers.iter().flat_map(|p| [*p, *p + behind]).collect();
+        let points = inliers;
         let bbox = if entity.class == "wall" {
             GravityBox::enclosing(&slab, plane.normal.y.atan2(plane.normal.x))?
         } else {
@@ -166,6 +184,8 @@ fn shape_of(entity: &GraphEntity, room_center: Vec3, params: &ContactGraphParams
             planes: vec![plane],
         });
     }
+    // Stray pieces (label bleeding onto a neighbour) would stretch the box.
+    let points = largest_cluster(&points, params.cluster_cell);
     let bbox = GravityBox::minimal(&points)?;
     let planes = ransac_planes(&points, &params.ransac)
         .into_iter()

@@ -55,6 +55,61 @@ pub fn aligned_from_world(up: Vec3, floor_height: f32) -> Affine3A {
     Affine3A::from_rotation_translation(rotation, Vec3::new(0.0, 0.0, -floor_height))
 }
 
+/// Where the up direction came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GravitySource {
+    /// The sequence's gravity file.
+    Given,
+    /// Estimated from the map's horizontal surfaces.
+    Estimated,
+    /// Neither: the world's +z (said in the report so nobody mistakes it for a measurement).
+    Assumed,
+}
+
+/// The gravity the reconstruction used, and how it aligned the world.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GravityReport {
+    pub source: GravitySource,
+    pub up_in_world: [f32; 3],
+    /// Angle between the estimate and the sequence's gravity file, when both exist (degrees).
+    pub estimate_to_given_deg: Option<f32>,
+    /// Column-major 4x4: the aligned frame (z up, floor at 0) of the contact graph and every
+    /// export after it, from the sequence's world frame.
+    pub aligned_from_world: [f32; 16],
+}
+
+/// Decides the up direction: the given gravity unless `estimate` asks to ignore it, else the
+/// estimate from `map_mesh` with the cameras' hint, else +z. `floor_points` (world frame), when
+/// there are any, put the floor at z = 0 by their median height.
+pub fn resolve_gravity(
+    given: Option<Vec3>,
+    estimate: bool,
+    hint_up: Option<Vec3>,
+    map_mesh: impl FnOnce() -> TriMesh,
+    floor_points: &[Vec3],
+) -> GravityReport {
+    let given_up = given.and_then(|g| (-g).try_normalize());
+    let estimated = (estimate || given_up.is_none())
+        .then(|| hint_up.and_then(|hint| estimate_up(&map_mesh(), hint)))
+        .flatten();
+    let (source, up) = match (given_up, estimated) {
+        (Some(g), _) if !estimate => (GravitySource::Given, g),
+        (_, Some(e)) => (GravitySource::Estimated, e),
+        (Some(g), None) => (GravitySource::Given, g),
+        (None, None) => (GravitySource::Assumed, Vec3::Z),
+    };
+    let mut heights: Vec<f32> = floor_points.iter().map(|p| p.dot(up)).collect();
+    heights.sort_by(f32::total_cmp);
+    let floor_height = heights.get(heights.len() / 2).copied().unwrap_or(0.0);
+    GravityReport {
+        source,
+        up_in_world: up.to_array(),
+        estimate_to_given_deg: estimated.zip(given_up).map(|(e, g)| angle_deg(e, g)),
+        aligned_from_world: glam::Mat4::from(aligned_from_world(up, floor_height)).to_cols_array(),
+    }
+}
+
 /// Angle between two directions in degrees.
 pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
     a.normalize().dot(b.normalize()).clamp(-1.0, 1.0).acos().to_degrees()

@@ -47,22 +47,44 @@ pub fn spawn_contact_graph(
     graph: &ContactGraph,
 ) -> Result<HashMap<String, Entity>, String> {
     graph.check()?;
-    let root = world
-        .spawn((SceneRoot, Name::new("world"), Transform::IDENTITY))
-        .id();
     let mut entities = HashMap::new();
-    let mut poses = HashMap::new();
     for node in &graph.nodes {
-        let gbox = GravityBox::from(&node.bbox);
-        let pose = world_from_entity(&gbox, node.cad.as_ref());
-        let mut e = world.spawn((
+        let e = world.spawn((
             SceneEntity(node.id.clone()),
-            Name::new(node.id.clone()),
             Panoptic {
                 instance: entities.len() as u32 + 1,
                 class: node.class.clone(),
                 kind: node.kind,
             },
+        ));
+        entities.insert(node.id.clone(), e.id());
+    }
+    attach_contact_graph(world, graph, &entities)?;
+    Ok(entities)
+}
+
+/// Gives the entities of `graph`'s nodes (`entities`: node id to entity) their boxes, planes and
+/// CAD models, and hangs them under a new `SceneRoot` as the support tree says: `ChildOf` the
+/// supporting entity, a `Joint`, and a `Transform` relative to the parent.
+pub fn attach_contact_graph(
+    world: &mut World,
+    graph: &ContactGraph,
+    entities: &HashMap<String, Entity>,
+) -> Result<Entity, String> {
+    graph.check()?;
+    if let Some(missing) = graph.nodes.iter().find(|n| !entities.contains_key(&n.id)) {
+        return Err(format!("node {:?} has no entity", missing.id));
+    }
+    let root = world
+        .spawn((SceneRoot, Name::new("world"), Transform::IDENTITY))
+        .id();
+    let mut poses = HashMap::new();
+    for node in &graph.nodes {
+        let gbox = GravityBox::from(&node.bbox);
+        let pose = world_from_entity(&gbox, node.cad.as_ref());
+        let mut e = world.entity_mut(entities[&node.id]);
+        e.insert((
+            Name::new(node.id.clone()),
             OrientedBox(gbox),
             SurfacePlanes(node.planes.iter().map(|p| Plane::from_array(*p)).collect()),
         ));
@@ -74,11 +96,9 @@ pub fn spawn_contact_graph(
                 alignment_error: c.alignment_error,
             });
         }
-        entities.insert(node.id.clone(), e.id());
         poses.insert(node.id.clone(), pose);
     }
     for node in &graph.nodes {
-        let entity = entities[&node.id];
         let (parent, parent_pose, joint) = match graph.parent_of(&node.id) {
             Some(p) => (entities[p], poses[p], support_joint(&node.class)),
             None => {
@@ -91,7 +111,7 @@ pub fn spawn_contact_graph(
             }
         };
         let local = parent_pose.inverse() * poses[&node.id];
-        world.entity_mut(entity).insert((
+        world.entity_mut(entities[&node.id]).insert((
             ChildOf(parent),
             transform_of(local),
             Joint {
@@ -100,7 +120,7 @@ pub fn spawn_contact_graph(
             },
         ));
     }
-    Ok(entities)
+    Ok(root)
 }
 
 #[cfg(test)]

@@ -1,0 +1,75 @@
+//! Euclidean clusters of points on a voxel grid: points whose cells touch (26-neighbourhood)
+//! belong together. Used to drop the stray pieces a noisy segmentation leaves on an entity.
+
+use std::collections::HashMap;
+
+use glam::{IVec3, Vec3};
+
+/// The points of the largest cluster (most points) at grid resolution `cell` metres, in input
+/// order; ties keep the cluster that starts first.
+pub fn largest_cluster(points: &[Vec3], cell: f32) -> Vec<Vec3> {
+    let key = |p: &Vec3| (*p / cell).floor().as_ivec3();
+    let mut cells: HashMap<IVec3, usize> = HashMap::new();
+    for p in points.iter().filter(|p| p.is_finite()) {
+        let next = cells.len();
+        cells.entry(key(p)).or_insert(next);
+    }
+    // Union-find over occupied cells.
+    let mut parent: Vec<usize> = (0..cells.len()).collect();
+    fn find(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for (c, &i) in &cells {
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    if let Some(&j) = cells.get(&(*c + IVec3::new(dx, dy, dz))) {
+                        let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                        if a != b {
+                            parent[a.max(b)] = a.min(b);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut count = vec![0usize; cells.len()];
+    let mut root_of_point = Vec::with_capacity(points.len());
+    for p in points {
+        let root = p
+            .is_finite()
+            .then(|| find(&mut parent, cells[&key(p)]));
+        if let Some(r) = root {
+            count[r] += 1;
+        }
+        root_of_point.push(root);
+    }
+    let Some(best) = (0..count.len()).max_by(|a, b| count[*a].cmp(&count[*b]).then(b.cmp(a))) else {
+        return Vec::new();
+    };
+    points
+        .iter()
+        .zip(root_of_point)
+        .filter(|(_, r)| *r == Some(best))
+        .map(|(p, _)| *p)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stray_blob_is_dropped_and_a_connected_shape_kept() {
+        let mut points: Vec<Vec3> = (0..50).map(|i| Vec3::new(i as f32 * 0.02, 0.0, 0.0)).collect();
+        points.extend((0..10).map(|i| Vec3::new(3.0 + i as f32 * 0.02, 1.0, 0.0)));
+        let kept = largest_cluster(&points, 0.05);
+        assert_eq!(kept.len(), 50);
+        assert!(kept.iter().all(|p| p.x < 1.0));
+        assert!(largest_cluster(&[], 0.05).is_empty());
+    }
+}
