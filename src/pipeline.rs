@@ -8,6 +8,7 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::error::{InputError, IsceneError};
+use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
 use crate::io::atomic::StagedDir;
 use crate::io::panoptic_dir::{PanopticIndex, write_panoptic};
@@ -16,7 +17,6 @@ use crate::io::write_sequence::write_text;
 use crate::panoptic::{InstanceFusion, MapperParams};
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
-use crate::graph::gravity::GravityReport;
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::panoptic_mapping::{MappingConfig, PanopticMap, PanopticSurface};
@@ -245,7 +245,10 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     }
     let contact_graph = app.world().get_resource::<SceneContactGraph>();
     if let Some(scene) = contact_graph {
-        write_text(&staged.path().join("contact_graph.json"), &scene.graph.to_json())?;
+        write_text(
+            &staged.path().join("contact_graph.json"),
+            &scene.graph.to_json(),
+        )?;
         outputs.push("contact_graph.json".into());
     }
     let mut report = ReconstructReport {

@@ -2,6 +2,8 @@
 //! sequence. Panoptic quality and instance mAP for now; the contact-graph, CAD and physics
 //! figures of the report are `null` until their stages exist.
 
+pub mod contact;
+pub mod ged;
 pub mod panoptic_quality;
 pub mod truth;
 
@@ -17,6 +19,12 @@ use crate::io::ply::read_mesh_ply;
 use panoptic_quality::{PanopticMetrics, Segment, evaluate};
 use truth::NearestMesh;
 
+use std::collections::{BTreeMap, HashSet};
+
+use contact::{ContactMetrics, evaluate_contact_graph, seen_subgraph};
+
+use crate::graph::ContactGraph;
+
 /// Truth segments with fewer evaluated voxels than this are void: too little of them was seen
 /// to ask for a match.
 const MIN_TRUTH_VOXELS: usize = 10;
@@ -28,7 +36,12 @@ pub struct EvalReport {
     /// Metres: evaluated voxels farther than this from every truth mesh are void.
     pub truth_distance_m: f32,
     pub obb_map50: Option<f64>,
-    pub ged: Option<f64>,
+    /// Graph edit distance to the truth's contact graph (unit costs).
+    pub ged: Option<u32>,
+    /// Whether `ged` is exact (small graphs) or the bipartite upper bound.
+    pub ged_exact: Option<bool>,
+    /// Per-class box AP and the truth nodes left out as unseen.
+    pub contact_graph: Option<ContactMetrics>,
     pub cad_class_accuracy: Option<f64>,
     pub mean_alignment_error: Option<f64>,
     pub stable_fraction: Option<f64>,
@@ -76,6 +89,12 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
             *t = 0;
         }
     }
+    let seen: HashSet<String> = truth
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| size[i + 1] >= MIN_TRUTH_VOXELS)
+        .map(|(_, t)| t.name.clone())
+        .collect();
     let pred_of: Vec<u32> = voxels.iter().map(|(_, e)| *e).collect();
     let pred: Vec<Segment> = index
         .entities
@@ -92,14 +111,78 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
             .get(class)
             .is_some_and(|c| c.kind != EntityKind::Layout)
     });
+    let scores: BTreeMap<String, f32> = index
+        .entities
+        .iter()
+        .map(|e| (e.id.clone(), e.score))
+        .collect();
+    let contact = contact_metrics(dir, gt, &seen, &scores)?;
     Ok(EvalReport {
         panoptic,
         truth_distance_m,
-        obb_map50: None,
-        ged: None,
+        obb_map50: contact.as_ref().map(|c| c.obb_map50),
+        ged: contact.as_ref().map(|c| c.ged.cost),
+        ged_exact: contact.as_ref().map(|c| c.ged.exact),
+        contact_graph: contact,
         cad_class_accuracy: None,
         mean_alignment_error: None,
         stable_fraction: None,
         max_penetration_m: None,
     })
+}
+
+/// Contact-graph metrics when both the reconstruction and the truth have a contact graph.
+fn contact_metrics(
+    dir: &Path,
+    gt: &Path,
+    seen: &HashSet<String>,
+    scores: &BTreeMap<String, f32>,
+) -> Result<Option<ContactMetrics>, InputError> {
+    let pred_path = dir.join("contact_graph.json");
+    let truth_path = gt.join("gt").join("contact_graph.json");
+    if !pred_path.is_file() || !truth_path.is_file() {
+        return Ok(None);
+    }
+    let pred = ContactGraph::load(&pred_path)?;
+    let truth = ContactGraph::load(&truth_path)?;
+    let unseen: Vec<String> = truth
+        .nodes
+        .iter()
+        .filter(|n| !seen.contains(&n.id))
+        .map(|n| n.id.clone())
+        .collect();
+    let truth = seen_subgraph(&truth, seen);
+    let truth_from_pred = aligned_from_world(&dir.join("report.json"))?.inverse();
+    Ok(Some(evaluate_contact_graph(
+        &pred,
+        &truth,
+        &truth_from_pred,
+        scores,
+        unseen,
+    )))
+}
+
+/// The reconstruction's aligned frame from the sequence's world frame, as report.json records it
+/// (identity when the report has none).
+fn aligned_from_world(report: &Path) -> Result<glam::Affine3A, InputError> {
+    if !report.is_file() {
+        return Ok(glam::Affine3A::IDENTITY);
+    }
+    let text = std::fs::read_to_string(report).map_err(|e| InputError::io(report, &e))?;
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| InputError::invalid(report, format!("invalid JSON: {e}")))?;
+    let Some(cols) = value.pointer("/gravity/aligned_from_world") else {
+        return Ok(glam::Affine3A::IDENTITY);
+    };
+    let cols: [f32; 16] = serde_json::from_value(cols.clone())
+        .map_err(|e| InputError::invalid(report, format!("gravity.aligned_from_world: {e}")))?;
+    if cols.iter().any(|v| !v.is_finite()) {
+        return Err(InputError::invalid(
+            report,
+            "gravity.aligned_from_world holds a NaN",
+        ));
+    }
+    Ok(glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(
+        &cols,
+    )))
 }

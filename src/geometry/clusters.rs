@@ -40,15 +40,14 @@ pub fn largest_cluster(points: &[Vec3], cell: f32) -> Vec<Vec3> {
     let mut count = vec![0usize; cells.len()];
     let mut root_of_point = Vec::with_capacity(points.len());
     for p in points {
-        let root = p
-            .is_finite()
-            .then(|| find(&mut parent, cells[&key(p)]));
+        let root = p.is_finite().then(|| find(&mut parent, cells[&key(p)]));
         if let Some(r) = root {
             count[r] += 1;
         }
         root_of_point.push(root);
     }
-    let Some(best) = (0..count.len()).max_by(|a, b| count[*a].cmp(&count[*b]).then(b.cmp(a))) else {
+    let Some(best) = (0..count.len()).max_by(|a, b| count[*a].cmp(&count[*b]).then(b.cmp(a)))
+    else {
         return Vec::new();
     };
     points
@@ -65,7 +64,9 @@ mod tests {
 
     #[test]
     fn a_stray_blob_is_dropped_and_a_connected_shape_kept() {
-        let mut points: Vec<Vec3> = (0..50).map(|i| Vec3::new(i as f32 * 0.02, 0.0, 0.0)).collect();
+        let mut points: Vec<Vec3> = (0..50)
+            .map(|i| Vec3::new(i as f32 * 0.02, 0.0, 0.0))
+            .collect();
         points.extend((0..10).map(|i| Vec3::new(3.0 + i as f32 * 0.02, 1.0, 0.0)));
         let kept = largest_cluster(&points, 0.05);
         assert_eq!(kept.len(), 50);

@@ -90,6 +90,30 @@ impl GravityBox {
         })
     }
 
+    /// The footprint's corners, counter-clockwise.
+    pub fn footprint(&self) -> [glam::Vec2; 4] {
+        let axis = glam::Vec2::from_angle(self.yaw);
+        let (u, v) = (axis * 0.5 * self.size.x, axis.perp() * 0.5 * self.size.y);
+        let c = self.center.truncate();
+        [c - u - v, c + u - v, c + u + v, c - u + v]
+    }
+
+    /// Intersection over union of the two boxes' volumes: the footprints' intersection (convex
+    /// polygon clipping) times the overlap of the z intervals.
+    pub fn iou(&self, other: &GravityBox) -> f32 {
+        let dz = self.top_z().min(other.top_z()) - self.bottom_z().max(other.bottom_z());
+        if dz <= 0.0 {
+            return 0.0;
+        }
+        let inter = polygon_area(&clip_convex(&self.footprint(), &other.footprint())) * dz;
+        let union = self.volume() + other.volume() - inter;
+        if union <= 0.0 {
+            0.0
+        } else {
+            (inter / union).clamp(0.0, 1.0)
+        }
+    }
+
     /// Whether two boxes overlap once each is grown by `margin` (separating axes in the floor plane
     /// plus the z interval: both boxes share the z axis, so four axes decide).
     pub fn overlaps(&self, other: &GravityBox, margin: f32) -> bool {
@@ -112,6 +136,45 @@ impl GravityBox {
             a0 - margin <= b1 && b0 - margin <= a1
         })
     }
+}
+
+/// `subject` clipped by the convex, counter-clockwise polygon `clip` (Sutherland-Hodgman).
+fn clip_convex(subject: &[glam::Vec2], clip: &[glam::Vec2]) -> Vec<glam::Vec2> {
+    let mut out = subject.to_vec();
+    for k in 0..clip.len() {
+        let (a, b) = (clip[k], clip[(k + 1) % clip.len()]);
+        let inside = |p: glam::Vec2| (b - a).perp_dot(p - a) >= 0.0;
+        let input = std::mem::take(&mut out);
+        for i in 0..input.len() {
+            let (p, q) = (input[i], input[(i + 1) % input.len()]);
+            let crossing = || {
+                let (dp, dq) = ((b - a).perp_dot(p - a), (b - a).perp_dot(q - a));
+                p + (q - p) * (dp / (dp - dq))
+            };
+            match (inside(p), inside(q)) {
+                (true, true) => out.push(q),
+                (true, false) => out.push(crossing()),
+                (false, true) => {
+                    out.push(crossing());
+                    out.push(q);
+                }
+                (false, false) => {}
+            }
+        }
+        if out.is_empty() {
+            break;
+        }
+    }
+    out
+}
+
+/// Area of a simple polygon (shoelace), counter-clockwise positive.
+fn polygon_area(polygon: &[glam::Vec2]) -> f32 {
+    let n = polygon.len();
+    (0..n)
+        .map(|i| polygon[i].perp_dot(polygon[(i + 1) % n]))
+        .sum::<f32>()
+        * 0.5
 }
 
 #[cfg(test)]
@@ -151,6 +214,24 @@ mod tests {
             for c in b.corners() {
                 prop_assert!(m.contains(c, 1e-3));
             }
+        }
+
+        /// IoU is 1 with itself, symmetric, in [0, 1], and matches the closed form for a box
+        /// shifted along its own x axis.
+        #[test]
+        fn iou_behaves(
+            sx in 0.1f32..3.0, sy in 0.1f32..3.0, sz in 0.1f32..3.0, yaw in -3.1f32..3.1,
+            shift in 0.0f32..1.0, other_yaw in -3.1f32..3.1,
+        ) {
+            let a = GravityBox { center: Vec3::new(0.5, -0.2, 1.0), yaw, size: Vec3::new(sx, sy, sz) };
+            prop_assert!((a.iou(&a) - 1.0).abs() < 1e-4);
+            let axis = Vec3::new(yaw.cos(), yaw.sin(), 0.0);
+            let moved = GravityBox { center: a.center + axis * shift * sx, ..a };
+            let expected = (1.0 - shift) / (1.0 + shift);
+            prop_assert!((a.iou(&moved) - expected).abs() < 1e-3, "{} vs {}", a.iou(&moved), expected);
+            let b = GravityBox { yaw: other_yaw, ..moved };
+            let (ab, ba) = (a.iou(&b), b.iou(&a));
+            prop_assert!((ab - ba).abs() < 1e-4 && (0.0..=1.0).contains(&ab));
         }
 
         #[test]

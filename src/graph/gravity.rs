@@ -112,7 +112,11 @@ pub fn resolve_gravity(
 
 /// Angle between two directions in degrees.
 pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
-    a.normalize().dot(b.normalize()).clamp(-1.0, 1.0).acos().to_degrees()
+    a.normalize()
+        .dot(b.normalize())
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees()
 }
 
 #[cfg(test)]
@@ -123,14 +127,24 @@ mod tests {
     fn the_floor_and_a_table_give_up_despite_a_wide_hint_and_walls() {
         let tilt = Quat::from_rotation_x(0.5) * Quat::from_rotation_y(-0.3);
         let mut room = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.1), Vec3::new(5.0, 4.0, 0.0));
-        room.append(&TriMesh::cuboid(Vec3::new(1.0, 1.0, 0.7), Vec3::new(2.4, 1.8, 0.75)));
-        room.append(&TriMesh::cuboid(Vec3::new(0.0, 3.9, 0.0), Vec3::new(5.0, 4.0, 2.6)));
+        room.append(&TriMesh::cuboid(
+            Vec3::new(1.0, 1.0, 0.7),
+            Vec3::new(2.4, 1.8, 0.75),
+        ));
+        room.append(&TriMesh::cuboid(
+            Vec3::new(0.0, 3.9, 0.0),
+            Vec3::new(5.0, 4.0, 2.6),
+        ));
         let tilted = room.transformed(&Affine3A::from_quat(tilt));
         let truth = tilt * Vec3::Z;
         let hint = Quat::from_rotation_z(0.4) * Quat::from_rotation_x(0.45) * truth;
         assert!(angle_deg(hint, truth) > 20.0);
         let up = estimate_up(&tilted, hint).expect("up");
-        assert!(angle_deg(up, truth) < 0.5, "off by {} degrees", angle_deg(up, truth));
+        assert!(
+            angle_deg(up, truth) < 0.5,
+            "off by {} degrees",
+            angle_deg(up, truth)
+        );
         let aligned = aligned_from_world(up, 0.0);
         assert!((aligned.transform_vector3(truth) - Vec3::Z).length() < 0.01);
     }

@@ -84,9 +84,9 @@ fn contact_graph_stage(world: &mut World) {
         world.entity_mut(*e).insert(SegmentMesh(mesh));
     }
     if let Err(problem) = attach_contact_graph(world, &graph, &by_id) {
-        world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(
-            format!("contact graph: {problem}"),
-        ));
+        world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(format!(
+            "contact graph: {problem}"
+        )));
         return;
     }
     world.insert_resource(SceneContactGraph { graph, gravity });

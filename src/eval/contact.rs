@@ -1,0 +1,137 @@
+//! Contact-graph metrics against the ground truth: oriented box mAP@0.5 over object classes, and
+//! the graph edit distance. Truth entities the reconstruction never saw (a box in a closed
+//! fridge) are left out of both, and listed.
+
+use std::collections::{BTreeMap, HashSet};
+
+use glam::{Affine3A, Vec3};
+use serde::Serialize;
+
+use crate::classes::EntityKind;
+use crate::eval::ged::{EditDistance, EditGraph, graph_edit_distance};
+use crate::eval::panoptic_quality::average_precision;
+use crate::geometry::GravityBox;
+use crate::graph::{ContactGraph, GraphEdge};
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactMetrics {
+    pub obb_map50: f64,
+    /// AP@0.5 of oriented boxes per object class of the truth.
+    pub obb_ap50: BTreeMap<String, f64>,
+    pub ged: EditDistance,
+    /// Truth nodes left out because nothing of them was seen.
+    pub unseen_truth: Vec<String>,
+}
+
+/// `truth` restricted to `seen` nodes and the edges among them.
+pub fn seen_subgraph(truth: &ContactGraph, seen: &HashSet<String>) -> ContactGraph {
+    let keep = |id: &str| seen.contains(id);
+    ContactGraph {
+        nodes: truth
+            .nodes
+            .iter()
+            .filter(|n| keep(&n.id))
+            .cloned()
+            .collect(),
+        edges: truth
+            .edges
+            .iter()
+            .filter(|e| match e {
+                GraphEdge::Support { parent, child } => keep(parent) && keep(child),
+                GraphEdge::Proximal { a, b } => keep(a) && keep(b),
+            })
+            .cloned()
+            .collect(),
+    }
+}
+
+/// Scores `pred` against `truth` (already restricted to what was seen). `truth_from_pred` takes
+/// predicted boxes into the truth's frame (the reconstruction's aligned frame may differ from the
+/// sequence's); `scores` rank predictions for AP (1 when missing).
+pub fn evaluate_contact_graph(
+    pred: &ContactGraph,
+    truth: &ContactGraph,
+    truth_from_pred: &Affine3A,
+    scores: &BTreeMap<String, f32>,
+    unseen_truth: Vec<String>,
+) -> ContactMetrics {
+    let yaw_turn = {
+        let x = truth_from_pred.transform_vector3(Vec3::X);
+        x.y.atan2(x.x)
+    };
+    let pred_box = |b: &GravityBox| GravityBox {
+        center: truth_from_pred.transform_point3(b.center),
+        yaw: b.yaw + yaw_turn,
+        size: b.size,
+    };
+    let is_object = |kind: EntityKind| kind != EntityKind::Layout;
+    let classes: Vec<&str> = {
+        let mut c: Vec<&str> = truth
+            .nodes
+            .iter()
+            .filter(|n| is_object(n.kind))
+            .map(|n| n.class.as_str())
+            .collect();
+        c.sort_unstable();
+        c.dedup();
+        c
+    };
+    let mut obb_ap50 = BTreeMap::new();
+    for class in classes {
+        let truths: Vec<GravityBox> = truth
+            .nodes
+            .iter()
+            .filter(|n| n.class == class)
+            .map(|n| GravityBox::from(&n.bbox))
+            .collect();
+        let mut preds: Vec<(f32, GravityBox)> = pred
+            .nodes
+            .iter()
+            .filter(|n| n.class == class)
+            .map(|n| {
+                (
+                    scores.get(&n.id).copied().unwrap_or(1.0),
+                    pred_box(&GravityBox::from(&n.bbox)),
+                )
+            })
+            .collect();
+        preds.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut taken = vec![false; truths.len()];
+        let hits: Vec<bool> = preds
+            .iter()
+            .map(|(_, p)| {
+                let best = (0..truths.len())
+                    .filter(|&t| !taken[t])
+                    .map(|t| (t, p.iou(&truths[t])))
+                    .max_by(|a, b| a.1.total_cmp(&b.1));
+                match best {
+                    Some((t, iou)) if iou > 0.5 => {
+                        taken[t] = true;
+                        true
+                    }
+                    _ => false,
+                }
+            })
+            .collect();
+        obb_ap50.insert(class.to_string(), average_precision(&hits, truths.len()));
+    }
+    let obb_map50 = if obb_ap50.is_empty() {
+        0.0
+    } else {
+        obb_ap50.values().sum::<f64>() / obb_ap50.len() as f64
+    };
+    let mut aligned = pred.clone();
+    for n in &mut aligned.nodes {
+        n.bbox = pred_box(&GravityBox::from(&n.bbox)).into();
+    }
+    let ged = graph_edit_distance(
+        &EditGraph::from_contact_graph(&aligned),
+        &EditGraph::from_contact_graph(truth),
+    );
+    ContactMetrics {
+        obb_map50,
+        obb_ap50,
+        ged,
+        unseen_truth,
+    }
+}
