@@ -12,7 +12,7 @@ use crate::geometry::clusters::largest_cluster;
 use crate::geometry::plane::fit_plane;
 use crate::geometry::ransac::{RansacParams, ransac_planes};
 use crate::geometry::{GravityBox, Plane, TriMesh};
-use crate::graph::proximal::proximal_edges;
+use crate::graph::proximal::{PROXIMAL_MARGIN, proximal_edges};
 use crate::graph::support::{SupportChoice, SupportEntity, SupportParams, infer_supports, rest_on};
 use crate::graph::{ContactGraph, GraphEdge, GraphNode};
 
@@ -37,6 +37,24 @@ pub struct ContactGraphParams {
     pub sample_spacing: f32,
     /// Grid cell (metres) of the clustering that keeps an object's largest connected piece.
     pub cluster_cell: f32,
+    /// An object's box turns to the room's axes when that makes its footprint at most this
+    /// factor larger than the minimal one: a box fitted to a partial, noisy view picks up a
+    /// spurious yaw, and furniture mostly stands square with the walls.
+    pub square_with_room_area: f32,
+    /// Boxes closer than this (metres) are proximal: `PROXIMAL_MARGIN` for exact meshes; less
+    /// for a map, whose boxes grow by about a voxel where surfaces bleed past silhouettes
+    /// (`for_voxel`).
+    pub proximal_margin: f32,
+}
+
+impl ContactGraphParams {
+    /// Parameters for entities out of a map with `voxel` metres voxels.
+    pub fn for_voxel(voxel: f32) -> Self {
+        Self {
+            proximal_margin: PROXIMAL_MARGIN - voxel,
+            ..Self::default()
+        }
+    }
 }
 
 impl Default for ContactGraphParams {
@@ -46,6 +64,8 @@ impl Default for ContactGraphParams {
             support: SupportParams::default(),
             sample_spacing: 0.02,
             cluster_cell: 0.06,
+            square_with_room_area: 1.1,
+            proximal_margin: PROXIMAL_MARGIN,
         }
     }
 }
@@ -61,11 +81,18 @@ struct Shape {
 /// points) are left out.
 pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams) -> ContactGraph {
     let room_center = room_center(entities);
-    let shaped: Vec<(usize, Shape)> = entities
+    let mut shaped: Vec<(usize, Shape)> = entities
         .par_iter()
         .enumerate()
         .filter_map(|(i, e)| shape_of(e, room_center, params).map(|s| (i, s)))
         .collect();
+    if let Some(yaw) = room_yaw(entities, &shaped) {
+        for (i, shape) in &mut shaped {
+            if entities[*i].kind != EntityKind::Layout {
+                shape.bbox = square_with_room(&shape.bbox, &shape.points, yaw, params);
+            }
+        }
+    }
     let table = ClassTable::builtin();
     let support_input: Vec<SupportEntity> = shaped
         .iter()
@@ -117,7 +144,11 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
             child: child.to_string(),
         })
         .collect();
-    edges.extend(proximal_edges(&boxed, &supports_by_id));
+    edges.extend(proximal_edges(
+        &boxed,
+        &supports_by_id,
+        params.proximal_margin,
+    ));
     let nodes = (0..shaped.len())
         .map(|k| GraphNode {
             id: id(k).to_string(),
@@ -130,6 +161,36 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
         })
         .collect();
     ContactGraph { nodes, edges }
+}
+
+/// The room's yaw modulo 90 degrees, from its walls' normals (circular mean of four times the
+/// angle, so walls at right angles agree); `None` without walls.
+fn room_yaw(entities: &[GraphEntity], shaped: &[(usize, Shape)]) -> Option<f32> {
+    let sum: glam::Vec2 = shaped
+        .iter()
+        .filter(|(i, _)| entities[*i].class == "wall")
+        .filter_map(|(_, s)| s.planes.first())
+        .map(|p| glam::Vec2::from_angle(4.0 * p.normal.y.atan2(p.normal.x)))
+        .sum();
+    (sum.length() > 1e-3).then(|| 0.25 * sum.y.atan2(sum.x))
+}
+
+/// `bbox`, or the box of `points` square with the room when its footprint is nearly as small.
+fn square_with_room(
+    bbox: &GravityBox,
+    points: &[Vec3],
+    room_yaw: f32,
+    params: &ContactGraphParams,
+) -> GravityBox {
+    match GravityBox::enclosing(points, room_yaw) {
+        Some(square)
+            if square.size.x * square.size.y
+                <= params.square_with_room_area * bbox.size.x * bbox.size.y =>
+        {
+            square
+        }
+        _ => *bbox,
+    }
 }
 
 /// The middle of the room: the centre of the floor if there is one, else of everything.

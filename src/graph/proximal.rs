@@ -8,12 +8,14 @@ use crate::graph::GraphEdge;
 /// Boxes closer than this (metres) count as touching.
 pub const PROXIMAL_MARGIN: f32 = 0.02;
 
-/// Proximal edges among `nodes` (id, box, class), in node order, leaving out pairs related by
-/// a support edge in `supports` (parent, child). Floor and ceiling only ever support; walls are
-/// proximal to what stands against them but not to each other.
+/// Proximal edges among `nodes` (id, box, class), in node order: boxes closer than `margin`
+/// (metres; `PROXIMAL_MARGIN` for exact boxes), leaving out pairs related by a support edge in
+/// `supports` (parent, child). Floor and ceiling only ever support; walls are proximal to what
+/// stands against them but not to each other.
 pub fn proximal_edges(
     nodes: &[(&str, GravityBox, &str)],
     supports: &[(&str, &str)],
+    margin: f32,
 ) -> Vec<GraphEdge> {
     let related = |a: &str, b: &str| {
         supports
@@ -31,7 +33,7 @@ pub fn proximal_edges(
             {
                 continue;
             }
-            if box_a.overlaps(box_b, PROXIMAL_MARGIN) {
+            if box_a.overlaps(box_b, margin) {
                 edges.push(GraphEdge::Proximal {
                     a: a.to_string(),
                     b: b.to_string(),

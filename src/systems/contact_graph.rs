@@ -74,7 +74,10 @@ fn contact_graph_stage(world: &mut World) {
             mesh,
         })
         .collect();
-    let graph = build_contact_graph(&graph_entities, &ContactGraphParams::default());
+    let graph = build_contact_graph(
+        &graph_entities,
+        &ContactGraphParams::for_voxel(map.0.tsdf.voxel_size),
+    );
     let by_id: HashMap<String, Entity> = entities
         .iter()
         .map(|(e, id, _, _)| (id.clone(), *e))
