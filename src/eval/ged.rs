@@ -63,25 +63,39 @@ impl EditGraph {
     }
 }
 
-/// The distance and whether it is exact (else an upper bound from the bipartite mapping).
+/// The distance and whether it is exact (else an upper bound from the bipartite mapping), with
+/// the edits of the path it was measured on by kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct EditDistance {
     pub cost: u32,
     pub exact: bool,
+    pub parts: EditParts,
+}
+
+/// Edits by kind: nodes inserted, deleted or relabelled; support and proximal edges inserted or
+/// deleted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct EditParts {
+    pub nodes: u32,
+    pub support: u32,
+    pub proximal: u32,
 }
 
 /// The edit distance: exact when both graphs have at most `EXACT_MAX_NODES` nodes.
 pub fn graph_edit_distance(a: &EditGraph, b: &EditGraph) -> EditDistance {
-    let bound = bipartite_upper_bound(a, b);
+    let (bound, mapping) = bipartite_upper_bound(a, b);
     if a.len().max(b.len()) <= EXACT_MAX_NODES {
+        let (cost, mapping) = exact_search(a, b, bound, mapping);
         EditDistance {
-            cost: exact_distance(a, b, bound.0),
+            cost,
             exact: true,
+            parts: mapping_parts(a, b, &mapping),
         }
     } else {
         EditDistance {
-            cost: bound.0,
+            cost: bound,
             exact: false,
+            parts: mapping_parts(a, b, &mapping),
         }
     }
 }
@@ -89,6 +103,12 @@ pub fn graph_edit_distance(a: &EditGraph, b: &EditGraph) -> EditDistance {
 /// The exact cost of the edit path a node mapping implies: `mapping[i]` is the node of `b` that
 /// node `i` of `a` becomes, `None` = deleted; nodes of `b` no one maps to are inserted.
 pub fn mapping_cost(a: &EditGraph, b: &EditGraph, mapping: &[Option<usize>]) -> u32 {
+    let p = mapping_parts(a, b, mapping);
+    p.nodes + p.support + p.proximal
+}
+
+/// The edits, by kind, of the path `mapping` implies (see `mapping_cost`).
+pub fn mapping_parts(a: &EditGraph, b: &EditGraph, mapping: &[Option<usize>]) -> EditParts {
     let mut cost = 0u32;
     let mut used = vec![false; b.len()];
     for (i, m) in mapping.iter().enumerate() {
@@ -112,9 +132,11 @@ pub fn mapping_cost(a: &EditGraph, b: &EditGraph, mapping: &[Option<usize>]) -> 
         .iter()
         .filter(|e| mapped(e).is_some_and(|(x, y)| b.proximal.contains(&(x.min(y), x.max(y)))))
         .count();
-    cost += (a.support.len() - kept_support + b.support.len() - kept_support) as u32;
-    cost += (a.proximal.len() - kept_proximal + b.proximal.len() - kept_proximal) as u32;
-    cost
+    EditParts {
+        nodes: cost,
+        support: (a.support.len() - kept_support + b.support.len() - kept_support) as u32,
+        proximal: (a.proximal.len() - kept_proximal + b.proximal.len() - kept_proximal) as u32,
+    }
 }
 
 /// Kuhn-Munkres on node costs (class, local edges halved, a small pull towards the nearest
@@ -208,7 +230,18 @@ pub fn bipartite_upper_bound(a: &EditGraph, b: &EditGraph) -> (u32, Vec<Option<u
 /// Branch and bound over the nodes of `a`, each mapped to an unused node of `b` or deleted,
 /// starting from the bound `upper`. Exponential: for small graphs only.
 pub fn exact_distance(a: &EditGraph, b: &EditGraph, upper: u32) -> u32 {
-    let mut best = upper;
+    exact_search(a, b, upper, vec![None; a.len()]).0
+}
+
+/// The exact distance and a mapping that reaches it; `upper` and `start` are a known cost and
+/// the mapping that reaches it (returned when nothing beats it).
+fn exact_search(
+    a: &EditGraph,
+    b: &EditGraph,
+    upper: u32,
+    start: Vec<Option<usize>>,
+) -> (u32, Vec<Option<usize>>) {
+    let mut best = (upper, start);
     let mut mapping = vec![None; a.len()];
     let mut used = vec![false; b.len()];
     search(a, b, 0, &mut mapping, &mut used, &mut best);
@@ -221,13 +254,16 @@ fn search(
     i: usize,
     mapping: &mut [Option<usize>],
     used: &mut [bool],
-    best: &mut u32,
+    best: &mut (u32, Vec<Option<usize>>),
 ) {
     if i == a.len() {
-        *best = (*best).min(mapping_cost(a, b, mapping));
+        let cost = mapping_cost(a, b, mapping);
+        if cost < best.0 {
+            *best = (cost, mapping.to_vec());
+        }
         return;
     }
-    if partial_lower_bound(a, b, i, mapping, used) >= *best {
+    if partial_lower_bound(a, b, i, mapping, used) >= best.0 {
         return;
     }
     for j in 0..b.len() {
@@ -339,13 +375,8 @@ mod tests {
     fn a_graph_is_at_distance_zero_from_itself_and_known_edits_cost_what_they_should() {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let g = random_graph(&mut rng, 7);
-        assert_eq!(
-            graph_edit_distance(&g, &g),
-            EditDistance {
-                cost: 0,
-                exact: true
-            }
-        );
+        let same = graph_edit_distance(&g, &g);
+        assert_eq!((same.cost, same.exact), (0, true));
         // A wrong support parent costs 2.
         let mut wrong = g.clone();
         let &(p, c) = g.support.iter().next().expect("an edge");
@@ -354,7 +385,9 @@ mod tests {
             .find(|&q| q != p && q != c && !g.support.contains(&(q, c)))
             .expect("node");
         wrong.support.insert((other, c));
-        assert!(graph_edit_distance(&g, &wrong).cost <= 2);
+        let d = graph_edit_distance(&g, &wrong);
+        assert!(d.cost <= 2);
+        assert_eq!(d.cost, d.parts.nodes + d.parts.support + d.parts.proximal);
         // A missing leaf with its one edge costs 2.
         let mut small = g.clone();
         small.classes.push("cup".into());
