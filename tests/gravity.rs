@@ -28,7 +28,7 @@ fn redkitchen_gravity_is_estimated_within_two_degrees() {
     let hint = camera_up_hint(sequence.frames.iter().map(|f| f.world_from_camera)).expect("hint");
     let up = estimate_up(&mesh, hint).expect("up");
     let error = angle_deg(up, -given);
-    println!(
+    eprintln!(
         "hint {:.1} deg off, estimate {error:.2} deg off",
         angle_deg(hint, -given)
     );
