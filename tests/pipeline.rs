@@ -9,14 +9,17 @@ use iscene::systems::{Reconstruct, ReconstructionStage};
 fn the_stage_schedule_builds_without_ambiguities_and_runs_in_order() {
     let mut app = App::new();
     app.add_plugins(iscene::ReconstructionPlugins);
-    // A probe system per stage records the order the stages run in.
+    // A probe system per stage records the order the stages run in. It touches only `Order`, so
+    // it may run on either side of a stage's exclusive systems (hence `ambiguous_with_all`).
     #[derive(Resource, Default)]
     struct Order(Vec<&'static str>);
     app.init_resource::<Order>();
     for stage in ReconstructionStage::ALL {
         app.add_systems(
             Reconstruct,
-            (move |mut order: ResMut<Order>| order.0.push(stage.name())).in_set(stage),
+            (move |mut order: ResMut<Order>| order.0.push(stage.name()))
+                .in_set(stage)
+                .ambiguous_with_all(),
         );
     }
     let dir = tempfile::tempdir().expect("tempdir");
