@@ -9,7 +9,7 @@
 //! The Voxblox++ baseline tracks the two separately: counts of (label, class) and of
 //! (label, instance), the instance chosen without regard to class.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use crate::map::SegmentLabel;
 
@@ -55,6 +55,9 @@ pub struct InstanceCounts {
     /// one class, and in the same mask. Labels seen apart more than together are two objects.
     apart: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     together: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
+    /// Joint only: label pairs seen in masks of different classes in one frame (the floor and the
+    /// wall meeting it): never the same surface, whatever their geometry overlaps.
+    apart_across_classes: BTreeSet<(SegmentLabel, SegmentLabel)>,
     next_instance: InstanceId,
 }
 
@@ -66,6 +69,7 @@ impl InstanceCounts {
             instance_only: BTreeMap::new(),
             apart: BTreeMap::new(),
             together: BTreeMap::new(),
+            apart_across_classes: BTreeSet::new(),
             next_instance: 1,
         }
     }
@@ -131,15 +135,21 @@ impl InstanceCounts {
         instances
     }
 
-    /// Whether labels `a` and `b` were ever seen in different masks of one class in a frame.
+    /// Whether labels `a` and `b` were ever seen in different masks of one frame.
     pub fn seen_apart(&self, a: SegmentLabel, b: SegmentLabel) -> bool {
-        self.apart.contains_key(&(a.min(b), a.max(b)))
+        let key = (a.min(b), a.max(b));
+        self.apart.contains_key(&key) || self.apart_across_classes.contains(&key)
     }
 
     fn count_co_observations(&mut self, masks: &[MaskObservation]) {
         for (a, ma) in masks.iter().enumerate() {
             for (b, mb) in masks.iter().enumerate().skip(a) {
                 if ma.class != mb.class {
+                    for &la in &ma.labels {
+                        for &lb in mb.labels.iter().filter(|&&lb| lb != la) {
+                            self.apart_across_classes.insert((la.min(lb), la.max(lb)));
+                        }
+                    }
                     continue;
                 }
                 for &la in &ma.labels {
@@ -212,6 +222,16 @@ impl InstanceCounts {
                 if a != b {
                     *table.entry((a.min(b), a.max(b))).or_default() += n;
                 }
+            }
+        }
+        let old = std::mem::take(&mut self.apart_across_classes);
+        for (a, b) in old {
+            let (a, b) = (
+                if a == from { into } else { a },
+                if b == from { into } else { b },
+            );
+            if a != b {
+                self.apart_across_classes.insert((a.min(b), a.max(b)));
             }
         }
         let moved: Vec<_> = self
@@ -380,6 +400,19 @@ mod tests {
         counts.merge_labels(12, 10);
         assert_eq!(counts.identity(12), None);
         assert_eq!(counts.identity(10).map(|i| i.votes), Some(3));
+    }
+
+    #[test]
+    fn labels_in_masks_of_different_classes_are_apart_through_label_merges() {
+        let mut counts = InstanceCounts::new(InstanceFusion::Joint);
+        // The floor and the wall meeting it, in one frame: two surfaces, not one to merge.
+        counts.observe_frame(&[mask(1, &[10]), mask(2, &[20])]);
+        assert!(counts.seen_apart(10, 20) && counts.seen_apart(20, 10));
+        assert!(!counts.seen_apart(10, 30));
+        // A label merged into the wall's carries the wall's separation along.
+        counts.merge_labels(20, 30);
+        assert!(counts.seen_apart(10, 30));
+        assert!(!counts.seen_apart(10, 20));
     }
 
     #[test]
