@@ -49,6 +49,23 @@ impl TriMesh {
         )
     }
 
+    /// Per-vertex unit normals: the area-weighted mean of the adjacent triangles' normals (zero
+    /// for a vertex without a proper triangle).
+    pub fn vertex_normals(&self) -> Vec<Vec3> {
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        for (i, t) in self.triangles.iter().enumerate() {
+            let [a, b, c] = self.triangle(i);
+            // Twice the area along the normal: larger triangles weigh more.
+            let n = (b - a).cross(c - a);
+            if n.is_finite() {
+                for &v in t {
+                    normals[v as usize] += n;
+                }
+            }
+        }
+        normals.iter().map(|n| n.normalize_or_zero()).collect()
+    }
+
     /// The three corners of triangle `i`.
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
         let t = self.triangles[i];
@@ -213,6 +230,16 @@ mod tests {
             m.signed_volume()
         );
         assert!((m.area() - 22.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn vertex_normals_are_unit_and_point_out() {
+        let m = TriMesh::cuboid(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0));
+        let centre = Vec3::new(0.5, 1.0, 1.5);
+        for (p, n) in m.positions.iter().zip(m.vertex_normals()) {
+            assert!((n.length() - 1.0).abs() < 1e-5);
+            assert!(n.dot(*p - centre) > 0.0, "{n} at {p}");
+        }
     }
 
     #[test]

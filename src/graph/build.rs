@@ -12,7 +12,7 @@ use crate::geometry::clusters::largest_cluster;
 use crate::geometry::plane::fit_plane;
 use crate::geometry::ransac::{RansacParams, ransac_planes};
 use crate::geometry::{GravityBox, Plane, TriMesh};
-use crate::graph::proximal::{PROXIMAL_MARGIN, proximal_edges};
+use crate::graph::proximal::{PROXIMAL_MARGIN, ProximalMargins, proximal_edges};
 use crate::graph::support::{SupportChoice, SupportEntity, SupportParams, infer_supports, rest_on};
 use crate::graph::{ContactGraph, GraphEdge, GraphNode};
 
@@ -41,17 +41,25 @@ pub struct ContactGraphParams {
     /// factor larger than the minimal one: a box fitted to a partial, noisy view picks up a
     /// spurious yaw, and furniture mostly stands square with the walls.
     pub square_with_room_area: f32,
-    /// Boxes closer than this (metres) are proximal: `PROXIMAL_MARGIN` for exact meshes; less
-    /// for a map, whose boxes grow by about a voxel where surfaces bleed past silhouettes
-    /// (`for_voxel`).
-    pub proximal_margin: f32,
+    /// Boxes closer than this (metres) are proximal: `PROXIMAL_MARGIN` for exact meshes. A map's
+    /// object boxes grow by about a voxel where surfaces bleed past silhouettes, so two objects
+    /// need a voxel less (`for_voxel`); walls are exact planes, and the object points on them
+    /// go to the wall (`layout_band`), so the wall margin stays.
+    pub proximal_margins: ProximalMargins,
+    /// An object's surface points within this distance (metres) of a wall or the floor, facing
+    /// the way that layout surface faces, are the layout's: segmentation bleeds an object's label
+    /// onto the wall behind it, and a surface that close cannot be told from the wall anyway.
+    pub layout_band: f32,
 }
 
 impl ContactGraphParams {
     /// Parameters for entities out of a map with `voxel` metres voxels.
     pub fn for_voxel(voxel: f32) -> Self {
         Self {
-            proximal_margin: PROXIMAL_MARGIN - voxel,
+            proximal_margins: ProximalMargins {
+                objects: PROXIMAL_MARGIN - voxel,
+                wall: PROXIMAL_MARGIN,
+            },
             ..Self::default()
         }
     }
@@ -65,7 +73,8 @@ impl Default for ContactGraphParams {
             sample_spacing: 0.02,
             cluster_cell: 0.06,
             square_with_room_area: 1.1,
-            proximal_margin: PROXIMAL_MARGIN,
+            proximal_margins: ProximalMargins::EXACT,
+            layout_band: 0.02,
         }
     }
 }
@@ -81,11 +90,28 @@ struct Shape {
 /// points) are left out.
 pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams) -> ContactGraph {
     let room_center = room_center(entities);
+    let is_layout = |e: &GraphEntity| e.kind == EntityKind::Layout;
     let mut shaped: Vec<(usize, Shape)> = entities
         .par_iter()
         .enumerate()
-        .filter_map(|(i, e)| shape_of(e, room_center, params).map(|s| (i, s)))
+        .filter(|(_, e)| is_layout(e))
+        .filter_map(|(i, e)| layout_shape(e, room_center, params).map(|s| (i, s)))
         .collect();
+    // Walls and floor claim the object points lying on them.
+    let claiming: Vec<Plane> = shaped
+        .iter()
+        .filter(|(i, _)| matches!(entities[*i].class, "wall" | "floor"))
+        .filter_map(|(_, s)| s.planes.first().copied())
+        .collect();
+    shaped.par_extend(
+        entities
+            .par_iter()
+            .enumerate()
+            .filter(|(_, e)| !is_layout(e))
+            .filter_map(|(i, e)| object_shape(e, &claiming, params).map(|s| (i, s))),
+    );
+    // Entity order, as given: the graph's nodes and edges come out in it.
+    shaped.sort_by_key(|(i, _)| *i);
     if let Some(yaw) = room_yaw(entities, &shaped) {
         for (i, shape) in &mut shaped {
             if entities[*i].kind != EntityKind::Layout {
@@ -147,7 +173,7 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
     edges.extend(proximal_edges(
         &boxed,
         &supports_by_id,
-        params.proximal_margin,
+        params.proximal_margins,
     ));
     let nodes = (0..shaped.len())
         .map(|k| GraphNode {
@@ -211,42 +237,72 @@ fn room_center(entities: &[GraphEntity]) -> Vec3 {
     .unwrap_or(Vec3::ZERO)
 }
 
-fn shape_of(entity: &GraphEntity, room_center: Vec3, params: &ContactGraphParams) -> Option<Shape> {
-    let points = surface_points(entity.mesh, params.sample_spacing);
+fn layout_shape(
+    entity: &GraphEntity,
+    room_center: Vec3,
+    params: &ContactGraphParams,
+) -> Option<Shape> {
+    let points = surface_points(entity.mesh, params.sample_spacing).points;
     if points.len() < 3 {
         return None;
     }
-    if entity.kind == EntityKind::Layout {
-        // The layout piece is its largest plane; voxels a noisy segmentation gave it elsewhere
-        // (a cabinet side labelled wall) would make its slab thick.
-        let main = ransac_planes(
-            &points,
-            &RansacParams {
-                max_planes: 1,
-                ..params.ransac
-            },
-        );
-        let inliers: Vec<Vec3> = match main.first() {
-            Some(p) => p.inliers.iter().map(|&i| points[i as usize]).collect(),
-            None => points,
-        };
-        let plane = layout_plane(entity.class, &inliers, room_center)?;
-        let behind = -plane.normal * LAYOUT_THICKNESS;
-        let slab: Vec<Vec3> = inliers.iter().flat_map(|p| [*p, *p + behind]).collect();
-        let points = inliers;
-        let bbox = if entity.class == "wall" {
-            GravityBox::enclosing(&slab, plane.normal.y.atan2(plane.normal.x))?
-        } else {
-            GravityBox::minimal(&slab)?
-        };
-        return Some(Shape {
-            points,
-            bbox,
-            planes: vec![plane],
-        });
-    }
+    // The layout piece is its largest plane; voxels a noisy segmentation gave it elsewhere (a
+    // cabinet side labelled wall) would make its slab thick.
+    let main = ransac_planes(
+        &points,
+        &RansacParams {
+            max_planes: 1,
+            ..params.ransac
+        },
+    );
+    let inliers: Vec<Vec3> = match main.first() {
+        Some(p) => p.inliers.iter().map(|&i| points[i as usize]).collect(),
+        None => points,
+    };
+    let plane = layout_plane(entity.class, &inliers, room_center)?;
+    // The slab's face is the fitted plane itself: the inliers' spread in front of it is noise
+    // (up to the RANSAC threshold) and would push the face into the room.
+    let behind = -plane.normal * LAYOUT_THICKNESS;
+    let slab: Vec<Vec3> = inliers
+        .iter()
+        .map(|p| *p - plane.normal * plane.signed_distance(*p))
+        .flat_map(|p| [p, p + behind])
+        .collect();
+    let bbox = if entity.class == "wall" {
+        GravityBox::enclosing(&slab, plane.normal.y.atan2(plane.normal.x))?
+    } else {
+        GravityBox::minimal(&slab)?
+    };
+    Some(Shape {
+        points: inliers,
+        bbox,
+        planes: vec![plane],
+    })
+}
+
+fn object_shape(
+    entity: &GraphEntity,
+    claiming: &[Plane],
+    params: &ContactGraphParams,
+) -> Option<Shape> {
+    let surface = surface_points(entity.mesh, params.sample_spacing);
+    let on_layout = |p: Vec3, n: Vec3| {
+        claiming
+            .iter()
+            .any(|l| l.signed_distance(p) < params.layout_band && n.dot(l.normal) > 0.85)
+    };
+    let points: Vec<Vec3> = surface
+        .points
+        .iter()
+        .zip(&surface.normals)
+        .filter(|(p, n)| !on_layout(**p, **n))
+        .map(|(p, _)| *p)
+        .collect();
     // Stray pieces (label bleeding onto a neighbour) would stretch the box.
     let points = largest_cluster(&points, params.cluster_cell);
+    if points.len() < 3 {
+        return None;
+    }
     let bbox = GravityBox::minimal(&points)?;
     let planes = ransac_planes(&points, &params.ransac)
         .into_iter()
@@ -281,21 +337,29 @@ fn layout_plane(class: &str, points: &[Vec3], room_center: Vec3) -> Option<Plane
     })
 }
 
+/// Points on a mesh's surface with the surface's unit normal at each (zero where undefined).
+pub struct SurfacePoints {
+    pub points: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+}
+
 /// The mesh's vertices, plus points on a barycentric grid inside every triangle with an edge
 /// longer than `spacing`, so no two neighbouring surface points are farther apart than that.
-pub fn surface_points(mesh: &TriMesh, spacing: f32) -> Vec<Vec3> {
-    let mut points: Vec<Vec3> = mesh
+pub fn surface_points(mesh: &TriMesh, spacing: f32) -> SurfacePoints {
+    let (mut points, mut normals): (Vec<Vec3>, Vec<Vec3>) = mesh
         .positions
         .iter()
         .copied()
-        .filter(|p| p.is_finite())
-        .collect();
+        .zip(mesh.vertex_normals())
+        .filter(|(p, _)| p.is_finite())
+        .unzip();
     for t in 0..mesh.triangles.len() {
         let [a, b, c] = mesh.triangle(t);
         let longest = (b - a).length().max((c - b).length()).max((a - c).length());
         if !longest.is_finite() || longest <= spacing {
             continue;
         }
+        let normal = mesh.face_normal(t);
         let k = (longest / spacing).ceil() as usize;
         for i in 0..=k {
             for j in 0..=(k - i) {
@@ -305,8 +369,9 @@ pub fn surface_points(mesh: &TriMesh, spacing: f32) -> Vec<Vec3> {
                 }
                 let (u, v) = (i as f32 / k as f32, j as f32 / k as f32);
                 points.push(a + (b - a) * u + (c - a) * v);
+                normals.push(normal);
             }
         }
     }
-    points
+    SurfacePoints { points, normals }
 }

@@ -8,14 +8,31 @@ use crate::graph::GraphEdge;
 /// Boxes closer than this (metres) count as touching.
 pub const PROXIMAL_MARGIN: f32 = 0.02;
 
-/// Proximal edges among `nodes` (id, box, class), in node order: boxes closer than `margin`
-/// (metres; `PROXIMAL_MARGIN` for exact boxes), leaving out pairs related by a support edge in
-/// `supports` (parent, child). Floor and ceiling only ever support; walls are proximal to what
-/// stands against them but not to each other.
+/// How close two boxes must be (metres) to count as touching.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProximalMargins {
+    /// Between two objects.
+    pub objects: f32,
+    /// Between an object and a wall.
+    pub wall: f32,
+}
+
+impl ProximalMargins {
+    /// For exact boxes (the ground truth): `PROXIMAL_MARGIN` everywhere.
+    pub const EXACT: Self = Self {
+        objects: PROXIMAL_MARGIN,
+        wall: PROXIMAL_MARGIN,
+    };
+}
+
+/// Proximal edges among `nodes` (id, box, class), in node order: boxes closer than the margin
+/// for the pair, leaving out pairs related by a support edge in `supports` (parent, child).
+/// Floor and ceiling only ever support; walls are proximal to what stands against them but not to
+/// each other.
 pub fn proximal_edges(
     nodes: &[(&str, GravityBox, &str)],
     supports: &[(&str, &str)],
-    margin: f32,
+    margins: ProximalMargins,
 ) -> Vec<GraphEdge> {
     let related = |a: &str, b: &str| {
         supports
@@ -33,6 +50,11 @@ pub fn proximal_edges(
             {
                 continue;
             }
+            let margin = if *class_a == "wall" || *class_b == "wall" {
+                margins.wall
+            } else {
+                margins.objects
+            };
             if box_a.overlaps(box_b, margin) {
                 edges.push(GraphEdge::Proximal {
                     a: a.to_string(),

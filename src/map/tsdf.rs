@@ -346,6 +346,9 @@ impl TsdfMap {
     }
 }
 
+/// Labels vote within this many voxels of the measured surface.
+const LABEL_BAND_VOXELS: f32 = 2.0;
+
 /// What one frame's integration needs, shared by the threads.
 struct Integrator<'a> {
     camera: Pinhole,
@@ -491,8 +494,10 @@ impl Integrator<'_> {
                 *old = (o + (f32::from(new) - o) * share + 0.5) as u8;
             }
         }
-        // Labels vote only within the band, where the voxel belongs to what the pixel sees.
-        if label != 0 {
+        // Labels vote only near the measured surface, where the voxel belongs to what the pixel
+        // sees: deeper in the band lies whatever is behind it (the wall a few centimetres behind
+        // a sofa would take the sofa's label from every view that sees the sofa in front of it).
+        if label != 0 && sdf.abs() < LABEL_BAND_VOXELS * self.voxel_size {
             if voxel.label == label {
                 voxel.label_weight = (u32::from(voxel.label_weight) + u32::from(weight))
                     .min(u32::from(self.max_weight)) as u16;

@@ -81,7 +81,7 @@ impl Default for ExtractionParams {
         Self {
             surface_band: 0.75,
             min_weight: 2.0,
-            min_surface_voxels: 25,
+            min_surface_voxels: 40,
             min_small_object_voxels: 12,
             small_object_size: 0.3,
             min_layout_voxels: 400,
@@ -90,20 +90,44 @@ impl Default for ExtractionParams {
     }
 }
 
-/// Surface voxels: observed, within the band around the zero crossing.
+/// Surface voxels: observed voxels less than the band from the surface. The distance is the sdf
+/// over its gradient's length: a projective sdf overstates the distance to a surface seen
+/// obliquely by 1 / cos of the angle, and with the sdf alone a plane halfway between voxel centres
+/// (the floor and ceiling of a noise-free render) all but vanished from the map.
 pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, SegmentLabel)> {
     let band = params.surface_band * map.voxel_size;
+    let observed = |v: &crate::map::Voxel| v.weight() >= params.min_weight;
+    let sdf = |key: IVec3| map.voxel(key).filter(|v| observed(v)).map(|v| v.sdf);
+    // |grad sdf| by central differences (one-sided where a neighbour is missing), clamped: noise
+    // makes steep gradients, and obliquity beyond 1 / cos(70 deg) is rare.
+    let stretch = |key: IVec3, s: f32| {
+        let gradient = Vec3::from_array([IVec3::X, IVec3::Y, IVec3::Z].map(|step| {
+            match (sdf(key + step), sdf(key - step)) {
+                (Some(a), Some(b)) => 0.5 * (a - b),
+                (Some(a), None) => a - s,
+                (None, Some(b)) => s - b,
+                (None, None) => 0.0,
+            }
+        })) / map.voxel_size;
+        gradient.length().clamp(1.0, MAX_SDF_STRETCH)
+    };
     let mut out = Vec::new();
     for block in &map.blocks {
         for (i, v) in block.voxels.iter().enumerate() {
-            if v.weight() >= params.min_weight && v.sdf.abs() < band {
-                let local = crate::map::tsdf::voxel_local(i);
-                out.push((block.key * crate::map::BLOCK_SIDE as i32 + local, v.label));
+            if !observed(v) || v.sdf.abs() >= band * MAX_SDF_STRETCH {
+                continue;
+            }
+            let key = block.key * crate::map::BLOCK_SIDE as i32 + crate::map::tsdf::voxel_local(i);
+            if v.sdf.abs() < band || v.sdf.abs() < band * stretch(key, v.sdf) {
+                out.push((key, v.label));
             }
         }
     }
     out
 }
+
+/// The most a projective sdf is taken to overstate the distance to the surface.
+const MAX_SDF_STRETCH: f32 = 3.0;
 
 /// The labels of one (class, instance), with their surface voxels and vote support.
 struct Group {

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::classes::EntityKind;
 use crate::geometry::plane::dominant_planes;
 use crate::geometry::{GravityBox, TriMesh};
-use crate::graph::proximal::{PROXIMAL_MARGIN, proximal_edges};
+use crate::graph::proximal::{ProximalMargins, proximal_edges};
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
 use crate::scene::world::{SceneWorld, Support};
 
@@ -147,7 +147,7 @@ impl SceneWorld {
             .zip(&boxes)
             .map(|(n, b)| (n.id.as_str(), *b, n.class.as_str()))
             .collect();
-        let proximal = proximal_edges(&boxed, &supports, PROXIMAL_MARGIN);
+        let proximal = proximal_edges(&boxed, &supports, ProximalMargins::EXACT);
         edges.extend(proximal);
         ContactGraph { nodes, edges }
     }
