@@ -56,6 +56,9 @@ impl ContactGraphParams {
     /// Parameters for entities out of a map with `voxel` metres voxels.
     pub fn for_voxel(voxel: f32) -> Self {
         Self {
+            // A map's mesh has a vertex every voxel or so: sampling inside its triangles would
+            // multiply the points (and the stage's time) for no new surface.
+            sample_spacing: (2.0 * voxel).max(Self::default().sample_spacing),
             proximal_margins: ProximalMargins {
                 objects: PROXIMAL_MARGIN - voxel,
                 wall: PROXIMAL_MARGIN,
