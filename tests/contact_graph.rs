@@ -116,3 +116,44 @@ fn the_kitchens_contact_graph_has_every_support_right() {
     assert_eq!(contact.ged.parts.support, 0, "every support parent right");
     assert!(contact.obb_map50 >= 0.8, "box mAP {:.3}", contact.obb_map50);
 }
+
+/// Every scene rendered without noise and mapped with ground-truth segmentation (every second
+/// frame): every entity is found and every support parent is right, with boxes near issue 4's bar.
+/// Proximal pairs are not all right yet: furniture 3 to 7 cm from a wall or a neighbour touches
+/// it in a 2 cm map (measured on all frames: 4, 2, 3 and 4 proximal edits), so this asserts the
+/// measured bound, not the goal of none.
+#[test]
+fn clean_renders_get_every_node_and_support_right() {
+    let mut failures = Vec::new();
+    for name in ["kitchen", "office", "living_room", "bedroom"] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let seq = dir.path().join("seq");
+        common::render_scene(name, &seq, 300, true);
+        let out = dir.path().join("out");
+        reconstruct(&ReconstructOptions {
+            input: Some(seq.clone()),
+            out: out.clone(),
+            frames: Some((0, None, 2)),
+            voxel: 0.02,
+            segmentation: SegmentationChoice::Oracle,
+            fusion: InstanceFusion::Joint,
+            estimate_gravity: false,
+            progress: false,
+        })
+        .expect("reconstruct");
+        let eval = evaluate_reconstruction(&out, &seq).expect("eval");
+        let contact = eval.contact_graph.expect("contact-graph metrics");
+        eprintln!(
+            "{name}: PQ {:.3}, obb mAP {:.3}, GED {:?}, unseen {:?}",
+            eval.pq, contact.obb_map50, contact.ged, contact.unseen_truth
+        );
+        let parts = contact.ged.parts;
+        if parts.nodes != 0 || parts.support != 0 || parts.proximal > 4 {
+            failures.push(format!("{name}: edits {parts:?}"));
+        }
+        if contact.obb_map50 < 0.7 {
+            failures.push(format!("{name}: box mAP {:.3}", contact.obb_map50));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -59,6 +59,7 @@ impl ContactGraphParams {
             // A map's mesh has a vertex every voxel or so: sampling inside its triangles would
             // multiply the points (and the stage's time) for no new surface.
             sample_spacing: (2.0 * voxel).max(Self::default().sample_spacing),
+            cluster_cell: 2.0 * voxel,
             proximal_margins: ProximalMargins {
                 objects: PROXIMAL_MARGIN - voxel,
                 wall: PROXIMAL_MARGIN,
