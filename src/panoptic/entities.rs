@@ -74,6 +74,9 @@ pub struct ExtractionParams {
     pub min_layout_voxels: usize,
     /// Metres: a wall instance whose voxels lie this close to a larger wall's plane joins it.
     pub coplanar_distance: f32,
+    /// An instance with at most this share of the surface voxels of an instance of its class that
+    /// it touches is a piece of it and joins it.
+    pub fragment_share: f32,
 }
 
 impl Default for ExtractionParams {
@@ -86,6 +89,7 @@ impl Default for ExtractionParams {
             small_object_size: 0.3,
             min_layout_voxels: 400,
             coplanar_distance: 0.05,
+            fragment_share: 0.05,
         }
     }
 }
@@ -192,6 +196,76 @@ fn merge_coplanar_walls(
     }
 }
 
+/// A piece of an object that instance fusion kept apart (a patch of the oven's top under an
+/// instance of its own) joins the instance of its class it touches (surface voxels 26-adjacent)
+/// when it has at most `share` of that instance's voxels. Two objects of one class that touch
+/// are both whole, and neither is that much smaller than the other. Layout is left alone (a
+/// wall's corner touches the next wall).
+fn absorb_fragments(
+    groups: &mut BTreeMap<(ClassId, InstanceId), Group>,
+    voxels: &[(IVec3, SegmentLabel)],
+    is_object: impl Fn(ClassId) -> bool,
+    share: f32,
+) {
+    let mut group_of_label: BTreeMap<SegmentLabel, (ClassId, InstanceId)> = BTreeMap::new();
+    for (key, g) in groups.iter().filter(|(k, _)| is_object(k.0)) {
+        for &l in &g.labels {
+            group_of_label.insert(l, *key);
+        }
+    }
+    let group_at: std::collections::HashMap<IVec3, (ClassId, InstanceId)> = voxels
+        .iter()
+        .filter_map(|(v, l)| group_of_label.get(l).map(|k| (*v, *k)))
+        .collect();
+    // Smallest first, each into the largest same-class instance it touches that is big enough.
+    let mut order: Vec<(ClassId, InstanceId)> =
+        groups.keys().copied().filter(|k| is_object(k.0)).collect();
+    order.sort_by_key(|k| (groups[k].voxels, *k));
+    // A fragment already absorbed answers for its host.
+    let mut host_of: BTreeMap<(ClassId, InstanceId), (ClassId, InstanceId)> = BTreeMap::new();
+    let resolve = |host_of: &BTreeMap<_, _>, mut k: (ClassId, InstanceId)| {
+        while let Some(&h) = host_of.get(&k) {
+            k = h;
+        }
+        k
+    };
+    for small in order {
+        let size = groups[&small].voxels;
+        let mut touching: BTreeMap<(ClassId, InstanceId), usize> = BTreeMap::new();
+        for (v, k) in &group_at {
+            if *k != small {
+                continue;
+            }
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        if let Some(&other) = group_at.get(&(*v + IVec3::new(dx, dy, dz))) {
+                            let other = resolve(&host_of, other);
+                            if other.0 == small.0 && other != small {
+                                touching.insert(other, groups[&other].voxels);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let host = touching
+            .into_iter()
+            .filter(|(_, n)| size as f32 <= share * *n as f32)
+            .max_by_key(|(k, n)| (*n, std::cmp::Reverse(*k)))
+            .map(|(k, _)| k);
+        if let Some(host) = host {
+            let piece = groups.remove(&small).expect("a group");
+            let into = groups.get_mut(&host).expect("a group");
+            into.labels.extend(piece.labels);
+            into.labels.sort_unstable();
+            into.voxels += piece.voxels;
+            into.weighted_support += piece.weighted_support;
+            host_of.insert(small, host);
+        }
+    }
+}
+
 pub fn extract_entities(
     map: &TsdfMap,
     instances: &InstanceCounts,
@@ -228,6 +302,12 @@ pub fn extract_entities(
     if let Some(wall) = classes.id("wall") {
         merge_coplanar_walls(&mut groups, wall, &voxels, map, params.coplanar_distance);
     }
+    let is_object = |c: ClassId| {
+        table
+            .get(classes.name(c))
+            .is_some_and(|info| info.kind != EntityKind::Layout)
+    };
+    absorb_fragments(&mut groups, &voxels, is_object, params.fragment_share);
     let mut entities: Vec<PanopticEntity> = Vec::new();
     let mut per_class_count: BTreeMap<String, usize> = BTreeMap::new();
     for ((class_id, instance), g) in groups {
@@ -298,6 +378,41 @@ mod tests {
             voxels,
             weighted_support: voxels as f32,
         }
+    }
+
+    #[test]
+    fn a_small_piece_touching_an_instance_of_its_class_joins_it() {
+        // Class 1: a 10x10 patch (label 1), a 2-voxel piece touching it (label 2), and a twin
+        // patch touching it (label 3). Class 2: a piece touching the patch (label 4). Layout
+        // class 9: a piece touching a large wall (labels 5, 6).
+        let mut voxels = Vec::new();
+        for y in 0..10 {
+            for x in 0..10 {
+                voxels.push((IVec3::new(x, y, 0), 1));
+                voxels.push((IVec3::new(x + 10, y, 0), 3));
+                voxels.push((IVec3::new(x, y, 5), 6));
+            }
+        }
+        voxels.extend([
+            (IVec3::new(0, 10, 0), 2),
+            (IVec3::new(1, 10, 0), 2),
+            (IVec3::new(2, 10, 0), 4),
+            (IVec3::new(0, 10, 5), 5),
+        ]);
+        let mut groups = BTreeMap::from([
+            ((1, 1), group(&[1], 100)),
+            ((1, 2), group(&[2], 2)),
+            ((1, 3), group(&[3], 100)),
+            ((2, 4), group(&[4], 1)),
+            ((9, 5), group(&[5], 1)),
+            ((9, 6), group(&[6], 100)),
+        ]);
+        absorb_fragments(&mut groups, &voxels, |c| c != 9, 0.05);
+        assert_eq!(groups[&(1, 1)].labels, vec![1, 2], "the piece joins");
+        assert_eq!(groups[&(1, 1)].voxels, 102);
+        assert!(groups.contains_key(&(1, 3)), "a touching twin stays whole");
+        assert!(groups.contains_key(&(2, 4)), "another class stays");
+        assert!(groups.contains_key(&(9, 5)), "layout is left alone");
     }
 
     #[test]

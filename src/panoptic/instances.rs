@@ -9,7 +9,7 @@
 //! The Voxblox++ baseline tracks the two separately: counts of (label, class) and of
 //! (label, instance), the instance chosen without regard to class.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 
 use crate::map::SegmentLabel;
 
@@ -44,6 +44,9 @@ pub struct LabelIdentity {
     pub votes: u32,
 }
 
+/// Frames in masks of different classes that keep two labels from merging.
+const APART_ACROSS_CLASSES_FRAMES: u32 = 3;
+
 #[derive(Clone, Debug)]
 pub struct InstanceCounts {
     pub mode: InstanceFusion,
@@ -55,9 +58,10 @@ pub struct InstanceCounts {
     /// one class, and in the same mask. Labels seen apart more than together are two objects.
     apart: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     together: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
-    /// Joint only: label pairs seen in masks of different classes in one frame (the floor and the
-    /// wall meeting it): never the same surface, whatever their geometry overlaps.
-    apart_across_classes: BTreeSet<(SegmentLabel, SegmentLabel)>,
+    /// Joint only: frames in which two labels were seen in masks of different classes (the floor
+    /// and the wall meeting it): in enough frames, never the same surface, whatever their geometry
+    /// overlaps.
+    apart_across_classes: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     next_instance: InstanceId,
 }
 
@@ -69,7 +73,7 @@ impl InstanceCounts {
             instance_only: BTreeMap::new(),
             apart: BTreeMap::new(),
             together: BTreeMap::new(),
-            apart_across_classes: BTreeSet::new(),
+            apart_across_classes: BTreeMap::new(),
             next_instance: 1,
         }
     }
@@ -135,10 +139,16 @@ impl InstanceCounts {
         instances
     }
 
-    /// Whether labels `a` and `b` were ever seen in different masks of one frame.
+    /// Whether labels `a` and `b` were seen in different masks of one class in a frame, or in
+    /// masks of different classes in `APART_ACROSS_CLASSES_FRAMES` frames (once could be a
+    /// segmenter's split mask with one part's class confused).
     pub fn seen_apart(&self, a: SegmentLabel, b: SegmentLabel) -> bool {
         let key = (a.min(b), a.max(b));
-        self.apart.contains_key(&key) || self.apart_across_classes.contains(&key)
+        self.apart.contains_key(&key)
+            || self
+                .apart_across_classes
+                .get(&key)
+                .is_some_and(|&n| n >= APART_ACROSS_CLASSES_FRAMES)
     }
 
     fn count_co_observations(&mut self, masks: &[MaskObservation]) {
@@ -147,7 +157,10 @@ impl InstanceCounts {
                 if ma.class != mb.class {
                     for &la in &ma.labels {
                         for &lb in mb.labels.iter().filter(|&&lb| lb != la) {
-                            self.apart_across_classes.insert((la.min(lb), la.max(lb)));
+                            *self
+                                .apart_across_classes
+                                .entry((la.min(lb), la.max(lb)))
+                                .or_default() += 1;
                         }
                     }
                     continue;
@@ -212,7 +225,11 @@ impl InstanceCounts {
 
     /// Moves every count of label `from` onto label `into`.
     pub fn merge_labels(&mut self, from: SegmentLabel, into: SegmentLabel) {
-        for table in [&mut self.apart, &mut self.together] {
+        for table in [
+            &mut self.apart,
+            &mut self.together,
+            &mut self.apart_across_classes,
+        ] {
             let old = std::mem::take(table);
             for ((a, b), n) in old {
                 let (a, b) = (
@@ -222,16 +239,6 @@ impl InstanceCounts {
                 if a != b {
                     *table.entry((a.min(b), a.max(b))).or_default() += n;
                 }
-            }
-        }
-        let old = std::mem::take(&mut self.apart_across_classes);
-        for (a, b) in old {
-            let (a, b) = (
-                if a == from { into } else { a },
-                if b == from { into } else { b },
-            );
-            if a != b {
-                self.apart_across_classes.insert((a.min(b), a.max(b)));
             }
         }
         let moved: Vec<_> = self
@@ -405,8 +412,13 @@ mod tests {
     #[test]
     fn labels_in_masks_of_different_classes_are_apart_through_label_merges() {
         let mut counts = InstanceCounts::new(InstanceFusion::Joint);
-        // The floor and the wall meeting it, in one frame: two surfaces, not one to merge.
+        // The floor and the wall meeting it, frame after frame: two surfaces, not one to merge.
+        // Once is not enough: a split mask with one part's class confused looks the same.
         counts.observe_frame(&[mask(1, &[10]), mask(2, &[20])]);
+        assert!(!counts.seen_apart(10, 20));
+        for _ in 1..APART_ACROSS_CLASSES_FRAMES {
+            counts.observe_frame(&[mask(1, &[10]), mask(2, &[20])]);
+        }
         assert!(counts.seen_apart(10, 20) && counts.seen_apart(20, 10));
         assert!(!counts.seen_apart(10, 30));
         // A label merged into the wall's carries the wall's separation along.
