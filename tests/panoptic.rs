@@ -86,7 +86,7 @@ fn joint_fusion_recovers_the_office_layout_and_objects() {
 }
 
 #[test]
-fn the_same_input_gives_the_same_panoptic_output() {
+fn the_same_input_gives_the_same_panoptic_output_and_contact_graph() {
     let dir = tempfile::tempdir().expect("tempdir");
     let seq = dir.path().join("kitchen.seq");
     common::render_scene("kitchen", &seq, 24, false);
@@ -100,6 +100,9 @@ fn the_same_input_gives_the_same_panoptic_output() {
     );
     assert!(ha.len() > 5);
     assert_eq!(ha, hb);
+    // The contact graph (RANSAC is seeded, the stage runs in parallel) too.
+    let graph = |dir: &Path| std::fs::read(dir.join("contact_graph.json")).expect("contact graph");
+    assert_eq!(graph(&a), graph(&b));
 }
 
 #[test]

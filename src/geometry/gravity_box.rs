@@ -138,6 +138,14 @@ impl GravityBox {
     }
 }
 
+/// Area of the intersection of two convex, counter-clockwise polygons.
+pub fn convex_overlap_area(a: &[glam::Vec2], b: &[glam::Vec2]) -> f32 {
+    if a.len() < 3 || b.len() < 3 {
+        return 0.0;
+    }
+    polygon_area(&clip_convex(a, b)).max(0.0)
+}
+
 /// `subject` clipped by the convex, counter-clockwise polygon `clip` (Sutherland-Hodgman).
 fn clip_convex(subject: &[glam::Vec2], clip: &[glam::Vec2]) -> Vec<glam::Vec2> {
     let mut out = subject.to_vec();

@@ -5,6 +5,8 @@
 use glam::{Vec2, Vec3};
 
 use crate::classes::EntityKind;
+use crate::geometry::gravity_box::convex_overlap_area;
+use crate::geometry::min_area_rect::convex_hull;
 use crate::geometry::{GravityBox, Plane};
 
 #[derive(Clone, Copy, Debug)]
@@ -24,6 +26,10 @@ pub struct SupportParams {
     pub area_cell: f32,
     /// A child this close to a wall (metres) touches it.
     pub wall_touch: f32,
+    /// A parent's surface seen within this distance (metres) around a child's footprint counts
+    /// as continuing under it, out to the outline of the surface (what stands on a table hides
+    /// the table top under it).
+    pub surface_reach: f32,
 }
 
 impl Default for SupportParams {
@@ -36,6 +42,7 @@ impl Default for SupportParams {
             plane_band: 0.03,
             area_cell: 0.02,
             wall_touch: 0.05,
+            surface_reach: 0.05,
         }
     }
 }
@@ -73,16 +80,53 @@ pub fn infer_supports(
     entities: &[SupportEntity],
     params: &SupportParams,
 ) -> Vec<Option<SupportChoice>> {
+    let surfaces: Vec<Vec<UpwardSurface>> = entities
+        .iter()
+        .map(|e| upward_surfaces(e, params))
+        .collect();
     entities
         .iter()
         .enumerate()
-        .map(|(i, e)| (e.kind != EntityKind::Layout).then(|| support_of(i, entities, params))?)
+        .map(|(i, e)| {
+            (e.kind != EntityKind::Layout).then(|| support_of(i, entities, &surfaces, params))?
+        })
+        .collect()
+}
+
+/// One upward plane of an entity with the surface points on it and their outline.
+struct UpwardSurface {
+    plane: Plane,
+    points: Vec<Vec2>,
+    /// Convex hull of `points`, counter-clockwise.
+    outline: Vec<Vec2>,
+}
+
+fn upward_surfaces(entity: &SupportEntity, params: &SupportParams) -> Vec<UpwardSurface> {
+    entity
+        .planes
+        .iter()
+        .filter(|pl| pl.normal.z >= params.up_normal)
+        .map(|&plane| {
+            let points: Vec<Vec2> = entity
+                .vertices
+                .iter()
+                .filter(|v| plane.signed_distance(**v).abs() <= params.plane_band)
+                .map(|v| v.truncate())
+                .collect();
+            let outline = convex_hull(&points);
+            UpwardSurface {
+                plane,
+                points,
+                outline,
+            }
+        })
         .collect()
 }
 
 fn support_of(
     child: usize,
     entities: &[SupportEntity],
+    surfaces: &[Vec<UpwardSurface>],
     params: &SupportParams,
 ) -> Option<SupportChoice> {
     let c = &entities[child];
@@ -105,11 +149,8 @@ fn support_of(
         // The floor is seen only around what stands on it: its extent, not its vertices, says
         // where it holds.
         let layout_floor = parent.class == "floor";
-        for plane in parent
-            .planes
-            .iter()
-            .filter(|pl| pl.normal.z >= params.up_normal)
-        {
+        for surface in &surfaces[p] {
+            let plane = &surface.plane;
             let height = plane_height(plane, c.bbox.center.truncate());
             if height > bottom + params.above_tolerance {
                 continue;
@@ -121,13 +162,28 @@ fn support_of(
             let area = if layout_floor {
                 footprint.overlap_with_box(&parent.bbox)
             } else {
-                footprint.covered_by(
-                    parent
-                        .vertices
-                        .iter()
-                        .filter(|v| plane.signed_distance(**v).abs() <= params.plane_band),
-                    params.area_cell,
-                )
+                let seen = footprint.covered_by(surface.points.iter().copied(), params.area_cell);
+                // Where the surface is seen right around the child, it runs on under it to its
+                // outline.
+                let around = Footprint::of(&GravityBox {
+                    size: footprint.bbox.size + Vec3::new(2.0, 2.0, 0.0) * params.surface_reach,
+                    ..footprint.bbox
+                });
+                let continues = surface
+                    .points
+                    .iter()
+                    .filter(|q| around.contains(**q) && !footprint.contains(**q))
+                    .take(3)
+                    .count()
+                    == 3;
+                if continues {
+                    seen.max(
+                        convex_overlap_area(&footprint.bbox.footprint(), &surface.outline)
+                            / footprint.area().max(1e-9),
+                    )
+                } else {
+                    seen
+                }
             };
             if area >= params.min_area {
                 consider(SupportChoice::Below {
@@ -162,7 +218,7 @@ fn support_of(
             .filter(|v| v.z >= bottom - params.max_gap && v.z <= bottom + params.above_tolerance)
             .filter(|v| footprint.contains(v.truncate()))
             .collect();
-        let area = footprint.covered_by(under.iter().copied(), params.area_cell);
+        let area = footprint.covered_by(under.iter().map(|v| v.truncate()), params.area_cell);
         if area < params.min_area {
             continue;
         }
@@ -247,7 +303,7 @@ impl Footprint {
     }
 
     /// Share of the footprint whose grid cells hold at least one of `points`.
-    fn covered_by<'p>(&self, points: impl Iterator<Item = &'p Vec3>, cell: f32) -> f32 {
+    fn covered_by(&self, points: impl Iterator<Item = Vec2>, cell: f32) -> f32 {
         let half = self.bbox.size.truncate() * 0.5;
         let cells = (self.bbox.size.truncate() / cell)
             .ceil()
@@ -255,7 +311,7 @@ impl Footprint {
             .as_uvec2();
         let mut hit = vec![false; (cells.x * cells.y) as usize];
         for p in points {
-            let l = self.local(p.truncate()) + half;
+            let l = self.local(p) + half;
             if l.x < 0.0 || l.y < 0.0 || l.x >= self.bbox.size.x || l.y >= self.bbox.size.y {
                 continue;
             }
@@ -416,6 +472,58 @@ mod tests {
             "{:?}",
             supports[7]
         );
+    }
+
+    #[test]
+    fn a_book_hiding_the_table_top_rests_on_the_table_plane() {
+        let floor = slab(Vec3::new(2.0, 2.0, -0.05), Vec3::new(4.0, 4.0, 0.1));
+        let table = slab(Vec3::new(1.0, 1.0, 0.375), Vec3::new(1.2, 0.8, 0.75));
+        // Only the book's top was seen, 4 cm above the table (beyond the plane's band).
+        let book = slab(Vec3::new(1.1, 0.9, 0.79), Vec3::new(0.2, 0.15, 0.0));
+        let up = |b: &GravityBox| Plane::from_point_normal(Vec3::new(0.0, 0.0, b.top_z()), Vec3::Z);
+        // The table top is seen around the book, not under it; a strip of the book's top took
+        // the table's label (bleeding), so "the table's surface under the book" is up there.
+        let footprint = Footprint::of(&book);
+        let mut table_vertices: Vec<Vec3> = top_vertices(&table)
+            .into_iter()
+            .filter(|v| !footprint.contains(v.truncate()))
+            .collect();
+        table_vertices.extend(
+            top_vertices(&book)
+                .into_iter()
+                .map(|v| v.with_z(book.top_z())),
+        );
+        let planes = [vec![up(&floor)], vec![up(&table)], vec![up(&book)]];
+        let vertices = [vec![], table_vertices, top_vertices(&book)];
+        let boxes = [floor, table, book];
+        let classes = ["floor", "table", "book"];
+        let entities: Vec<SupportEntity> = (0..3)
+            .map(|i| SupportEntity {
+                class: classes[i],
+                kind: if i == 0 {
+                    EntityKind::Layout
+                } else {
+                    EntityKind::Rigid
+                },
+                movable: i == 2,
+                bbox: boxes[i],
+                planes: &planes[i],
+                vertices: &vertices[i],
+            })
+            .collect();
+        let supports = infer_supports(&entities, &SupportParams::default());
+        let Some(SupportChoice::Below {
+            parent,
+            plane,
+            registered,
+            ..
+        }) = supports[2]
+        else {
+            panic!("the book is not held from below: {:?}", supports[2]);
+        };
+        assert_eq!((parent, registered), (1, false), "on the table's own plane");
+        let rested = rest_on(&book, &plane);
+        assert!((rested.bottom_z() - 0.75).abs() < 1e-5, "{rested:?}");
     }
 
     #[test]
