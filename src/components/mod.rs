@@ -3,12 +3,14 @@
 //! A scene entity (a piece of layout or an object) carries its `SceneEntity` id and `Panoptic`
 //! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, and once
 //! replaced its `CadModel`. Support is Bevy's `ChildOf`: the parent supports the child, and the
-//! child's `Joint` says how it may move relative to it.
+//! child's `Joint` says how it may move relative to it. `ProximalTo` lists its proximal
+//! neighbours.
 
 pub mod cad_model;
 pub mod joint;
 pub mod oriented_box;
 pub mod panoptic;
+pub mod proximal;
 pub mod segment_mesh;
 pub mod surface_planes;
 
@@ -16,5 +18,6 @@ pub use cad_model::CadModel;
 pub use joint::Joint;
 pub use oriented_box::OrientedBox;
 pub use panoptic::{Panoptic, SceneEntity};
+pub use proximal::ProximalTo;
 pub use segment_mesh::SegmentMesh;
 pub use surface_planes::SurfacePlanes;

@@ -7,9 +7,11 @@ use bevy::prelude::*;
 use glam::{Affine3A, Mat4};
 
 use crate::classes::{ClassTable, EntityKind};
-use crate::components::{CadModel, Joint, OrientedBox, Panoptic, SceneEntity, SurfacePlanes};
+use crate::components::{
+    CadModel, Joint, OrientedBox, Panoptic, ProximalTo, SceneEntity, SurfacePlanes,
+};
 use crate::geometry::{GravityBox, Plane};
-use crate::graph::ContactGraph;
+use crate::graph::{ContactGraph, GraphEdge};
 use crate::kinematics::JointSpec;
 
 /// Marks the root of the kinematic tree (the world frame).
@@ -65,7 +67,8 @@ pub fn spawn_contact_graph(
 
 /// Gives the entities of `graph`'s nodes (`entities`: node id to entity) their boxes, planes and
 /// CAD models, and hangs them under a new `SceneRoot` as the support tree says: `ChildOf` the
-/// supporting entity, a `Joint`, and a `Transform` relative to the parent.
+/// supporting entity, a `Joint`, and a `Transform` relative to the parent; proximal pairs become
+/// `ProximalTo` on both ends.
 pub fn attach_contact_graph(
     world: &mut World,
     graph: &ContactGraph,
@@ -120,6 +123,18 @@ pub fn attach_contact_graph(
             },
         ));
     }
+    let mut proximal: HashMap<&str, Vec<Entity>> = HashMap::new();
+    for edge in &graph.edges {
+        if let GraphEdge::Proximal { a, b } = edge {
+            proximal.entry(a).or_default().push(entities[b]);
+            proximal.entry(b).or_default().push(entities[a]);
+        }
+    }
+    for (id, neighbours) in proximal {
+        world
+            .entity_mut(entities[id])
+            .insert(ProximalTo(neighbours));
+    }
     Ok(root)
 }
 
@@ -164,6 +179,12 @@ mod tests {
             world.get::<Joint>(table).map(|j| j.spec.kind),
             Some(crate::kinematics::JointKind::Fixed)
         );
+        // The chair pulled up to the table touches it; the cup on the table is supported, so
+        // not proximal.
+        let chair = entities["chair_1"];
+        let near = |e: Entity| world.get::<ProximalTo>(e).map_or(&[][..], |p| &p.0[..]);
+        assert!(near(table).contains(&chair) && near(chair).contains(&table));
+        assert!(!near(table).contains(&cup));
         let global = world.get::<GlobalTransform>(cup).expect("global transform");
         let cad = world.get::<CadModel>(cup).expect("cad");
         let expected = Vec3::from(cad.world_from_model.translation);
