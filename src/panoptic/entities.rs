@@ -94,25 +94,35 @@ impl Default for ExtractionParams {
     }
 }
 
-/// Surface voxels: observed voxels less than the band from the surface. The distance is the sdf
-/// over its gradient's length: a projective sdf overstates the distance to a surface seen
-/// obliquely by 1 / cos of the angle, and with the sdf alone a plane halfway between voxel centres
-/// (the floor and ceiling of a noise-free render) all but vanished from the map.
+/// Surface voxels: observed voxels less than the band from the surface, and the nearer voxel of
+/// every pair of neighbours the surface passes between when it is less than the band from it once
+/// its sdf is divided by the sdf gradient's length: a projective sdf overstates the distance to a
+/// surface seen obliquely by 1 / cos of the angle, and with the sdf alone a plane halfway between
+/// voxel centres (the floor and ceiling of a noise-free render) all but vanished from the map.
+/// Only the nearer voxel, so noisy surfaces, whose gradients are steep everywhere, do not
+/// thicken.
 pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, SegmentLabel)> {
     let band = params.surface_band * map.voxel_size;
     let observed = |v: &crate::map::Voxel| v.weight() >= params.min_weight;
     let sdf = |key: IVec3| map.voxel(key).filter(|v| observed(v)).map(|v| v.sdf);
-    // |grad sdf| by central differences (one-sided where a neighbour is missing), clamped: noise
-    // makes steep gradients, and obliquity beyond 1 / cos(70 deg) is rare.
+    let steps = [IVec3::X, IVec3::Y, IVec3::Z];
+    let nearer_side_of_crossing = |key: IVec3, s: f32| {
+        steps
+            .iter()
+            .flat_map(|&step| [key + step, key - step])
+            .filter_map(sdf)
+            .any(|n| (n < 0.0) != (s < 0.0) && s.abs() <= n.abs())
+    };
+    // |grad sdf| by central differences (one-sided where a neighbour is missing), clamped:
+    // obliquity beyond 1 / cos(70 deg) is rare.
     let stretch = |key: IVec3, s: f32| {
-        let gradient = Vec3::from_array([IVec3::X, IVec3::Y, IVec3::Z].map(|step| {
-            match (sdf(key + step), sdf(key - step)) {
+        let gradient =
+            Vec3::from_array(steps.map(|step| match (sdf(key + step), sdf(key - step)) {
                 (Some(a), Some(b)) => 0.5 * (a - b),
                 (Some(a), None) => a - s,
                 (None, Some(b)) => s - b,
                 (None, None) => 0.0,
-            }
-        })) / map.voxel_size;
+            })) / map.voxel_size;
         gradient.length().clamp(1.0, MAX_SDF_STRETCH)
     };
     let mut out = Vec::new();
@@ -122,7 +132,9 @@ pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, S
                 continue;
             }
             let key = block.key * crate::map::BLOCK_SIDE as i32 + crate::map::tsdf::voxel_local(i);
-            if v.sdf.abs() < band || v.sdf.abs() < band * stretch(key, v.sdf) {
+            if v.sdf.abs() < band
+                || (nearer_side_of_crossing(key, v.sdf) && v.sdf.abs() < band * stretch(key, v.sdf))
+            {
                 out.push((key, v.label));
             }
         }

@@ -44,9 +44,6 @@ pub struct LabelIdentity {
     pub votes: u32,
 }
 
-/// Frames in masks of different classes that keep two labels from merging.
-const APART_ACROSS_CLASSES_FRAMES: u32 = 3;
-
 #[derive(Clone, Debug)]
 pub struct InstanceCounts {
     pub mode: InstanceFusion,
@@ -58,10 +55,6 @@ pub struct InstanceCounts {
     /// one class, and in the same mask. Labels seen apart more than together are two objects.
     apart: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     together: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
-    /// Joint only: frames in which two labels were seen in masks of different classes (the floor
-    /// and the wall meeting it): in enough frames, never the same surface, whatever their geometry
-    /// overlaps.
-    apart_across_classes: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     next_instance: InstanceId,
 }
 
@@ -73,7 +66,6 @@ impl InstanceCounts {
             instance_only: BTreeMap::new(),
             apart: BTreeMap::new(),
             together: BTreeMap::new(),
-            apart_across_classes: BTreeMap::new(),
             next_instance: 1,
         }
     }
@@ -139,30 +131,15 @@ impl InstanceCounts {
         instances
     }
 
-    /// Whether labels `a` and `b` were seen in different masks of one class in a frame, or in
-    /// masks of different classes in `APART_ACROSS_CLASSES_FRAMES` frames (once could be a
-    /// segmenter's split mask with one part's class confused).
+    /// Whether labels `a` and `b` were ever seen in different masks of one class in a frame.
     pub fn seen_apart(&self, a: SegmentLabel, b: SegmentLabel) -> bool {
-        let key = (a.min(b), a.max(b));
-        self.apart.contains_key(&key)
-            || self
-                .apart_across_classes
-                .get(&key)
-                .is_some_and(|&n| n >= APART_ACROSS_CLASSES_FRAMES)
+        self.apart.contains_key(&(a.min(b), a.max(b)))
     }
 
     fn count_co_observations(&mut self, masks: &[MaskObservation]) {
         for (a, ma) in masks.iter().enumerate() {
             for (b, mb) in masks.iter().enumerate().skip(a) {
                 if ma.class != mb.class {
-                    for &la in &ma.labels {
-                        for &lb in mb.labels.iter().filter(|&&lb| lb != la) {
-                            *self
-                                .apart_across_classes
-                                .entry((la.min(lb), la.max(lb)))
-                                .or_default() += 1;
-                        }
-                    }
                     continue;
                 }
                 for &la in &ma.labels {
@@ -225,11 +202,7 @@ impl InstanceCounts {
 
     /// Moves every count of label `from` onto label `into`.
     pub fn merge_labels(&mut self, from: SegmentLabel, into: SegmentLabel) {
-        for table in [
-            &mut self.apart,
-            &mut self.together,
-            &mut self.apart_across_classes,
-        ] {
+        for table in [&mut self.apart, &mut self.together] {
             let old = std::mem::take(table);
             for ((a, b), n) in old {
                 let (a, b) = (
@@ -315,6 +288,19 @@ impl InstanceCounts {
             .range((l, 0, 0)..=(l, ClassId::MAX, InstanceId::MAX))
             .map(|((_, c, p), n)| (*c, *p, *n))
             .collect()
+    }
+
+    /// Whether `a` and `b` resolve to two classes, each on at least `min_votes` mask votes (the
+    /// floor and the wall meeting it): two surfaces, however much their voxels overlap. A label
+    /// with fewer votes may be a fragment whose class the segmenter confused. Joint only.
+    pub fn of_different_classes(&self, a: SegmentLabel, b: SegmentLabel, min_votes: u32) -> bool {
+        if self.mode != InstanceFusion::Joint {
+            return false;
+        }
+        match (self.identity(a), self.identity(b)) {
+            (Some(x), Some(y)) => x.class != y.class && x.votes.min(y.votes) >= min_votes,
+            _ => false,
+        }
     }
 
     /// class = argmax_c sum_p Phi(l, c, p); instance = argmax_p Phi(l, class, p) (joint), or the
@@ -410,21 +396,22 @@ mod tests {
     }
 
     #[test]
-    fn labels_in_masks_of_different_classes_are_apart_through_label_merges() {
+    fn labels_voted_into_two_classes_are_of_different_classes() {
         let mut counts = InstanceCounts::new(InstanceFusion::Joint);
-        // The floor and the wall meeting it, frame after frame: two surfaces, not one to merge.
-        // Once is not enough: a split mask with one part's class confused looks the same.
-        counts.observe_frame(&[mask(1, &[10]), mask(2, &[20])]);
-        assert!(!counts.seen_apart(10, 20));
-        for _ in 1..APART_ACROSS_CLASSES_FRAMES {
+        for _ in 0..3 {
             counts.observe_frame(&[mask(1, &[10]), mask(2, &[20])]);
         }
-        assert!(counts.seen_apart(10, 20) && counts.seen_apart(20, 10));
-        assert!(!counts.seen_apart(10, 30));
-        // A label merged into the wall's carries the wall's separation along.
-        counts.merge_labels(20, 30);
-        assert!(counts.seen_apart(10, 30));
-        assert!(!counts.seen_apart(10, 20));
+        // A fragment seen once under a confused class.
+        counts.observe_frame(&[mask(2, &[30])]);
+        assert!(counts.of_different_classes(10, 20, 3));
+        assert!(
+            !counts.of_different_classes(10, 30, 3),
+            "too few votes to tell"
+        );
+        assert!(!counts.of_different_classes(10, 99, 3), "never seen");
+        let mut baseline = InstanceCounts::new(InstanceFusion::Voxblox);
+        baseline.observe_frame(&[mask(1, &[10]), mask(2, &[20])]);
+        assert!(!baseline.of_different_classes(10, 20, 1));
     }
 
     #[test]

@@ -292,8 +292,14 @@ impl PanopticMapper {
         let mut parent: Vec<SegmentLabel> = (0..self.next_label).collect();
         let mut merged = 0;
         for (&(a, b), &n) in &self.pair_counts {
-            // Never merge what a segmenter saw as two objects (flush cabinet fronts, for one).
-            if n >= self.params.merge_frames && !self.instances.seen_apart(a, b) {
+            // Never merge what a segmenter saw as two objects (flush cabinet fronts, for one) nor
+            // what resolved to two classes (the floor and the wall meeting it in a corner).
+            if n >= self.params.merge_frames
+                && !self.instances.seen_apart(a, b)
+                && !self
+                    .instances
+                    .of_different_classes(a, b, self.params.merge_frames)
+            {
                 crate::panoptic::geometric::union(&mut parent, a, b);
                 merged += 1;
             }
