@@ -8,6 +8,16 @@ use glam::{IVec3, Vec3};
 /// The points of the largest cluster (most points) at grid resolution `cell` metres, in input
 /// order; ties keep the cluster that starts first.
 pub fn largest_cluster(points: &[Vec3], cell: f32) -> Vec<Vec3> {
+    points
+        .iter()
+        .zip(in_largest_cluster(points, cell))
+        .filter(|(_, keep)| *keep)
+        .map(|(p, _)| *p)
+        .collect()
+}
+
+/// Per point, whether it belongs to the largest cluster of `largest_cluster`.
+pub fn in_largest_cluster(points: &[Vec3], cell: f32) -> Vec<bool> {
     let key = |p: &Vec3| (*p / cell).floor().as_ivec3();
     let mut cells: HashMap<IVec3, usize> = HashMap::new();
     for p in points.iter().filter(|p| p.is_finite()) {
@@ -46,15 +56,10 @@ pub fn largest_cluster(points: &[Vec3], cell: f32) -> Vec<Vec3> {
         }
         root_of_point.push(root);
     }
-    let Some(best) = (0..count.len()).max_by(|a, b| count[*a].cmp(&count[*b]).then(b.cmp(a)))
-    else {
-        return Vec::new();
-    };
-    points
-        .iter()
-        .zip(root_of_point)
-        .filter(|(_, r)| *r == Some(best))
-        .map(|(p, _)| *p)
+    let best = (0..count.len()).max_by(|a, b| count[*a].cmp(&count[*b]).then(b.cmp(a)));
+    root_of_point
+        .into_iter()
+        .map(|r| r.is_some() && r == best)
         .collect()
 }
 

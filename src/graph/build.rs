@@ -8,7 +8,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::classes::{ClassTable, EntityKind};
-use crate::geometry::clusters::largest_cluster;
+use crate::geometry::clusters::in_largest_cluster;
 use crate::geometry::plane::fit_plane;
 use crate::geometry::ransac::{RansacParams, ransac_planes};
 use crate::geometry::{GravityBox, Plane, TriMesh};
@@ -50,6 +50,9 @@ pub struct ContactGraphParams {
     /// the way that layout surface faces, are the layout's: segmentation bleeds an object's label
     /// onto the wall behind it, and a surface that close cannot be told from the wall anyway.
     pub layout_band: f32,
+    /// Likewise an object's points within this distance (metres) of the plane that supports it,
+    /// facing up like it, are the parent's (tighter: a book lying on a table is 2 cm thick).
+    pub support_band: f32,
 }
 
 impl ContactGraphParams {
@@ -79,13 +82,16 @@ impl Default for ContactGraphParams {
             square_with_room_area: 1.1,
             proximal_margins: ProximalMargins::EXACT,
             layout_band: 0.02,
+            support_band: 0.01,
         }
     }
 }
 
-/// An entity's geometry for the graph: surface points, box, planes.
+/// An entity's geometry for the graph: surface points (with their normals for objects), box,
+/// planes.
 struct Shape {
     points: Vec<Vec3>,
+    normals: Vec<Vec3>,
     bbox: GravityBox,
     planes: Vec<Plane>,
 }
@@ -116,7 +122,8 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
     );
     // Entity order, as given: the graph's nodes and edges come out in it.
     shaped.sort_by_key(|(i, _)| *i);
-    if let Some(yaw) = room_yaw(entities, &shaped) {
+    let yaw = room_yaw(entities, &shaped);
+    if let Some(yaw) = yaw {
         for (i, shape) in &mut shaped {
             if entities[*i].kind != EntityKind::Layout {
                 shape.bbox = square_with_room(&shape.bbox, &shape.points, yaw, params);
@@ -149,6 +156,11 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
                 registered,
                 ..
             } => {
+                if !registered
+                    && let Some(b) = box_off_support(&shaped[child].1, &plane, yaw, params)
+                {
+                    boxes[child] = b;
+                }
                 boxes[child] = rest_on(&boxes[child], &plane);
                 if registered {
                     planes[parent].push(plane);
@@ -203,6 +215,34 @@ fn room_yaw(entities: &[GraphEntity], shaped: &[(usize, Shape)]) -> Option<f32> 
         .map(|p| glam::Vec2::from_angle(4.0 * p.normal.y.atan2(p.normal.x)))
         .sum();
     (sum.length() > 1e-3).then(|| 0.25 * sum.y.atan2(sum.x))
+}
+
+/// The box of an object without its points that lie on the surface holding it and face the way
+/// it faces (segmentation bleeds a cup's label onto the counter around its base); `None` when
+/// nothing is dropped or too little is left.
+fn box_off_support(
+    shape: &Shape,
+    plane: &Plane,
+    room_yaw: Option<f32>,
+    params: &ContactGraphParams,
+) -> Option<GravityBox> {
+    let kept: Vec<Vec3> = shape
+        .points
+        .iter()
+        .zip(&shape.normals)
+        .filter(|(p, n)| {
+            plane.signed_distance(**p) >= params.support_band || n.dot(plane.normal) <= 0.85
+        })
+        .map(|(p, _)| *p)
+        .collect();
+    if kept.len() == shape.points.len() || kept.len() * 2 < shape.points.len() {
+        return None;
+    }
+    let minimal = GravityBox::minimal(&kept)?;
+    Some(match room_yaw {
+        Some(yaw) => square_with_room(&minimal, &kept, yaw, params),
+        None => minimal,
+    })
 }
 
 /// `bbox`, or the box of `points` square with the room when its footprint is nearly as small.
@@ -279,6 +319,7 @@ fn layout_shape(
     };
     Some(Shape {
         points: inliers,
+        normals: Vec::new(),
         bbox,
         planes: vec![plane],
     })
@@ -295,15 +336,21 @@ fn object_shape(
             .iter()
             .any(|l| l.signed_distance(p) < params.layout_band && n.dot(l.normal) > 0.85)
     };
-    let points: Vec<Vec3> = surface
+    let (points, normals): (Vec<Vec3>, Vec<Vec3>) = surface
         .points
         .iter()
         .zip(&surface.normals)
         .filter(|(p, n)| !on_layout(**p, **n))
-        .map(|(p, _)| *p)
-        .collect();
+        .unzip();
     // Stray pieces (label bleeding onto a neighbour) would stretch the box.
-    let points = largest_cluster(&points, params.cluster_cell);
+    let keep = in_largest_cluster(&points, params.cluster_cell);
+    let (points, normals): (Vec<Vec3>, Vec<Vec3>) = points
+        .into_iter()
+        .zip(normals)
+        .zip(keep)
+        .filter(|(_, k)| *k)
+        .map(|(pn, _)| pn)
+        .unzip();
     if points.len() < 3 {
         return None;
     }
@@ -314,6 +361,7 @@ fn object_shape(
         .collect();
     Some(Shape {
         points,
+        normals,
         bbox,
         planes,
     })
@@ -378,4 +426,43 @@ pub fn surface_points(mesh: &TriMesh, spacing: f32) -> SurfacePoints {
         }
     }
     SurfacePoints { points, normals }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cups_label_bled_onto_the_counter_leaves_its_box() {
+        // An 8 cm cup standing on a counter at z = 0.9, and a 6 cm ring of counter top around its
+        // base that took the cup's label.
+        let cup = TriMesh::cylinder(Vec3::new(0.0, 0.0, 0.9), 0.04, 0.1, 24);
+        let mut points = surface_points(&cup, 0.01);
+        for i in 0..24 {
+            let angle = i as f32 / 24.0 * std::f32::consts::TAU;
+            for r in [0.05, 0.07, 0.1] {
+                points
+                    .points
+                    .push(Vec3::new(r * angle.cos(), r * angle.sin(), 0.9));
+                points.normals.push(Vec3::Z);
+            }
+        }
+        let shape = Shape {
+            bbox: GravityBox::minimal(&points.points).expect("points"),
+            points: points.points,
+            normals: points.normals,
+            planes: Vec::new(),
+        };
+        assert!(shape.bbox.size.x > 0.19, "the ring stretches the box");
+        let counter = Plane::from_point_normal(Vec3::new(0.0, 0.0, 0.9), Vec3::Z);
+        let params = ContactGraphParams::default();
+        let b = box_off_support(&shape, &counter, Some(0.0), &params).expect("a smaller box");
+        assert!(
+            (b.size.x - 0.08).abs() < 0.005 && (b.size.y - 0.08).abs() < 0.005,
+            "{b:?}"
+        );
+        // Nothing on the counter: nothing to drop.
+        let high = Plane::from_point_normal(Vec3::new(0.0, 0.0, 0.5), Vec3::Z);
+        assert_eq!(box_off_support(&shape, &high, Some(0.0), &params), None);
+    }
 }
