@@ -5,18 +5,8 @@ use std::collections::HashMap;
 
 use glam::{IVec3, Vec3};
 
-/// The points of the largest cluster (most points) at grid resolution `cell` metres, in input
-/// order; ties keep the cluster that starts first.
-pub fn largest_cluster(points: &[Vec3], cell: f32) -> Vec<Vec3> {
-    points
-        .iter()
-        .zip(in_largest_cluster(points, cell))
-        .filter(|(_, keep)| *keep)
-        .map(|(p, _)| *p)
-        .collect()
-}
-
-/// Per point, whether it belongs to the largest cluster of `largest_cluster`.
+/// Per point, whether it belongs to the largest cluster (most points) at grid resolution `cell`
+/// metres; ties keep the cluster that starts first.
 pub fn in_largest_cluster(points: &[Vec3], cell: f32) -> Vec<bool> {
     let key = |p: &Vec3| (*p / cell).floor().as_ivec3();
     let mut cells: HashMap<IVec3, usize> = HashMap::new();
@@ -73,9 +63,9 @@ mod tests {
             .map(|i| Vec3::new(i as f32 * 0.02, 0.0, 0.0))
             .collect();
         points.extend((0..10).map(|i| Vec3::new(3.0 + i as f32 * 0.02, 1.0, 0.0)));
-        let kept = largest_cluster(&points, 0.05);
-        assert_eq!(kept.len(), 50);
-        assert!(kept.iter().all(|p| p.x < 1.0));
-        assert!(largest_cluster(&[], 0.05).is_empty());
+        let keep = in_largest_cluster(&points, 0.05);
+        assert_eq!(keep.iter().filter(|k| **k).count(), 50);
+        assert!(points.iter().zip(&keep).all(|(p, k)| *k == (p.x < 1.0)));
+        assert!(in_largest_cluster(&[], 0.05).is_empty());
     }
 }

@@ -123,11 +123,9 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
     // Entity order, as given: the graph's nodes and edges come out in it.
     shaped.sort_by_key(|(i, _)| *i);
     let yaw = room_yaw(entities, &shaped);
-    if let Some(yaw) = yaw {
-        for (i, shape) in &mut shaped {
-            if entities[*i].kind != EntityKind::Layout {
-                shape.bbox = square_with_room(&shape.bbox, &shape.points, yaw, params);
-            }
+    for (i, shape) in &mut shaped {
+        if entities[*i].kind != EntityKind::Layout {
+            shape.bbox = square_with_room(&shape.bbox, &shape.points, yaw, params);
         }
     }
     let table = ClassTable::builtin();
@@ -230,29 +228,31 @@ fn box_off_support(
         .points
         .iter()
         .zip(&shape.normals)
-        .filter(|(p, n)| {
-            plane.signed_distance(**p) >= params.support_band || n.dot(plane.normal) <= 0.85
-        })
+        .filter(|(p, n)| !lies_on(plane, **p, **n, params.support_band))
         .map(|(p, _)| *p)
         .collect();
     if kept.len() == shape.points.len() || kept.len() * 2 < shape.points.len() {
         return None;
     }
     let minimal = GravityBox::minimal(&kept)?;
-    Some(match room_yaw {
-        Some(yaw) => square_with_room(&minimal, &kept, yaw, params),
-        None => minimal,
-    })
+    Some(square_with_room(&minimal, &kept, room_yaw, params))
 }
 
-/// `bbox`, or the box of `points` square with the room when its footprint is nearly as small.
+/// Whether a surface point with normal `n` lies on `surface` (less than `band` in front of it, or
+/// behind it) and faces the way it does: then it is that surface, whatever label it took.
+fn lies_on(surface: &Plane, p: Vec3, n: Vec3, band: f32) -> bool {
+    surface.signed_distance(p) < band && n.dot(surface.normal) > 0.85
+}
+
+/// `bbox`, or the box of `points` square with the room (walls' yaw `room_yaw`, if there are
+/// walls) when its footprint is nearly as small.
 fn square_with_room(
     bbox: &GravityBox,
     points: &[Vec3],
-    room_yaw: f32,
+    room_yaw: Option<f32>,
     params: &ContactGraphParams,
 ) -> GravityBox {
-    match GravityBox::enclosing(points, room_yaw) {
+    match room_yaw.and_then(|yaw| GravityBox::enclosing(points, yaw)) {
         Some(square)
             if square.size.x * square.size.y
                 <= params.square_with_room_area * bbox.size.x * bbox.size.y =>
@@ -334,7 +334,7 @@ fn object_shape(
     let on_layout = |p: Vec3, n: Vec3| {
         claiming
             .iter()
-            .any(|l| l.signed_distance(p) < params.layout_band && n.dot(l.normal) > 0.85)
+            .any(|l| lies_on(l, p, n, params.layout_band))
     };
     let (points, normals): (Vec<Vec3>, Vec<Vec3>) = surface
         .points

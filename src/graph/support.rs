@@ -101,7 +101,9 @@ struct UpwardSurface {
     outline: Vec<Vec2>,
 }
 
+/// The floor holds by box overlap, not by its points (`support_of`): its surfaces carry none.
 fn upward_surfaces(entity: &SupportEntity, params: &SupportParams) -> Vec<UpwardSurface> {
+    let by_points = entity.class != "floor";
     entity
         .planes
         .iter()
@@ -110,7 +112,7 @@ fn upward_surfaces(entity: &SupportEntity, params: &SupportParams) -> Vec<Upward
             let points: Vec<Vec2> = entity
                 .vertices
                 .iter()
-                .filter(|v| plane.signed_distance(**v).abs() <= params.plane_band)
+                .filter(|v| by_points && plane.signed_distance(**v).abs() <= params.plane_band)
                 .map(|v| v.truncate())
                 .collect();
             let outline = convex_hull(&points);

@@ -152,6 +152,20 @@ struct Group {
     weighted_support: f32,
 }
 
+/// Moves group `from` into group `into`: its labels, voxels and vote support.
+fn merge_group(
+    groups: &mut BTreeMap<(ClassId, InstanceId), Group>,
+    from: (ClassId, InstanceId),
+    into: (ClassId, InstanceId),
+) {
+    let piece = groups.remove(&from).expect("the group to merge");
+    let host = groups.get_mut(&into).expect("the group merged into");
+    host.labels.extend(piece.labels);
+    host.labels.sort_unstable();
+    host.voxels += piece.voxels;
+    host.weighted_support += piece.weighted_support;
+}
+
 /// A wall is a plane: wall instances whose voxels lie on the plane of a larger wall instance are
 /// pieces of it (a wall seen in parts, a mask split by the segmenter) and join it.
 fn merge_coplanar_walls(
@@ -196,12 +210,7 @@ fn merge_coplanar_walls(
         });
         match host {
             Some(h) => {
-                let piece = groups.remove(&walls[k]).expect("a wall group");
-                let into = groups.get_mut(&walls[h]).expect("a wall group");
-                into.labels.extend(piece.labels);
-                into.labels.sort_unstable();
-                into.voxels += piece.voxels;
-                into.weighted_support += piece.weighted_support;
+                merge_group(groups, walls[k], walls[h]);
             }
             None => kept.push(k),
         }
@@ -267,12 +276,7 @@ fn absorb_fragments(
             .max_by_key(|(k, n)| (*n, std::cmp::Reverse(*k)))
             .map(|(k, _)| k);
         if let Some(host) = host {
-            let piece = groups.remove(&small).expect("a group");
-            let into = groups.get_mut(&host).expect("a group");
-            into.labels.extend(piece.labels);
-            into.labels.sort_unstable();
-            into.voxels += piece.voxels;
-            into.weighted_support += piece.weighted_support;
+            merge_group(groups, small, host);
             host_of.insert(small, host);
         }
     }
