@@ -238,6 +238,18 @@ fn absorb_fragments(
         .iter()
         .filter_map(|(v, l)| group_of_label.get(l).map(|k| (*v, *k)))
         .collect();
+    let mut voxels_of: BTreeMap<(ClassId, InstanceId), Vec<IVec3>> = BTreeMap::new();
+    for (v, l) in voxels {
+        if let Some(k) = group_of_label.get(l) {
+            voxels_of.entry(*k).or_default().push(*v);
+        }
+    }
+    // Only a group this small next to the largest of its class can be a fragment at all.
+    let mut largest: BTreeMap<ClassId, usize> = BTreeMap::new();
+    for (k, g) in groups.iter() {
+        let n = largest.entry(k.0).or_default();
+        *n = (*n).max(g.voxels);
+    }
     // Smallest first, each into the largest same-class instance it touches that is big enough.
     let mut order: Vec<(ClassId, InstanceId)> =
         groups.keys().copied().filter(|k| is_object(k.0)).collect();
@@ -252,11 +264,11 @@ fn absorb_fragments(
     };
     for small in order {
         let size = groups[&small].voxels;
+        if size as f32 > share * largest[&small.0] as f32 {
+            continue;
+        }
         let mut touching: BTreeMap<(ClassId, InstanceId), usize> = BTreeMap::new();
-        for (v, k) in &group_at {
-            if *k != small {
-                continue;
-            }
+        for v in voxels_of.get(&small).into_iter().flatten() {
             for dz in -1..=1 {
                 for dy in -1..=1 {
                     for dx in -1..=1 {
@@ -278,6 +290,8 @@ fn absorb_fragments(
         if let Some(host) = host {
             merge_group(groups, small, host);
             host_of.insert(small, host);
+            let grown = groups[&host].voxels;
+            largest.entry(host.0).and_modify(|n| *n = (*n).max(grown));
         }
     }
 }
