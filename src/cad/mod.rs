@@ -2,9 +2,12 @@
 
 pub mod appliances;
 pub mod builder;
+pub mod database;
 pub mod export;
 pub mod library;
+pub mod matching;
 pub mod model;
+pub mod orientation;
 pub mod seating;
 pub mod storage;
 pub mod tables;

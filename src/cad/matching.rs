@@ -1,0 +1,200 @@
+//! Ranking-based matching (Han et al., Sect. 4.1): every model of the object's class in each of
+//! the 24 axis orientations, scored by the matching error ME = ds + dpi + 0.2 db, best first.
+
+use glam::{Mat3, Vec3};
+use pathfinding::kuhn_munkres::kuhn_munkres_min;
+use pathfinding::matrix::Matrix;
+
+use crate::cad::database::CadDatabase;
+use crate::cad::orientation::axis_rotations;
+use crate::geometry::{GravityBox, Plane};
+
+/// How many candidates go on to alignment (the paper's top 10).
+pub const KEEP_CANDIDATES: usize = 10;
+
+/// Weight of the upright prior db in ME.
+const UPRIGHT_WEIGHT: f32 = 0.2;
+
+/// Normals closer than this (|cos|) are one direction: RANSAC finds the same face more than once.
+const SAME_DIRECTION_COS: f32 = 0.985;
+
+/// What replacement knows of one object, in the gravity-aligned world.
+#[derive(Clone, Debug)]
+pub struct ObservedObject<'a> {
+    pub id: &'a str,
+    pub class: &'a str,
+    /// The refined gravity-aligned box (its bottom on the supporting plane).
+    pub bbox: GravityBox,
+    pub planes: Vec<Plane>,
+    /// The segment mesh's vertices.
+    pub points: &'a [Vec3],
+}
+
+/// One model in one axis orientation, with its matching error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    /// Index into the database.
+    pub model: usize,
+    /// Index into [`axis_rotations`]: how the model stands in the object's box frame.
+    pub orientation: usize,
+    pub matching_error: f32,
+}
+
+/// The `keep` best candidates for `object` among the models of its class, lowest ME first (ties
+/// by model index, then orientation, so the order is deterministic). Empty when the database
+/// has no model of the class.
+pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -> Vec<Candidate> {
+    let box_from_world = Mat3::from_rotation_z(-object.bbox.yaw);
+    let object_directions = distinct_directions(
+        object
+            .planes
+            .iter()
+            .map(|p| box_from_world * p.normal),
+    );
+    let object_shape = relative_size(object.bbox.size);
+    let rotations = axis_rotations();
+    let mut candidates = Vec::new();
+    for (index, entry) in db.of_class(object.class) {
+        let model_directions = distinct_directions(entry.planes.iter().map(|p| p.normal));
+        for (orientation, rotation) in rotations.iter().enumerate() {
+            let model_shape = relative_size((*rotation * entry.model.size).abs());
+            let ds = (object_shape - model_shape).abs().element_sum();
+            let rotated: Vec<Vec3> = model_directions.iter().map(|n| *rotation * *n).collect();
+            let dpi = plane_misalignment(&object_directions, &rotated);
+            // db = 1 + g . z(y) with g = -z: 0 upright, 1 on its side, 2 upside down.
+            let db = 1.0 - rotation.z_axis.z;
+            candidates.push(Candidate {
+                model: index,
+                orientation,
+                matching_error: ds + dpi + UPRIGHT_WEIGHT * db,
+            });
+        }
+    }
+    candidates.sort_by(|a, b| {
+        a.matching_error
+            .total_cmp(&b.matching_error)
+            .then(a.model.cmp(&b.model))
+            .then(a.orientation.cmp(&b.orientation))
+    });
+    candidates.truncate(keep);
+    candidates
+}
+
+/// Box size divided by its length: the shape without the scale.
+fn relative_size(size: Vec3) -> Vec3 {
+    size / size.length().max(1e-6)
+}
+
+/// Unit normals with near-duplicates (either sign) dropped, first occurrence kept.
+fn distinct_directions(normals: impl Iterator<Item = Vec3>) -> Vec<Vec3> {
+    let mut kept: Vec<Vec3> = Vec::new();
+    for n in normals {
+        let n = n.normalize_or_zero();
+        if n != Vec3::ZERO && kept.iter().all(|k| k.dot(n).abs() < SAME_DIRECTION_COS) {
+            kept.push(n);
+        }
+    }
+    kept
+}
+
+/// dpi: the mean of 1 - |cos| over the object's plane directions under the best one-to-one
+/// assignment to the model's (Kuhn-Munkres); a direction left without a partner costs 1.
+fn plane_misalignment(object: &[Vec3], model: &[Vec3]) -> f32 {
+    if object.is_empty() {
+        return 0.0;
+    }
+    if model.is_empty() {
+        return 1.0;
+    }
+    // Kuhn-Munkres wants no more rows than columns; the assignment is symmetric.
+    let (rows, cols) = if object.len() <= model.len() {
+        (object, model)
+    } else {
+        (model, object)
+    };
+    const SCALE: f32 = 1e6;
+    let weights: Vec<Vec<i64>> = rows
+        .iter()
+        .map(|r| {
+            cols.iter()
+                .map(|c| ((1.0 - r.dot(*c).abs()) * SCALE).round() as i64)
+                .collect()
+        })
+        .collect();
+    let assigned = match Matrix::from_rows(weights) {
+        Ok(matrix) => kuhn_munkres_min(&matrix).0 as f32 / SCALE,
+        Err(_) => return 1.0,
+    };
+    let unmatched = object.len().saturating_sub(model.len()) as f32;
+    (assigned + unmatched) / object.len() as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cad::orientation::upright_yaw;
+    use crate::geometry::plane::dominant_planes;
+
+    /// An object seen completely: the model's own mesh placed with a yaw.
+    fn observe(db: &CadDatabase, id: &str, yaw: f32) -> (GravityBox, Vec<Plane>, Vec<Vec3>) {
+        let entry = db
+            .models()
+            .iter()
+            .find(|m| m.model.id == id)
+            .expect("model");
+        let pose = glam::Affine3A::from_rotation_translation(
+            glam::Quat::from_rotation_z(yaw),
+            Vec3::new(1.0, 2.0, 0.0),
+        );
+        let mesh = entry.mesh.transformed(&pose);
+        let planes = dominant_planes(&mesh, 0.01, 8)
+            .into_iter()
+            .map(|(p, _)| p)
+            .collect();
+        let bbox = GravityBox::minimal(&mesh.positions).expect("box");
+        (bbox, planes, mesh.positions)
+    }
+
+    #[test]
+    fn a_seen_model_ranks_itself_upright_at_its_own_aspect_first() {
+        let db = CadDatabase::parametric();
+        for id in ["table_01", "fridge_01", "sofa_01", "cabinet_01"] {
+            let (bbox, planes, points) = observe(&db, id, 0.3);
+            let class = id.split('_').next().expect("class");
+            let object = ObservedObject {
+                id,
+                class,
+                bbox,
+                planes,
+                points: &points,
+            };
+            let ranked = rank_candidates(&object, &db, KEEP_CANDIDATES);
+            assert_eq!(ranked.len(), KEEP_CANDIDATES.min(24 * db.of_class(class).count()));
+            assert!(ranked.iter().all(|c| db.models()[c.model].model.class == class));
+            let best = ranked[0];
+            assert!(
+                upright_yaw(&axis_rotations()[best.orientation]).is_some(),
+                "{id}: best orientation {} lays the model down",
+                best.orientation
+            );
+            assert!(
+                ranked.iter().take(4).any(|c| db.models()[c.model].model.id == id),
+                "{id}: not among the first four: {:?}",
+                ranked
+                    .iter()
+                    .map(|c| (&db.models()[c.model].model.id, c.orientation, c.matching_error))
+                    .collect::<Vec<_>>()
+            );
+            assert!(ranked.windows(2).all(|w| w[0].matching_error <= w[1].matching_error));
+        }
+    }
+
+    #[test]
+    fn plane_misalignment_is_zero_for_the_same_directions_and_one_for_none_alike() {
+        let axes = [Vec3::X, Vec3::Y, Vec3::Z];
+        assert!(plane_misalignment(&axes, &[Vec3::Z, -Vec3::X, Vec3::Y]) < 1e-5);
+        assert!((plane_misalignment(&[Vec3::Z], &[Vec3::X, Vec3::Y]) - 1.0).abs() < 1e-5);
+        // Two object directions, one model direction: one is left over at cost 1.
+        assert!((plane_misalignment(&[Vec3::Z, Vec3::X], &[Vec3::Z]) - 0.5).abs() < 1e-5);
+    }
+}
