@@ -33,6 +33,9 @@ impl EntityKind {
 #[serde(deny_unknown_fields)]
 pub struct ClassInfo {
     pub kind: EntityKind,
+    /// How many yaws about +z look the same: 1 (the front matters), 2 (a half turn: a
+    /// rectangular table), 4 (a quarter turn), 0 (round: a cup, a bottle).
+    pub yaw_symmetry: u32,
     /// Default full size in the canonical frame (x width, y depth, z height), metres.
     pub size: Vec3,
     pub size_min: Vec3,
@@ -46,6 +49,19 @@ pub struct ClassInfo {
     pub voc: Vec<String>,
     /// Classes a segmenter confuses this one with (used by the oracle's noise model).
     pub confusable: Vec<String>,
+}
+
+impl ClassInfo {
+    /// The angle between two yaws (radians) up to the class's symmetry, in [0, pi].
+    pub fn yaw_difference(&self, a: f32, b: f32) -> f32 {
+        use std::f32::consts::TAU;
+        if self.yaw_symmetry == 0 {
+            return 0.0;
+        }
+        let period = TAU / self.yaw_symmetry as f32;
+        let d = (a - b).rem_euclid(period);
+        d.min(period - d)
+    }
 }
 
 #[derive(Deserialize)]
@@ -97,6 +113,20 @@ impl ClassTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn yaw_differences_respect_the_class_symmetry() {
+        use std::f32::consts::PI;
+        let table = ClassTable::builtin();
+        let chair = table.get("chair").expect("chair");
+        let desk = table.get("table").expect("table");
+        let cup = table.get("cup").expect("cup");
+        assert!((chair.yaw_difference(0.1, 0.1 + PI) - PI).abs() < 1e-5);
+        assert!((chair.yaw_difference(-3.0, 3.0) - (2.0 * PI - 6.0)).abs() < 1e-5);
+        assert!(desk.yaw_difference(0.1, 0.1 + PI) < 1e-5);
+        assert!((desk.yaw_difference(0.0, 0.5 * PI) - 0.5 * PI).abs() < 1e-5);
+        assert_eq!(cup.yaw_difference(0.0, 2.0), 0.0);
+    }
 
     #[test]
     fn every_design_class_is_in_the_table_and_consistent() {
