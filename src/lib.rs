@@ -36,6 +36,7 @@ impl PluginGroup for ReconstructionPlugins {
             .add(systems::IngestPlugin)
             .add(systems::PanopticMappingPlugin)
             .add(systems::ContactGraphPlugin)
+            .add(systems::CadReplacementPlugin)
     }
 }
 

@@ -17,6 +17,7 @@ use crate::io::write_sequence::write_text;
 use crate::panoptic::{InstanceFusion, MapperParams};
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
+use crate::systems::cad_replacement::CadReport;
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::panoptic_mapping::{MappingConfig, PanopticMap, PanopticSurface};
@@ -53,6 +54,8 @@ pub struct ReconstructReport {
     pub relations: usize,
     pub gravity: Option<GravityReport>,
     pub panoptic: Option<PanopticReport>,
+    /// The CAD models that replaced objects, with their alignment errors.
+    pub cad: Option<CadReport>,
     /// Stages that ran, with wall-clock seconds; rendering and writing are listed too.
     pub timings: Vec<(String, f64)>,
     /// Stages of the pipeline that have no implementation yet and did not run.
@@ -76,12 +79,14 @@ pub struct PanopticReport {
 }
 
 /// Stages with systems in this build.
-const BUILT_STAGES: [ReconstructionStage; 5] = [
+const BUILT_STAGES: [ReconstructionStage; 7] = [
     ReconstructionStage::Ingest,
     ReconstructionStage::Segment,
     ReconstructionStage::Integrate,
     ReconstructionStage::Extract,
     ReconstructionStage::ContactGraph,
+    ReconstructionStage::CadMatch,
+    ReconstructionStage::CadAlign,
 ];
 
 fn fusion_name(fusion: InstanceFusion) -> &'static str {
@@ -260,6 +265,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         relations: contact_graph.map_or(0, |c| c.graph.edges.len()),
         gravity: contact_graph.map(|c| c.gravity.clone()),
         panoptic,
+        cad: app.world().get_resource::<CadReport>().cloned(),
         timings,
         stages_not_built: ReconstructionStage::ALL
             .iter()

@@ -44,18 +44,36 @@ pub struct Alignment {
     pub alignment_error: f32,
 }
 
-/// Aligns every candidate and returns the one with the lowest alignment error (ties by rank).
+/// Metres of alignment error that facing the wrong way (df = 1) or lying on a side (db = 1)
+/// weighs as when choosing among aligned candidates: shapes that fit alike are told apart by the
+/// priors of the ranking.
+const PRIOR_AE_WEIGHT: f32 = 0.02;
+
+/// Aligns every candidate and returns the one with the lowest alignment error plus prior
+/// penalties (ties by rank).
 pub fn align_best(
     object: &ObservedObject,
     db: &CadDatabase,
     candidates: &[Candidate],
 ) -> Option<Alignment> {
-    candidates
+    let all = candidates
         .par_iter()
         .filter_map(|c| align_candidate(object, &db.models()[c.model], *c))
-        .collect::<Vec<_>>()
+        .collect::<Vec<_>>();
+    if std::env::var("CAD_DEBUG").is_ok() {
+        for a in &all {
+            let x = a.world_from_model.transform_vector3(Vec3::X);
+            eprintln!("DBG {} {} o{} ME {:.3} AE {:.4} s {:.2?} yaw {:.1} t {:.2?}", object.id, db.models()[a.candidate.model].model.id, a.candidate.orientation, a.candidate.matching_error, a.alignment_error, a.scale, x.y.atan2(x.x).to_degrees(), a.world_from_model.translation);
+        }
+    }
+    all
         .into_iter()
-        .min_by(|a, b| a.alignment_error.total_cmp(&b.alignment_error))
+        .min_by(|a, b| choice_score(a).total_cmp(&choice_score(b)))
+}
+
+fn choice_score(a: &Alignment) -> f32 {
+    a.alignment_error
+        + PRIOR_AE_WEIGHT * (a.candidate.facing_error + a.candidate.upright_error)
 }
 
 /// Aligns one candidate; `None` when the object has no points or the fit breaks down numerically.
@@ -433,6 +451,7 @@ mod tests {
             bbox,
             planes: Vec::<Plane>::new(),
             points,
+            facing: None,
         }
     }
 

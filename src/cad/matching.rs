@@ -14,6 +14,9 @@ pub const KEEP_CANDIDATES: usize = 10;
 
 /// Weight of the upright prior db in ME.
 const UPRIGHT_WEIGHT: f32 = 0.2;
+/// Weight in ME of df, the facing prior (an object with its back to a wall faces the room):
+/// a box-shaped fridge or oven fits its box as well sideways, so the front needs a prior.
+const FACING_WEIGHT: f32 = 0.3;
 
 /// Normals closer than this (|cos|) are one direction: RANSAC finds the same face more than once.
 const SAME_DIRECTION_COS: f32 = 0.985;
@@ -26,8 +29,11 @@ pub struct ObservedObject<'a> {
     /// The refined gravity-aligned box (its bottom on the supporting plane).
     pub bbox: GravityBox,
     pub planes: Vec<Plane>,
-    /// The segment mesh's vertices.
+    /// The surface points seen of it.
     pub points: &'a [Vec3],
+    /// The way it most likely faces (horizontal unit vector): into the room, away from a wall
+    /// its back is against; `None` when no wall is near or the class has no front.
+    pub facing: Option<Vec3>,
 }
 
 /// One model in one axis orientation, with its matching error.
@@ -38,6 +44,12 @@ pub struct Candidate {
     /// Index into [`axis_rotations`]: how the model stands in the object's box frame.
     pub orientation: usize,
     pub matching_error: f32,
+    /// db in [0, 2]: 0 upright, 2 upside down; part of `matching_error`, used again after
+    /// alignment (an upside-down box-shaped model fits as well as an upright one).
+    pub upright_error: f32,
+    /// df in [0, 1]: 0 when the model's front faces the object's `facing`, 1 when it faces the
+    /// wall (0 without a facing); part of `matching_error`, used again after alignment.
+    pub facing_error: f32,
 }
 
 /// The `keep` best candidates for `object` among the models of its class, lowest ME first (ties
@@ -45,6 +57,7 @@ pub struct Candidate {
 /// has no model of the class.
 pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -> Vec<Candidate> {
     let box_from_world = Mat3::from_rotation_z(-object.bbox.yaw);
+    let world_from_box = box_from_world.transpose();
     let object_directions = distinct_directions(
         object
             .planes
@@ -63,10 +76,16 @@ pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -
             let dpi = plane_misalignment(&object_directions, &rotated);
             // db = 1 + g . z(y) with g = -z: 0 upright, 1 on its side, 2 upside down.
             let db = 1.0 - rotation.z_axis.z;
+            let df = object.facing.map_or(0.0, |facing| {
+                let front = world_from_box * (*rotation * -Vec3::Y);
+                0.5 * (1.0 - front.dot(facing))
+            });
             candidates.push(Candidate {
                 model: index,
                 orientation,
-                matching_error: ds + dpi + UPRIGHT_WEIGHT * db,
+                matching_error: ds + dpi + UPRIGHT_WEIGHT * db + FACING_WEIGHT * df,
+                upright_error: db,
+                facing_error: df,
             });
         }
     }

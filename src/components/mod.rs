@@ -1,13 +1,14 @@
 //! ECS components: the vocabulary of a scene entity.
 //!
 //! A scene entity (a piece of layout or an object) carries its `SceneEntity` id and `Panoptic`
-//! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, and once
-//! replaced its `CadModel`. Support is Bevy's `ChildOf`: the parent supports the child, and the
+//! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, the
+//! `ObservedSurface` the contact graph kept of it, and once replaced its `CadModel`. Support is Bevy's `ChildOf`: the parent supports the child, and the
 //! child's `Joint` says how it may move relative to it. `ProximalTo` lists its proximal
 //! neighbours.
 
 pub mod cad_model;
 pub mod joint;
+pub mod observed_surface;
 pub mod oriented_box;
 pub mod panoptic;
 pub mod proximal;
@@ -16,6 +17,7 @@ pub mod surface_planes;
 
 pub use cad_model::CadModel;
 pub use joint::Joint;
+pub use observed_surface::ObservedSurface;
 pub use oriented_box::OrientedBox;
 pub use panoptic::{Panoptic, SceneEntity};
 pub use proximal::ProximalTo;

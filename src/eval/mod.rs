@@ -1,7 +1,8 @@
 //! `iscene eval DIR --gt SEQ`: scores a reconstruction against the ground truth of a rendered
-//! sequence. Panoptic quality and instance mAP for now; the contact-graph, CAD and physics
-//! figures of the report are `null` until their stages exist.
+//! sequence: panoptic quality and instance mAP, contact-graph and CAD figures; the physics
+//! figures are `null` until their stages exist.
 
+pub mod cad;
 pub mod contact;
 pub mod ged;
 pub mod panoptic_quality;
@@ -21,6 +22,7 @@ use truth::NearestMesh;
 
 use std::collections::{BTreeMap, HashSet};
 
+use cad::{CadMetrics, evaluate_cad};
 use contact::{ContactMetrics, evaluate_contact_graph, seen_subgraph};
 
 use crate::graph::ContactGraph;
@@ -42,6 +44,10 @@ pub struct EvalReport {
     pub ged_exact: Option<bool>,
     /// Per-class box AP and the truth nodes left out as unseen.
     pub contact_graph: Option<ContactMetrics>,
+    /// Of the objects whose front matters: the share whose model yaw is within 15 degrees.
+    pub cad_yaw_accuracy: Option<f64>,
+    /// Per object: the paired prediction, its model, class, yaw error and alignment error.
+    pub cad: Option<CadMetrics>,
     pub cad_class_accuracy: Option<f64>,
     pub mean_alignment_error: Option<f64>,
     pub stable_fraction: Option<f64>,
@@ -116,7 +122,10 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
         .iter()
         .map(|e| (e.id.clone(), e.score))
         .collect();
-    let contact = contact_metrics(dir, gt, &seen, &scores)?;
+    let (contact, cad) = match contact_metrics(dir, gt, &seen, &scores)? {
+        Some((c, cad)) => (Some(c), cad),
+        None => (None, None),
+    };
     Ok(EvalReport {
         panoptic,
         truth_distance_m,
@@ -124,20 +133,23 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
         ged: contact.as_ref().map(|c| c.ged.cost),
         ged_exact: contact.as_ref().map(|c| c.ged.exact),
         contact_graph: contact,
-        cad_class_accuracy: None,
-        mean_alignment_error: None,
+        cad_class_accuracy: cad.as_ref().map(|c| c.class_accuracy),
+        mean_alignment_error: cad.as_ref().and_then(|c| c.mean_alignment_error_m),
+        cad_yaw_accuracy: cad.as_ref().and_then(|c| c.yaw_accuracy),
+        cad,
         stable_fraction: None,
         max_penetration_m: None,
     })
 }
 
-/// Contact-graph metrics when both the reconstruction and the truth have a contact graph.
+/// Contact-graph and CAD metrics when both the reconstruction and the truth have a contact
+/// graph (CAD ones when the reconstruction placed models).
 fn contact_metrics(
     dir: &Path,
     gt: &Path,
     seen: &HashSet<String>,
     scores: &BTreeMap<String, f32>,
-) -> Result<Option<ContactMetrics>, InputError> {
+) -> Result<Option<(ContactMetrics, Option<CadMetrics>)>, InputError> {
     let pred_path = dir.join("contact_graph.json");
     let truth_path = gt.join("gt").join("contact_graph.json");
     if !pred_path.is_file() || !truth_path.is_file() {
@@ -153,13 +165,9 @@ fn contact_metrics(
         .collect();
     let truth = seen_subgraph(&truth, seen);
     let truth_from_pred = aligned_from_world(&dir.join("report.json"))?.inverse();
-    Ok(Some(evaluate_contact_graph(
-        &pred,
-        &truth,
-        &truth_from_pred,
-        scores,
-        unseen,
-    )))
+    let cad = evaluate_cad(&pred, &truth, &truth_from_pred);
+    let contact = evaluate_contact_graph(&pred, &truth, &truth_from_pred, scores, unseen);
+    Ok(Some((contact, cad)))
 }
 
 /// The reconstruction's aligned frame from the sequence's world frame, as report.json records it

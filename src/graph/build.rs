@@ -99,6 +99,23 @@ struct Shape {
 /// Builds the contact graph of `entities`; entities without a usable surface (fewer than three
 /// points) are left out.
 pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams) -> ContactGraph {
+    build_contact_graph_with_surfaces(entities, params).graph
+}
+
+/// A contact graph with what it saw of each node.
+pub struct BuiltContactGraph {
+    pub graph: ContactGraph,
+    /// Per node, in node order: the entity's own surface points (its mesh's vertices without
+    /// those the layout or, for an object resting on something, its support plane claimed,
+    /// and without stray pieces).
+    pub surfaces: Vec<Vec<Vec3>>,
+}
+
+/// [`build_contact_graph`], keeping each node's surface points for the stages after it.
+pub fn build_contact_graph_with_surfaces(
+    entities: &[GraphEntity],
+    params: &ContactGraphParams,
+) -> BuiltContactGraph {
     let room_center = room_center(entities);
     let is_layout = |e: &GraphEntity| e.kind == EntityKind::Layout;
     let mut shaped: Vec<(usize, Shape)> = entities
@@ -144,6 +161,7 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
 
     let mut boxes: Vec<GravityBox> = shaped.iter().map(|(_, s)| s.bbox).collect();
     let mut planes: Vec<Vec<Plane>> = shaped.iter().map(|(_, s)| s.planes.clone()).collect();
+    let mut surfaces: Vec<Option<Vec<Vec3>>> = vec![None; shaped.len()];
     let mut support_edges = Vec::new();
     for (child, choice) in supports.iter().enumerate() {
         let Some(choice) = choice else { continue };
@@ -155,9 +173,11 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
                 ..
             } => {
                 if !registered
-                    && let Some(b) = box_off_support(&shaped[child].1, &plane, yaw, params)
+                    && let Some(kept) = off_support(&shaped[child].1, &plane, params)
+                    && let Some(minimal) = GravityBox::minimal(&kept)
                 {
-                    boxes[child] = b;
+                    boxes[child] = square_with_room(&minimal, &kept, yaw, params);
+                    surfaces[child] = Some(kept);
                 }
                 boxes[child] = rest_on(&boxes[child], &plane);
                 if registered {
@@ -200,7 +220,15 @@ pub fn build_contact_graph(entities: &[GraphEntity], params: &ContactGraphParams
             joints: BTreeMap::new(),
         })
         .collect();
-    ContactGraph { nodes, edges }
+    let surfaces = surfaces
+        .into_iter()
+        .zip(shaped)
+        .map(|(kept, (_, shape))| kept.unwrap_or(shape.points))
+        .collect();
+    BuiltContactGraph {
+        graph: ContactGraph { nodes, edges },
+        surfaces,
+    }
 }
 
 /// The room's yaw modulo 90 degrees, from its walls' normals (circular mean of four times the
@@ -215,15 +243,10 @@ fn room_yaw(entities: &[GraphEntity], shaped: &[(usize, Shape)]) -> Option<f32> 
     (sum.length() > 1e-3).then(|| 0.25 * sum.y.atan2(sum.x))
 }
 
-/// The box of an object without its points that lie on the surface holding it and face the way
-/// it faces (segmentation bleeds a cup's label onto the counter around its base); `None` when
+/// An object's points without those that lie on the surface holding it and face the way it
+/// faces (segmentation bleeds a cup's label onto the counter around its base); `None` when
 /// nothing is dropped or too little is left.
-fn box_off_support(
-    shape: &Shape,
-    plane: &Plane,
-    room_yaw: Option<f32>,
-    params: &ContactGraphParams,
-) -> Option<GravityBox> {
+fn off_support(shape: &Shape, plane: &Plane, params: &ContactGraphParams) -> Option<Vec<Vec3>> {
     let kept: Vec<Vec3> = shape
         .points
         .iter()
@@ -231,11 +254,7 @@ fn box_off_support(
         .filter(|(p, n)| !lies_on(plane, **p, **n, params.support_band))
         .map(|(p, _)| *p)
         .collect();
-    if kept.len() == shape.points.len() || kept.len() * 2 < shape.points.len() {
-        return None;
-    }
-    let minimal = GravityBox::minimal(&kept)?;
-    Some(square_with_room(&minimal, &kept, room_yaw, params))
+    (kept.len() < shape.points.len() && kept.len() * 2 >= shape.points.len()).then_some(kept)
 }
 
 /// Whether a surface point with normal `n` lies on `surface` (less than `band` in front of it, or
@@ -456,13 +475,14 @@ mod tests {
         assert!(shape.bbox.size.x > 0.19, "the ring stretches the box");
         let counter = Plane::from_point_normal(Vec3::new(0.0, 0.0, 0.9), Vec3::Z);
         let params = ContactGraphParams::default();
-        let b = box_off_support(&shape, &counter, Some(0.0), &params).expect("a smaller box");
+        let kept = off_support(&shape, &counter, &params).expect("the ring dropped");
+        let b = GravityBox::minimal(&kept).expect("a box");
         assert!(
             (b.size.x - 0.08).abs() < 0.005 && (b.size.y - 0.08).abs() < 0.005,
             "{b:?}"
         );
         // Nothing on the counter: nothing to drop.
         let high = Plane::from_point_normal(Vec3::new(0.0, 0.0, 0.5), Vec3::Z);
-        assert_eq!(box_off_support(&shape, &high, Some(0.0), &params), None);
+        assert_eq!(off_support(&shape, &high, &params), None);
     }
 }

@@ -6,9 +6,9 @@ use std::collections::HashMap;
 use bevy::prelude::*;
 use glam::Affine3A;
 
-use crate::components::{Panoptic, SceneEntity, SegmentMesh};
+use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh};
 use crate::graph::ContactGraph;
-use crate::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph};
+use crate::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces};
 use crate::graph::gravity::{GravityReport, camera_up_hint, resolve_gravity};
 use crate::map::extract_mesh;
 use crate::systems::ingest::{InputSequence, StageError};
@@ -74,10 +74,11 @@ fn contact_graph_stage(world: &mut World) {
             mesh,
         })
         .collect();
-    let graph = build_contact_graph(
+    let built = build_contact_graph_with_surfaces(
         &graph_entities,
         &ContactGraphParams::for_voxel(map.0.tsdf.voxel_size),
     );
+    let graph = built.graph;
     let by_id: HashMap<String, Entity> = entities
         .iter()
         .map(|(e, id, _, _)| (id.clone(), *e))
@@ -85,6 +86,11 @@ fn contact_graph_stage(world: &mut World) {
     // The entities' meshes join the aligned world with their boxes.
     for ((e, _, _, _), mesh) in entities.iter().zip(aligned) {
         world.entity_mut(*e).insert(SegmentMesh(mesh));
+    }
+    for (node, surface) in graph.nodes.iter().zip(built.surfaces) {
+        world
+            .entity_mut(by_id[&node.id])
+            .insert(ObservedSurface(surface));
     }
     if let Err(problem) = attach_contact_graph(world, &graph, &by_id) {
         world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(format!(

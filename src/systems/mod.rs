@@ -1,12 +1,14 @@
 //! Pipeline stages as ECS systems: thin wrappers that read components, call a bevy-free
 //! algorithm, and write components. `stages` fixes their order.
 
+pub mod cad_replacement;
 pub mod contact_graph;
 pub mod ingest;
 pub mod panoptic_mapping;
 pub mod scene_graph;
 pub mod stages;
 
+pub use cad_replacement::CadReplacementPlugin;
 pub use contact_graph::ContactGraphPlugin;
 pub use ingest::IngestPlugin;
 pub use panoptic_mapping::PanopticMappingPlugin;

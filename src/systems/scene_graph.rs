@@ -66,7 +66,8 @@ pub fn spawn_contact_graph(
 }
 
 /// Gives the entities of `graph`'s nodes (`entities`: node id to entity) their boxes, planes and
-/// CAD models, and hangs them under a new `SceneRoot` as the support tree says: `ChildOf` the
+/// CAD models, and hangs them under the `SceneRoot` (made when there is none) as the support
+/// tree says: `ChildOf` the
 /// supporting entity, a `Joint`, and a `Transform` relative to the parent; proximal pairs become
 /// `ProximalTo` on both ends.
 pub fn attach_contact_graph(
@@ -78,9 +79,17 @@ pub fn attach_contact_graph(
     if let Some(missing) = graph.nodes.iter().find(|n| !entities.contains_key(&n.id)) {
         return Err(format!("node {:?} has no entity", missing.id));
     }
-    let root = world
-        .spawn((SceneRoot, Name::new("world"), Transform::IDENTITY))
-        .id();
+    // Attaching again (the CAD stage moves frames to the models) re-hangs under the same root.
+    let existing = world
+        .query_filtered::<Entity, With<SceneRoot>>()
+        .iter(world)
+        .next();
+    let root = match existing {
+        Some(root) => root,
+        None => world
+            .spawn((SceneRoot, Name::new("world"), Transform::IDENTITY))
+            .id(),
+    };
     let mut poses = HashMap::new();
     for node in &graph.nodes {
         let gbox = GravityBox::from(&node.bbox);

@@ -1,0 +1,142 @@
+//! CAD replacement of a whole scene: the objects of a contact graph with their segment points,
+//! ranked against the database, aligned, and written back into the graph's nodes.
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::cad::alignment::{Alignment, align_best};
+use crate::cad::database::CadDatabase;
+use crate::cad::matching::{Candidate, KEEP_CANDIDATES, ObservedObject, rank_candidates};
+use crate::classes::{ClassTable, EntityKind};
+use crate::geometry::{GravityBox, Plane};
+use crate::graph::{CadPlacement, ContactGraph};
+
+/// Objects with fewer segment points than this keep their segment mesh: too little was seen to
+/// align anything to.
+pub const MIN_OBJECT_POINTS: usize = 30;
+
+/// An object whose box comes this close (metres) to a wall has its back to it.
+const BACK_TO_WALL_M: f32 = 0.15;
+
+/// The objects of `graph` that replacement works on (not layout, enough points), in node order.
+/// `points` gives each node id its observed surface points (aligned world).
+pub fn observed_objects<'a>(
+    graph: &'a ContactGraph,
+    points: &'a HashMap<String, Vec<Vec3>>,
+) -> Vec<ObservedObject<'a>> {
+    // Wall planes face into the room.
+    let walls: Vec<Plane> = graph
+        .nodes
+        .iter()
+        .filter(|n| n.class == "wall")
+        .filter_map(|n| n.planes.first().map(|p| Plane::from_array(*p)))
+        .collect();
+    let table = ClassTable::builtin();
+    graph
+        .nodes
+        .iter()
+        .filter(|n| n.kind != EntityKind::Layout)
+        .filter_map(|n| {
+            let p = points.get(&n.id)?;
+            let bbox = GravityBox::from(&n.bbox);
+            let has_front = table.get(&n.class).is_some_and(|c| c.yaw_symmetry == 1);
+            (p.len() >= MIN_OBJECT_POINTS).then(|| ObservedObject {
+                id: &n.id,
+                class: &n.class,
+                bbox,
+                planes: n.planes.iter().map(|p| Plane::from_array(*p)).collect(),
+                points: p,
+                facing: if has_front {
+                    facing_from_walls(&bbox, &walls)
+                } else {
+                    None
+                },
+            })
+        })
+        .collect()
+}
+
+/// The inward normal (made horizontal) of the wall nearest to the box, if one is within
+/// `BACK_TO_WALL_M` of it.
+fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Vec3> {
+    walls
+        .iter()
+        .map(|w| {
+            let gap = bbox
+                .corners()
+                .iter()
+                .map(|c| w.signed_distance(*c))
+                .fold(f32::MAX, f32::min);
+            (gap, w)
+        })
+        .filter(|(gap, _)| *gap <= BACK_TO_WALL_M)
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .and_then(|(_, w)| Vec3::new(w.normal.x, w.normal.y, 0.0).try_normalize())
+}
+
+/// The ranked candidates of every object (CadMatch).
+pub fn rank_scene(objects: &[ObservedObject], db: &CadDatabase) -> Vec<Vec<Candidate>> {
+    objects
+        .par_iter()
+        .map(|o| rank_candidates(o, db, KEEP_CANDIDATES))
+        .collect()
+}
+
+/// The best alignment of every object among its candidates (CadAlign); `None` where no
+/// candidate could be aligned.
+pub fn align_scene(
+    objects: &[ObservedObject],
+    db: &CadDatabase,
+    candidates: &[Vec<Candidate>],
+) -> Vec<Option<Alignment>> {
+    objects
+        .par_iter()
+        .zip(candidates)
+        .map(|(o, c)| align_best(o, db, c))
+        .collect()
+}
+
+/// One object's replacement, as report.json lists it.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplacementRecord {
+    pub id: String,
+    pub model: String,
+    pub alignment_error_m: f32,
+    pub matching_error: f32,
+    /// Per model axis.
+    pub scale: [f32; 3],
+}
+
+/// Writes each alignment into its node's `cad` (the scale there is the geometric mean; the
+/// per-axis scale is in `world_from_model`) and returns the records.
+pub fn apply_replacements(
+    graph: &mut ContactGraph,
+    db: &CadDatabase,
+    objects: &[(String, Option<Alignment>)],
+) -> Vec<ReplacementRecord> {
+    let mut records = Vec::new();
+    for (id, alignment) in objects {
+        let (Some(a), Some(node)) = (alignment, graph.nodes.iter_mut().find(|n| n.id == *id))
+        else {
+            continue;
+        };
+        let model = &db.models()[a.candidate.model].model;
+        node.cad = Some(CadPlacement {
+            model: model.id.clone(),
+            world_from_model: Mat4::from(a.world_from_model).to_cols_array(),
+            scale: a.scale.element_product().cbrt(),
+            alignment_error: a.alignment_error,
+        });
+        records.push(ReplacementRecord {
+            id: id.clone(),
+            model: model.id.clone(),
+            alignment_error_m: a.alignment_error,
+            matching_error: a.candidate.matching_error,
+            scale: a.scale.to_array(),
+        });
+    }
+    records
+}

@@ -1,0 +1,218 @@
+//! CAD replacement metrics against the ground truth: each seen truth object is paired with the
+//! predicted node whose box overlaps it most; the replacing model's class, its yaw (up to the
+//! class's symmetry) and the alignment errors are scored.
+
+use glam::{Affine3A, Mat4, Vec3};
+use serde::Serialize;
+
+use crate::classes::{ClassTable, EntityKind};
+use crate::geometry::GravityBox;
+use crate::graph::{ContactGraph, GraphNode};
+
+/// A truth object and a prediction are one object when their boxes overlap at least this much.
+const MIN_PAIR_IOU: f32 = 0.1;
+/// The yaw tolerance.
+pub const YAW_TOLERANCE_DEG: f32 = 15.0;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CadObjectScore {
+    pub truth: String,
+    pub truth_model: Option<String>,
+    /// The paired prediction and the model that replaced it (`None`: unpaired or not replaced).
+    pub predicted: Option<String>,
+    pub model: Option<String>,
+    pub class_correct: bool,
+    /// Only for classes whose front matters, with the right class.
+    pub yaw_error_deg: Option<f32>,
+    pub alignment_error_m: Option<f32>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CadMetrics {
+    /// Seen truth objects replaced by a model of their class.
+    pub class_accuracy: f64,
+    /// Of the objects whose front matters and whose class is right: yaw within 15 degrees.
+    pub yaw_accuracy: Option<f64>,
+    /// Mean over the predicted objects that were replaced.
+    pub mean_alignment_error_m: Option<f64>,
+    /// Seen truth objects replaced by exactly their own database model.
+    pub model_accuracy: f64,
+    pub objects: Vec<CadObjectScore>,
+}
+
+/// The yaw of a model frame's x axis.
+fn model_yaw(world_from_model: &Affine3A) -> f32 {
+    let x = world_from_model.transform_vector3(Vec3::X);
+    x.y.atan2(x.x)
+}
+
+fn placement_frame(node: &GraphNode) -> Option<Affine3A> {
+    node.cad
+        .as_ref()
+        .map(|c| Affine3A::from_mat4(Mat4::from_cols_array(&c.world_from_model)))
+}
+
+/// Scores `pred`'s CAD placements against `truth` (restricted to what was seen);
+/// `truth_from_pred` takes the prediction into the truth's frame. `None` when the prediction
+/// has no CAD placement at all (the stage did not run).
+pub fn evaluate_cad(
+    pred: &ContactGraph,
+    truth: &ContactGraph,
+    truth_from_pred: &Affine3A,
+) -> Option<CadMetrics> {
+    if pred.nodes.iter().all(|n| n.cad.is_none()) {
+        return None;
+    }
+    let table = ClassTable::builtin();
+    let objects = |g: &ContactGraph| -> Vec<GraphNode> {
+        g.nodes
+            .iter()
+            .filter(|n| n.kind != EntityKind::Layout)
+            .cloned()
+            .collect()
+    };
+    let (pred_objects, truth_objects) = (objects(pred), objects(truth));
+    let yaw_turn = model_yaw(truth_from_pred);
+    let pred_boxes: Vec<GravityBox> = pred_objects
+        .iter()
+        .map(|n| {
+            let b = GravityBox::from(&n.bbox);
+            GravityBox {
+                center: truth_from_pred.transform_point3(b.center),
+                yaw: b.yaw + yaw_turn,
+                size: b.size,
+            }
+        })
+        .collect();
+    // Greedy pairing, best overlap first: each prediction stands for one truth object.
+    let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
+    for (t, tn) in truth_objects.iter().enumerate() {
+        let tb = GravityBox::from(&tn.bbox);
+        for (p, pb) in pred_boxes.iter().enumerate() {
+            let iou = tb.iou(pb);
+            if iou >= MIN_PAIR_IOU {
+                pairs.push((iou, t, p));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut pred_of = vec![None; truth_objects.len()];
+    let mut taken = vec![false; pred_objects.len()];
+    for (_, t, p) in pairs {
+        if pred_of[t].is_none() && !taken[p] {
+            pred_of[t] = Some(p);
+            taken[p] = true;
+        }
+    }
+    let mut scores = Vec::new();
+    for (t, tn) in truth_objects.iter().enumerate() {
+        let pn = pred_of[t].map(|p| &pred_objects[p]);
+        let placement = pn.and_then(|n| n.cad.as_ref().map(|c| (n, c)));
+        let class_correct = placement.is_some_and(|(n, _)| n.class == tn.class);
+        let front_matters = table.get(&tn.class).is_some_and(|c| c.yaw_symmetry == 1);
+        let yaw_error_deg = match (placement, placement_frame(tn)) {
+            (Some((n, _)), Some(truth_frame)) if class_correct && front_matters => {
+                let pred_frame = *truth_from_pred * placement_frame(n)?;
+                let info = table.get(&tn.class)?;
+                Some(
+                    info.yaw_difference(model_yaw(&pred_frame), model_yaw(&truth_frame))
+                        .to_degrees(),
+                )
+            }
+            _ => None,
+        };
+        scores.push(CadObjectScore {
+            truth: tn.id.clone(),
+            truth_model: tn.cad.as_ref().map(|c| c.model.clone()),
+            predicted: pn.map(|n| n.id.clone()),
+            model: placement.map(|(_, c)| c.model.clone()),
+            class_correct,
+            yaw_error_deg,
+            alignment_error_m: placement.map(|(_, c)| c.alignment_error),
+        });
+    }
+    let fraction = |hits: usize, total: usize| {
+        if total == 0 {
+            0.0
+        } else {
+            hits as f64 / total as f64
+        }
+    };
+    let yaws: Vec<f32> = scores.iter().filter_map(|s| s.yaw_error_deg).collect();
+    let errors: Vec<f64> = pred_objects
+        .iter()
+        .filter_map(|n| n.cad.as_ref().map(|c| f64::from(c.alignment_error)))
+        .collect();
+    Some(CadMetrics {
+        class_accuracy: fraction(
+            scores.iter().filter(|s| s.class_correct).count(),
+            scores.len(),
+        ),
+        yaw_accuracy: (!yaws.is_empty()).then(|| {
+            fraction(
+                yaws.iter().filter(|y| **y <= YAW_TOLERANCE_DEG).count(),
+                yaws.len(),
+            )
+        }),
+        mean_alignment_error_m: (!errors.is_empty())
+            .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
+        model_accuracy: fraction(
+            scores
+                .iter()
+                .filter(|s| s.model.is_some() && s.model == s.truth_model)
+                .count(),
+            scores.len(),
+        ),
+        objects: scores,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{SceneSpec, SceneWorld};
+    use std::path::Path;
+
+    fn kitchen_truth() -> ContactGraph {
+        let spec = SceneSpec::parse(
+            include_str!("../../scenes/kitchen.json"),
+            Path::new("kitchen.json"),
+        )
+        .expect("spec");
+        SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
+            .expect("world")
+            .contact_graph()
+    }
+
+    #[test]
+    fn the_truth_scores_perfectly_and_a_turned_chair_misses_its_yaw() {
+        let truth = kitchen_truth();
+        let perfect = evaluate_cad(&truth, &truth, &Affine3A::IDENTITY).expect("placements");
+        assert_eq!(perfect.class_accuracy, 1.0);
+        assert_eq!(perfect.model_accuracy, 1.0);
+        assert_eq!(perfect.yaw_accuracy, Some(1.0));
+        let mut turned = truth.clone();
+        let chair = turned
+            .nodes
+            .iter_mut()
+            .find(|n| n.id == "chair_1")
+            .expect("chair");
+        let cad = chair.cad.as_mut().expect("cad");
+        let frame = Affine3A::from_mat4(Mat4::from_cols_array(&cad.world_from_model));
+        let spun = Affine3A::from_translation(frame.translation.into())
+            * Affine3A::from_rotation_z(std::f32::consts::PI)
+            * Affine3A::from_translation((-frame.translation).into())
+            * frame;
+        cad.world_from_model = Mat4::from(spun).to_cols_array();
+        let scored = evaluate_cad(&turned, &truth, &Affine3A::IDENTITY).expect("placements");
+        let chair = scored
+            .objects
+            .iter()
+            .find(|s| s.truth == "chair_1")
+            .expect("chair score");
+        assert!((chair.yaw_error_deg.expect("yaw") - 180.0).abs() < 0.1);
+        assert!(scored.yaw_accuracy.expect("yaws") < 1.0);
+        // A cup's yaw never counts: it is round.
+        assert!(scored.objects.iter().filter(|s| s.truth.starts_with("cup")).all(|s| s.yaw_error_deg.is_none()));
+    }
+}

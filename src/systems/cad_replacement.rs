@@ -1,0 +1,146 @@
+//! The CadMatch and CadAlign stages: rank the database's models for every object of the contact
+//! graph, align the best candidates to the object's segment points, and let the winning model's
+//! frame become the entity's frame in the transform tree.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use serde::Serialize;
+
+use crate::cad::database::CadDatabase;
+use crate::cad::matching::Candidate;
+use crate::cad::replacement::{
+    ReplacementRecord, align_scene, apply_replacements, observed_objects, rank_scene,
+};
+use crate::components::{ObservedSurface, SceneEntity};
+use crate::systems::contact_graph::SceneContactGraph;
+use crate::systems::ingest::StageError;
+use crate::systems::scene_graph::attach_contact_graph;
+
+/// The database replacement chooses from (the parametric library unless one is given).
+#[derive(Resource, Clone)]
+pub struct CadLibrary(pub Arc<CadDatabase>);
+
+/// CadMatch's result: the ranked candidates of each object id.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct CadCandidates(pub Vec<(String, Vec<Candidate>)>);
+
+/// What CadAlign did, for report.json.
+#[derive(Resource, Clone, Debug, Serialize)]
+pub struct CadReport {
+    pub database_models: usize,
+    /// Objects of the contact graph (layout excluded).
+    pub objects: usize,
+    pub replaced: Vec<ReplacementRecord>,
+    pub mean_alignment_error_m: Option<f32>,
+}
+
+/// Each entity id's observed surface points.
+fn observed_points(world: &mut World) -> HashMap<String, Vec<Vec3>> {
+    world
+        .query::<(&SceneEntity, &ObservedSurface)>()
+        .iter(world)
+        .map(|(id, surface)| (id.0.clone(), surface.0.clone()))
+        .collect()
+}
+
+fn cad_match_stage(world: &mut World) {
+    if world.resource::<StageError>().0.is_some() {
+        return;
+    }
+    let Some(scene) = world.get_resource::<SceneContactGraph>() else {
+        return;
+    };
+    let graph = scene.graph.clone();
+    let db = world
+        .get_resource_or_insert_with(|| CadLibrary(Arc::new(CadDatabase::parametric())))
+        .0
+        .clone();
+    let points = observed_points(world);
+    let objects = observed_objects(&graph, &points);
+    let ranked = rank_scene(&objects, &db);
+    let candidates = objects
+        .iter()
+        .zip(ranked)
+        .map(|(o, c)| (o.id.to_string(), c))
+        .collect();
+    world.insert_resource(CadCandidates(candidates));
+}
+
+fn cad_align_stage(world: &mut World) {
+    if world.resource::<StageError>().0.is_some() {
+        return;
+    }
+    let (Some(scene), Some(candidates), Some(db)) = (
+        world.get_resource::<SceneContactGraph>(),
+        world.get_resource::<CadCandidates>(),
+        world.get_resource::<CadLibrary>(),
+    ) else {
+        return;
+    };
+    let mut graph = scene.graph.clone();
+    let candidates = candidates.0.clone();
+    let db = db.0.clone();
+    let points = observed_points(world);
+    let objects = observed_objects(&graph, &points);
+    let ranked: Vec<Vec<Candidate>> = objects
+        .iter()
+        .map(|o| {
+            candidates
+                .iter()
+                .find(|(id, _)| id == o.id)
+                .map(|(_, c)| c.clone())
+                .unwrap_or_default()
+        })
+        .collect();
+    let aligned = align_scene(&objects, &db, &ranked);
+    let results: Vec<(String, Option<_>)> = objects
+        .iter()
+        .map(|o| o.id.to_string())
+        .zip(aligned)
+        .collect();
+    let object_count = graph
+        .nodes
+        .iter()
+        .filter(|n| n.kind != crate::classes::EntityKind::Layout)
+        .count();
+    let replaced = apply_replacements(&mut graph, &db, &results);
+    let by_id: HashMap<String, Entity> = world
+        .query::<(Entity, &SceneEntity)>()
+        .iter(world)
+        .map(|(e, id)| (id.0.clone(), e))
+        .collect();
+    if let Err(problem) = attach_contact_graph(world, &graph, &by_id) {
+        world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(
+            format!("CAD replacement: {problem}"),
+        ));
+        return;
+    }
+    let mean_alignment_error_m = (!replaced.is_empty()).then(|| {
+        replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32
+    });
+    world.insert_resource(CadReport {
+        database_models: db.len(),
+        objects: object_count,
+        replaced,
+        mean_alignment_error_m,
+    });
+    world.resource_mut::<SceneContactGraph>().graph = graph;
+}
+
+/// Adds the CadMatch and CadAlign stages.
+pub struct CadReplacementPlugin;
+
+impl Plugin for CadReplacementPlugin {
+    fn build(&self, app: &mut App) {
+        use crate::systems::ReconstructionStage as Stage;
+        app.add_systems(
+            crate::systems::Reconstruct,
+            (
+                cad_match_stage.in_set(Stage::CadMatch),
+                cad_align_stage.in_set(Stage::CadAlign),
+            ),
+        );
+    }
+}
