@@ -9,8 +9,6 @@ mod common;
 use iscene::eval::evaluate_reconstruction;
 use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph};
 use iscene::graph::{ContactGraph, GraphEdge};
-use iscene::panoptic::InstanceFusion;
-use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
 use iscene::scene::{SceneSpec, SceneWorld};
 
 type Pairs = BTreeSet<(String, String)>;
@@ -74,30 +72,6 @@ fn the_graph_of_ground_truth_meshes_is_the_scenes_graph() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// Renders `scene` (300 frames) into `dir` and reconstructs every second frame with the oracle
-/// segmentation at 2 cm; returns the sequence and output folders.
-fn render_and_map_every_second_frame(
-    scene: &str,
-    dir: &Path,
-    no_noise: bool,
-) -> (std::path::PathBuf, std::path::PathBuf) {
-    let seq = dir.join("seq");
-    common::render_scene(scene, &seq, 300, no_noise);
-    let out = dir.join("out");
-    reconstruct(&ReconstructOptions {
-        input: Some(seq.clone()),
-        out: out.clone(),
-        frames: Some((0, None, 2)),
-        voxel: 0.02,
-        segmentation: SegmentationChoice::Oracle,
-        fusion: InstanceFusion::Joint,
-        estimate_gravity: false,
-        progress: false,
-    })
-    .expect("reconstruct");
-    (seq, out)
-}
-
 /// The kitchen through the whole pipeline with realistic depth and segmentation noise, every
 /// second frame: every seen entity is found and every support parent is right (the wall cabinet
 /// on its wall, the microwave on its cabinet, cups and the bowl on the table); oriented boxes
@@ -107,7 +81,7 @@ fn render_and_map_every_second_frame(
 #[test]
 fn the_kitchens_contact_graph_has_every_support_right() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (seq, out) = render_and_map_every_second_frame("kitchen", dir.path(), false);
+    let (seq, out) = common::render_and_map_every_second_frame("kitchen", dir.path(), false);
     ContactGraph::load(&out.join("contact_graph.json")).expect("a valid contact_graph.json");
     let eval = evaluate_reconstruction(&out, &seq).expect("eval");
     let contact = eval.contact_graph.expect("contact-graph metrics");
@@ -138,7 +112,7 @@ fn clean_renders_get_every_node_and_support_right() {
     let mut failures = Vec::new();
     for name in ["kitchen", "office", "living_room", "bedroom"] {
         let dir = tempfile::tempdir().expect("tempdir");
-        let (seq, out) = render_and_map_every_second_frame(name, dir.path(), true);
+        let (seq, out) = common::render_and_map_every_second_frame(name, dir.path(), true);
         let eval = evaluate_reconstruction(&out, &seq).expect("eval");
         let contact = eval.contact_graph.expect("contact-graph metrics");
         eprintln!(

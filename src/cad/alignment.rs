@@ -2,8 +2,9 @@
 //! scale (per model axis), yaw and horizontal translation, its bottom held on the supporting
 //! plane. Residuals: the object's surface points against the model's surface (point to plane,
 //! correspondences renewed ICP-style between LM runs, Huber-weighted), the box height, the
-//! containment of the object's floor rectangle in the model's, and a weak prior towards the
-//! database size. The alignment error AE is the RMS distance from the object's points to the
+//! containment of the object's floor rectangle in the model's and of the model's in the object's
+//! (with slack for unseen sides), the class's size range, and a weak prior towards the database
+//! size. The alignment error AE is the RMS distance from the object's points to the
 //! aligned model; the candidate with the best AE wins.
 
 use glam::{Affine3A, DAffine3, DMat3, DVec2, DVec3, Mat3, Vec3};
@@ -14,6 +15,7 @@ use rayon::prelude::*;
 use crate::cad::database::{CadDatabase, DatabaseModel, parry_mesh};
 use crate::cad::matching::{Candidate, ObservedObject};
 use crate::cad::orientation::axis_rotations;
+use crate::classes::ClassTable;
 
 /// Object points the optimisation works with (a deterministic stride through the mesh).
 const FIT_POINTS: usize = 300;
@@ -26,7 +28,15 @@ const HUBER_M: f64 = 0.03;
 /// Points farther than this from the model are outliers (label bleeding) while fitting.
 const OUTLIER_M: f64 = 0.15;
 const HEIGHT_WEIGHT: f64 = 1.0;
-const CONTAINMENT_WEIGHT: f64 = 0.5;
+const CONTAINMENT_WEIGHT: f64 = 0.1;
+/// The model's floor rectangle may reach this far (metres) beyond the object's box (a back or
+/// a side that was not seen) before it costs: the distance from the object's points to the
+/// model says nothing of model surface that no point is near.
+const OVERHANG_FREE_M: f64 = 0.1;
+const OVERHANG_WEIGHT: f64 = 0.5;
+/// Metres of residual per metre the scaled model leaves its class's size range (a bookshelf is
+/// never 2 m deep): a wall of cost, not a preference.
+const SIZE_RANGE_WEIGHT: f64 = 5.0;
 /// Metres per unit of log scale: 0.02 makes a 65% stretch cost like 1 cm of misfit.
 const SCALE_PRIOR_WEIGHT: f64 = 0.02;
 /// The first guess of a scale stays within these bounds (the observed box may be partial).
@@ -56,17 +66,10 @@ pub fn align_best(
     db: &CadDatabase,
     candidates: &[Candidate],
 ) -> Option<Alignment> {
-    let all = candidates
+    candidates
         .par_iter()
         .filter_map(|c| align_candidate(object, &db.models()[c.model], *c))
-        .collect::<Vec<_>>();
-    if std::env::var("CAD_DEBUG").is_ok() {
-        for a in &all {
-            let x = a.world_from_model.transform_vector3(Vec3::X);
-            eprintln!("DBG {} {} o{} ME {:.3} AE {:.4} s {:.2?} yaw {:.1} t {:.2?}", object.id, db.models()[a.candidate.model].model.id, a.candidate.orientation, a.candidate.matching_error, a.alignment_error, a.scale, x.y.atan2(x.x).to_degrees(), a.world_from_model.translation);
-        }
-    }
-    all
+        .collect::<Vec<_>>()
         .into_iter()
         .min_by(|a, b| choice_score(a).total_cmp(&choice_score(b)))
 }
@@ -143,6 +146,8 @@ struct PoseFrame {
     model_hi: DVec3,
     /// Database size of the model.
     model_size: DVec3,
+    /// The class's size range, per model axis (canonical frame).
+    class_size: Option<(DVec3, DVec3)>,
     support_z: f64,
     object_height: f64,
     object_yaw: f64,
@@ -187,6 +192,9 @@ impl PoseFrame {
             model_lo: lo.as_dvec3(),
             model_hi: hi.as_dvec3(),
             model_size: model.model.size.as_dvec3().max(DVec3::splat(1e-3)),
+            class_size: ClassTable::builtin()
+                .get(object.class)
+                .map(|c| (c.size_min.as_dvec3(), c.size_max.as_dvec3())),
             support_z: f64::from(b.bottom_z()),
             object_height: f64::from(b.size.z),
             object_yaw: f64::from(b.yaw),
@@ -335,6 +343,29 @@ impl AlignmentProblem<'_> {
             for axis in 0..2 {
                 let outside = (lo[axis] - u[axis]).max(0.0) + (u[axis] - hi[axis]).max(0.0);
                 r.push(CONTAINMENT_WEIGHT * outside);
+            }
+        }
+        // The model's floor rectangle not much beyond the object's box, in the box's frame.
+        let half = 0.5 * frame.object_size.truncate() + DVec2::splat(OVERHANG_FREE_M);
+        let to_object_box = DMat3::from_rotation_z(-frame.object_yaw);
+        let posed = DMat3::from_rotation_z(x[3]);
+        for i in 0..4 {
+            let corner = DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                0.0,
+            );
+            let world = pose.translation.truncate() + (posed * corner).truncate();
+            let u = (to_object_box * (world - frame.object_center).extend(0.0)).truncate();
+            for axis in 0..2 {
+                r.push(OVERHANG_WEIGHT * (u[axis].abs() - half[axis]).max(0.0));
+            }
+        }
+        if let Some((min, max)) = frame.class_size {
+            let size = pose.scale * frame.model_size;
+            for axis in 0..3 {
+                let outside = (min[axis] - size[axis]).max(0.0) + (size[axis] - max[axis]).max(0.0);
+                r.push(SIZE_RANGE_WEIGHT * outside);
             }
         }
         r.extend(x[..3].iter().map(|ln_s| SCALE_PRIOR_WEIGHT * ln_s));

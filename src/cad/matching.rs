@@ -31,9 +31,18 @@ pub struct ObservedObject<'a> {
     pub planes: Vec<Plane>,
     /// The surface points seen of it.
     pub points: &'a [Vec3],
-    /// The way it most likely faces (horizontal unit vector): into the room, away from a wall
-    /// its back is against; `None` when no wall is near or the class has no front.
-    pub facing: Option<Vec3>,
+    /// The way it most likely faces; `None` when the class has no front.
+    pub facing: Option<Facing>,
+}
+
+/// A prior on the way an object faces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Facing {
+    /// Horizontal unit vector.
+    pub direction: Vec3,
+    /// 1 for an object with its back to a wall (it faces away from it); less for weaker
+    /// evidence (it faces the middle of the room, where it is seen from).
+    pub confidence: f32,
 }
 
 /// One model in one axis orientation, with its matching error.
@@ -47,8 +56,9 @@ pub struct Candidate {
     /// db in [0, 2]: 0 upright, 2 upside down; part of `matching_error`, used again after
     /// alignment (an upside-down box-shaped model fits as well as an upright one).
     pub upright_error: f32,
-    /// df in [0, 1]: 0 when the model's front faces the object's `facing`, 1 when it faces the
-    /// wall (0 without a facing); part of `matching_error`, used again after alignment.
+    /// df in [0, 1]: 0 when the model's front faces the object's `facing`, its confidence when
+    /// it faces the opposite way (0 without a facing); part of `matching_error`, used again
+    /// after alignment.
     pub facing_error: f32,
 }
 
@@ -78,7 +88,7 @@ pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -
             let db = 1.0 - rotation.z_axis.z;
             let df = object.facing.map_or(0.0, |facing| {
                 let front = world_from_box * (*rotation * -Vec3::Y);
-                0.5 * (1.0 - front.dot(facing))
+                facing.confidence * 0.5 * (1.0 - front.dot(facing.direction))
             });
             candidates.push(Candidate {
                 model: index,

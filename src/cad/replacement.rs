@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::cad::alignment::{Alignment, align_best};
 use crate::cad::database::CadDatabase;
-use crate::cad::matching::{Candidate, KEEP_CANDIDATES, ObservedObject, rank_candidates};
+use crate::cad::matching::{Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates};
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
@@ -20,6 +20,9 @@ pub const MIN_OBJECT_POINTS: usize = 30;
 
 /// An object whose box comes this close (metres) to a wall has its back to it.
 const BACK_TO_WALL_M: f32 = 0.15;
+/// Confidence of the weaker prior that an object away from walls faces the room's middle (the
+/// side that was seen): enough to choose between shapes that fit alike, not against the shape.
+const FACES_ROOM_CONFIDENCE: f32 = 0.5;
 
 /// The objects of `graph` that replacement works on (not layout, enough points), in node order.
 /// `points` gives each node id its observed surface points (aligned world).
@@ -34,6 +37,18 @@ pub fn observed_objects<'a>(
         .filter(|n| n.class == "wall")
         .filter_map(|n| n.planes.first().map(|p| Plane::from_array(*p)))
         .collect();
+    let room_middle = graph
+        .node("floor")
+        .map(|f| Vec3::from_array(f.bbox.center))
+        .or_else(|| {
+            let walls: Vec<Vec3> = graph
+                .nodes
+                .iter()
+                .filter(|n| n.class == "wall")
+                .map(|n| Vec3::from_array(n.bbox.center))
+                .collect();
+            (!walls.is_empty()).then(|| walls.iter().sum::<Vec3>() / walls.len() as f32)
+        });
     let table = ClassTable::builtin();
     graph
         .nodes
@@ -50,7 +65,13 @@ pub fn observed_objects<'a>(
                 planes: n.planes.iter().map(|p| Plane::from_array(*p)).collect(),
                 points: p,
                 facing: if has_front {
-                    facing_from_walls(&bbox, &walls)
+                    facing_from_walls(&bbox, &walls).or_else(|| {
+                        let to_middle = room_middle? - bbox.center;
+                        Some(Facing {
+                            direction: to_middle.with_z(0.0).try_normalize()?,
+                            confidence: FACES_ROOM_CONFIDENCE,
+                        })
+                    })
                 } else {
                     None
                 },
@@ -59,9 +80,9 @@ pub fn observed_objects<'a>(
         .collect()
 }
 
-/// The inward normal (made horizontal) of the wall nearest to the box, if one is within
+/// Facing the inward normal (made horizontal) of the wall nearest to the box, if one is within
 /// `BACK_TO_WALL_M` of it.
-fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Vec3> {
+fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Facing> {
     walls
         .iter()
         .map(|w| {
@@ -74,7 +95,12 @@ fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Vec3> {
         })
         .filter(|(gap, _)| *gap <= BACK_TO_WALL_M)
         .min_by(|a, b| a.0.total_cmp(&b.0))
-        .and_then(|(_, w)| Vec3::new(w.normal.x, w.normal.y, 0.0).try_normalize())
+        .and_then(|(_, w)| {
+            Some(Facing {
+                direction: w.normal.with_z(0.0).try_normalize()?,
+                confidence: 1.0,
+            })
+        })
 }
 
 /// The ranked candidates of every object (CadMatch).

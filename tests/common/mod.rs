@@ -92,3 +92,27 @@ pub fn render_scene(scene: &str, out: &Path, frames: usize, no_noise: bool) {
     let (code, stdout, stderr) = iscene(&args, &root());
     assert_eq!(code, 0, "rendering {scene} failed: {stdout}{stderr}");
 }
+
+/// Renders `scene` (300 frames) into `dir` and reconstructs every second frame with the oracle
+/// segmentation at 2 cm; returns the sequence and output folders.
+pub fn render_and_map_every_second_frame(
+    scene: &str,
+    dir: &Path,
+    no_noise: bool,
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let seq = dir.join("seq");
+    render_scene(scene, &seq, 300, no_noise);
+    let out = dir.join("out");
+    iscene::pipeline::reconstruct(&iscene::pipeline::ReconstructOptions {
+        input: Some(seq.clone()),
+        out: out.clone(),
+        frames: Some((0, None, 2)),
+        voxel: 0.02,
+        segmentation: iscene::pipeline::SegmentationChoice::Oracle,
+        fusion: iscene::panoptic::InstanceFusion::Joint,
+        estimate_gravity: false,
+        progress: false,
+    })
+    .expect("reconstruct");
+    (seq, out)
+}
