@@ -196,6 +196,7 @@ mod tests {
                 bbox,
                 planes,
                 points: &points,
+                facing: None,
             };
             let ranked = rank_candidates(&object, &db, KEEP_CANDIDATES);
             assert_eq!(ranked.len(), KEEP_CANDIDATES.min(24 * db.of_class(class).count()));

@@ -9,6 +9,7 @@ pub mod library;
 pub mod matching;
 pub mod model;
 pub mod orientation;
+pub mod physical_check;
 pub mod replacement;
 pub mod seating;
 pub mod storage;
