@@ -79,7 +79,7 @@ pub struct PanopticReport {
 }
 
 /// Stages with systems in this build.
-const BUILT_STAGES: [ReconstructionStage; 7] = [
+const BUILT_STAGES: [ReconstructionStage; 8] = [
     ReconstructionStage::Ingest,
     ReconstructionStage::Segment,
     ReconstructionStage::Integrate,
@@ -87,6 +87,7 @@ const BUILT_STAGES: [ReconstructionStage; 7] = [
     ReconstructionStage::ContactGraph,
     ReconstructionStage::CadMatch,
     ReconstructionStage::CadAlign,
+    ReconstructionStage::PhysicalCheck,
 ];
 
 fn fusion_name(fusion: InstanceFusion) -> &'static str {

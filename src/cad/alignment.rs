@@ -59,22 +59,33 @@ pub struct Alignment {
 /// priors of the ranking.
 const PRIOR_AE_WEIGHT: f32 = 0.02;
 
-/// Aligns every candidate and returns the one with the lowest alignment error plus prior
-/// penalties (ties by rank).
+/// Aligns every candidate; the alignments come best first: lowest alignment error plus prior
+/// penalties (`choice_score`), ties by rank.
+pub fn align_all(
+    object: &ObservedObject,
+    db: &CadDatabase,
+    candidates: &[Candidate],
+) -> Vec<Alignment> {
+    let mut aligned: Vec<Alignment> = candidates
+        .par_iter()
+        .filter_map(|c| align_candidate(object, &db.models()[c.model], *c))
+        .collect();
+    // A stable sort keeps the rank order among equal scores.
+    aligned.sort_by(|a, b| choice_score(a).total_cmp(&choice_score(b)));
+    aligned
+}
+
+/// The best of [`align_all`].
 pub fn align_best(
     object: &ObservedObject,
     db: &CadDatabase,
     candidates: &[Candidate],
 ) -> Option<Alignment> {
-    candidates
-        .par_iter()
-        .filter_map(|c| align_candidate(object, &db.models()[c.model], *c))
-        .collect::<Vec<_>>()
-        .into_iter()
-        .min_by(|a, b| choice_score(a).total_cmp(&choice_score(b)))
+    align_all(object, db, candidates).into_iter().next()
 }
 
-fn choice_score(a: &Alignment) -> f32 {
+/// What candidates are chosen by: the alignment error plus the ranking's priors, metres.
+pub fn choice_score(a: &Alignment) -> f32 {
     a.alignment_error
         + PRIOR_AE_WEIGHT * (a.candidate.facing_error + a.candidate.upright_error)
 }

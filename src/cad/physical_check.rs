@@ -7,6 +7,8 @@
 use glam::{Affine3A, Vec2, Vec3};
 use parry3d::math::Pose;
 use parry3d::shape::ConvexPolyhedron;
+use rayon::prelude::*;
+use serde::Serialize;
 
 use crate::cad::database::DatabaseModel;
 use crate::geometry::Plane;
@@ -173,6 +175,196 @@ pub fn support_area(child: &PlacedSolid, parent: &PlacedSolid) -> f32 {
     held as f32 / (n * n) as f32
 }
 
+/// What holds an object up, as the check needs it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Holder {
+    /// Another object (index among the checked objects).
+    Object(usize),
+    /// The floor plane.
+    Floor(Plane),
+    /// A wall, or nothing: no support test, no snapping.
+    Other,
+}
+
+/// The final state of one object's placement.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlacementCheck {
+    /// Which of the object's aligned candidates was chosen (0: the best by alignment).
+    pub chosen: usize,
+    /// Deepest interpenetration with another object, metres.
+    pub max_penetration_m: f32,
+    /// Deepest reach behind the floor or a wall, metres.
+    pub layout_penetration_m: f32,
+    /// Share of its bottom on the parent model's surface, when another object holds it.
+    pub support_area: Option<f32>,
+    /// Conflicts left: penetrations over 1 cm (layout or object), failed support tests.
+    pub conflicts: usize,
+}
+
+/// The min-conflict choice of every object's placement, snapped onto its support.
+pub struct CheckedPlacements {
+    /// Per object: the chosen alignment's index and its world-from-model after snapping.
+    pub chosen: Vec<Option<(usize, Affine3A)>>,
+    pub checks: Vec<Option<PlacementCheck>>,
+    /// Objects moved off their best alignment by the search.
+    pub swaps: usize,
+}
+
+/// Search steps at most (each moves one object to another candidate).
+const MAX_SEARCH_STEPS: usize = 64;
+
+/// Chooses among each object's `alignments` (best first) so that as few conflicts as possible
+/// remain, then snaps every model onto what holds it. `models` gives each alignment's database
+/// model; `layout` are the floor's and walls' planes, facing into the room.
+pub fn check_placements(
+    alignments: &[Vec<(&DatabaseModel, Affine3A)>],
+    holders: &[Holder],
+    layout: &[Plane],
+) -> CheckedPlacements {
+    let solids: Vec<Vec<PlacedSolid>> = alignments
+        .par_iter()
+        .map(|options| {
+            options
+                .iter()
+                .map(|(model, pose)| PlacedSolid::new(model, pose))
+                .collect()
+        })
+        .collect();
+    let n = alignments.len();
+    let mut choice: Vec<Option<usize>> = solids
+        .iter()
+        .map(|s| (!s.is_empty()).then_some(0))
+        .collect();
+    let conflicts_of = |i: usize, k: usize, choice: &[Option<usize>]| -> usize {
+        let me = &solids[i][k];
+        let placed = |j: usize| choice[j].map(|m| &solids[j][m]);
+        let mut count = usize::from(layout_penetration(me, layout) > MAX_PENETRATION_M);
+        for j in (0..n).filter(|&j| j != i) {
+            if let Some(other) = placed(j) {
+                count += usize::from(penetration_depth(me, other) > MAX_PENETRATION_M);
+                if holders[j] == Holder::Object(i) {
+                    count += usize::from(support_area(other, me) < MIN_SUPPORT_AREA);
+                }
+            }
+        }
+        if let Holder::Object(p) = holders[i]
+            && let Some(parent) = placed(p)
+        {
+            count += usize::from(support_area(me, parent) < MIN_SUPPORT_AREA);
+        }
+        count
+    };
+    let mut tried_in_vain = vec![false; n];
+    for _ in 0..MAX_SEARCH_STEPS {
+        let current: Vec<usize> = (0..n)
+            .map(|i| choice[i].map_or(0, |k| conflicts_of(i, k, &choice)))
+            .collect();
+        let Some(worst) = (0..n)
+            .filter(|&i| current[i] > 0 && !tried_in_vain[i])
+            .max_by_key(|&i| (current[i], std::cmp::Reverse(i)))
+        else {
+            break;
+        };
+        let best = (0..solids[worst].len())
+            .map(|k| (conflicts_of(worst, k, &choice), k))
+            .min()
+            .map(|(c, k)| (c, k));
+        match best {
+            Some((c, k)) if c < current[worst] => {
+                choice[worst] = Some(k);
+                tried_in_vain.iter_mut().for_each(|t| *t = false);
+            }
+            _ => tried_in_vain[worst] = true,
+        }
+    }
+    let swaps = choice.iter().filter(|c| matches!(c, Some(k) if *k > 0)).count();
+    // Snap parents before children: a child rests on its parent's final surface.
+    let mut poses: Vec<Option<Affine3A>> = (0..n)
+        .map(|i| choice[i].map(|k| alignments[i][k].1))
+        .collect();
+    let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
+    for i in support_order(holders) {
+        let (Some(k), Some(pose)) = (choice[i], poses[i]) else {
+            continue;
+        };
+        let model = alignments[i][k].0;
+        let solid = PlacedSolid::new(model, &pose);
+        let centre = 0.25 * solid.footprint.iter().sum::<Vec3>();
+        let target = match holders[i] {
+            Holder::Object(p) => finals[p]
+                .as_ref()
+                .and_then(|parent| parent.surface_height_at(centre.truncate(), solid.bottom_z())),
+            Holder::Floor(plane) if plane.normal.z.abs() > 1e-3 => Some(
+                -(plane.normal.x * centre.x + plane.normal.y * centre.y + plane.offset)
+                    / plane.normal.z,
+            ),
+            _ => None,
+        };
+        let snapped = match target {
+            Some(z) => Affine3A::from_translation(Vec3::Z * (z - solid.bottom_z())) * pose,
+            None => pose,
+        };
+        poses[i] = Some(snapped);
+        finals[i] = Some(PlacedSolid::new(model, &snapped));
+    }
+    let checks = (0..n)
+        .map(|i| {
+            let me = finals[i].as_ref()?;
+            let others = (0..n).filter(|&j| j != i).filter_map(|j| finals[j].as_ref());
+            let max_penetration_m = others
+                .map(|o| penetration_depth(me, o))
+                .fold(0.0f32, f32::max);
+            let layout_penetration_m = layout_penetration(me, layout);
+            let held_area = match holders[i] {
+                Holder::Object(p) => finals[p].as_ref().map(|parent| support_area(me, parent)),
+                _ => None,
+            };
+            let children_unsupported = (0..n)
+                .filter(|&c| holders[c] == Holder::Object(i))
+                .filter_map(|c| finals[c].as_ref())
+                .filter(|c| support_area(c, me) < MIN_SUPPORT_AREA)
+                .count();
+            let conflicts = usize::from(max_penetration_m > MAX_PENETRATION_M)
+                + usize::from(layout_penetration_m > MAX_PENETRATION_M)
+                + usize::from(held_area.is_some_and(|a| a < MIN_SUPPORT_AREA))
+                + children_unsupported;
+            Some(PlacementCheck {
+                chosen: choice[i]?,
+                max_penetration_m,
+                layout_penetration_m,
+                support_area: held_area,
+                conflicts,
+            })
+        })
+        .collect();
+    CheckedPlacements {
+        chosen: (0..n)
+            .map(|i| Some((choice[i]?, poses[i]?)))
+            .collect(),
+        checks,
+        swaps,
+    }
+}
+
+/// Object indices with every holder before what it holds (objects in a support cycle, which
+/// the contact graph never makes, come last).
+fn support_order(holders: &[Holder]) -> Vec<usize> {
+    let depth = |mut i: usize| {
+        let mut d = 0;
+        while let Holder::Object(p) = holders[i] {
+            d += 1;
+            i = p;
+            if d > holders.len() {
+                break;
+            }
+        }
+        d
+    };
+    let mut order: Vec<usize> = (0..holders.len()).collect();
+    order.sort_by_key(|&i| (depth(i), i));
+    order
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -204,5 +396,33 @@ mod tests {
         let low = placed(&db, "table_01", Vec3::new(0.0, 0.0, -0.02));
         assert!((layout_penetration(&low, &[floor]) - 0.02).abs() < 1e-3);
         assert!(layout_penetration(&table, &[floor]) < 1e-4);
+    }
+
+    #[test]
+    fn the_search_moves_a_sunk_cup_to_a_candidate_that_rests_on_the_table_and_snaps_it() {
+        let db = CadDatabase::parametric();
+        let model = |id: &str| db.models().iter().find(|m| m.model.id == id).expect("model");
+        let table = model("table_01");
+        let top = table.model.size.z;
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let cup = model("cup_01");
+        let alignments = vec![
+            vec![(table, Affine3A::IDENTITY)],
+            vec![
+                // Best by alignment, but 4 cm into the table top.
+                (cup, Affine3A::from_translation(Vec3::new(0.2, 0.1, top - 0.04))),
+                // Second best: floating 5 mm above it.
+                (cup, Affine3A::from_translation(Vec3::new(0.2, 0.1, top + 0.005))),
+            ],
+        ];
+        let holders = [Holder::Floor(floor), Holder::Object(0)];
+        let checked = check_placements(&alignments, &holders, &[floor]);
+        let (k, pose) = checked.chosen[1].expect("cup placed");
+        assert_eq!(k, 1, "the cup that does not sink in");
+        assert_eq!(checked.swaps, 1);
+        assert!((pose.translation.z - top).abs() < 1e-4, "snapped onto the top: {}", pose.translation.z);
+        let check = checked.checks[1].as_ref().expect("cup check");
+        assert_eq!(check.conflicts, 0, "{check:?}");
+        assert!(check.support_area.expect("held by the table") > 0.99);
     }
 }

@@ -7,8 +7,9 @@ use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::cad::alignment::{Alignment, align_best};
-use crate::cad::database::CadDatabase;
+use crate::cad::alignment::{Alignment, align_all};
+use crate::cad::database::{CadDatabase, DatabaseModel};
+use crate::cad::physical_check::{Holder, PlacementCheck, check_placements};
 use crate::cad::matching::{Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates};
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
@@ -111,17 +112,16 @@ pub fn rank_scene(objects: &[ObservedObject], db: &CadDatabase) -> Vec<Vec<Candi
         .collect()
 }
 
-/// The best alignment of every object among its candidates (CadAlign); `None` where no
-/// candidate could be aligned.
+/// Every object's candidates aligned, best first (CadAlign); empty where none could be.
 pub fn align_scene(
     objects: &[ObservedObject],
     db: &CadDatabase,
     candidates: &[Vec<Candidate>],
-) -> Vec<Option<Alignment>> {
+) -> Vec<Vec<Alignment>> {
     objects
         .par_iter()
         .zip(candidates)
-        .map(|(o, c)| align_best(o, db, c))
+        .map(|(o, c)| align_all(o, db, c))
         .collect()
 }
 
@@ -134,25 +134,68 @@ pub struct ReplacementRecord {
     pub matching_error: f32,
     /// Per model axis.
     pub scale: [f32; 3],
+    /// The physical check's verdict on the final placement.
+    #[serde(flatten)]
+    pub check: PlacementCheck,
 }
 
-/// Writes each alignment into its node's `cad` (the scale there is the geometric mean; the
-/// per-axis scale is in `world_from_model`) and returns the records.
-pub fn apply_replacements(
+/// The global physical check (PhysicalCheck): chooses among the aligned candidates of the
+/// objects `ids` (`alignments`, best first) so that models neither interpenetrate nor overhang
+/// their supports, snaps them onto what holds them (as `graph`'s support edges say), and writes
+/// each placement into its node's `cad` (the scale there is the geometric mean; the per-axis
+/// scale is in `world_from_model`).
+pub fn check_and_place(
     graph: &mut ContactGraph,
     db: &CadDatabase,
-    objects: &[(String, Option<Alignment>)],
+    ids: &[String],
+    alignments: &[Vec<Alignment>],
 ) -> Vec<ReplacementRecord> {
+    let layout_plane = |id: &str| {
+        graph
+            .node(id)
+            .and_then(|n| n.planes.first())
+            .map(|p| Plane::from_array(*p))
+    };
+    let floor = layout_plane("floor");
+    let layout: Vec<Plane> = graph
+        .nodes
+        .iter()
+        .filter(|n| n.class == "wall" || n.class == "floor")
+        .filter_map(|n| layout_plane(&n.id))
+        .collect();
+    let holders: Vec<Holder> = ids
+        .iter()
+        .map(|id| match graph.parent_of(id) {
+            Some("floor") => floor.map_or(Holder::Other, Holder::Floor),
+            Some(parent) => ids
+                .iter()
+                .position(|o| o == parent)
+                .map_or(Holder::Other, Holder::Object),
+            None => Holder::Other,
+        })
+        .collect();
+    let options: Vec<Vec<(&DatabaseModel, glam::Affine3A)>> = alignments
+        .iter()
+        .map(|list| {
+            list.iter()
+                .map(|a| (&db.models()[a.candidate.model], a.world_from_model))
+                .collect()
+        })
+        .collect();
+    let checked = check_placements(&options, &holders, &layout);
     let mut records = Vec::new();
-    for (id, alignment) in objects {
-        let (Some(a), Some(node)) = (alignment, graph.nodes.iter_mut().find(|n| n.id == *id))
-        else {
+    for (i, id) in ids.iter().enumerate() {
+        let (Some((k, pose)), Some(check)) = (checked.chosen[i], checked.checks[i].clone()) else {
             continue;
         };
+        let Some(node) = graph.nodes.iter_mut().find(|n| n.id == *id) else {
+            continue;
+        };
+        let a = &alignments[i][k];
         let model = &db.models()[a.candidate.model].model;
         node.cad = Some(CadPlacement {
             model: model.id.clone(),
-            world_from_model: Mat4::from(a.world_from_model).to_cols_array(),
+            world_from_model: Mat4::from(pose).to_cols_array(),
             scale: a.scale.element_product().cbrt(),
             alignment_error: a.alignment_error,
         });
@@ -162,6 +205,7 @@ pub fn apply_replacements(
             alignment_error_m: a.alignment_error,
             matching_error: a.candidate.matching_error,
             scale: a.scale.to_array(),
+            check,
         });
     }
     records

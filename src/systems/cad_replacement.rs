@@ -1,6 +1,7 @@
-//! The CadMatch and CadAlign stages: rank the database's models for every object of the contact
-//! graph, align the best candidates to the object's segment points, and let the winning model's
-//! frame become the entity's frame in the transform tree.
+//! The CadMatch, CadAlign and PhysicalCheck stages: rank the database's models for every object
+//! of the contact graph, align the best candidates to the object's observed surface, choose
+//! among them so the models neither interpenetrate nor overhang their supports, snap them on,
+//! and let each chosen model's frame become its entity's frame in the transform tree.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -8,10 +9,11 @@ use std::sync::Arc;
 use bevy::prelude::*;
 use serde::Serialize;
 
+use crate::cad::alignment::Alignment;
 use crate::cad::database::CadDatabase;
 use crate::cad::matching::Candidate;
 use crate::cad::replacement::{
-    ReplacementRecord, align_scene, apply_replacements, observed_objects, rank_scene,
+    ReplacementRecord, align_scene, check_and_place, observed_objects, rank_scene,
 };
 use crate::components::{ObservedSurface, SceneEntity};
 use crate::systems::contact_graph::SceneContactGraph;
@@ -26,7 +28,11 @@ pub struct CadLibrary(pub Arc<CadDatabase>);
 #[derive(Resource, Clone, Debug, Default)]
 pub struct CadCandidates(pub Vec<(String, Vec<Candidate>)>);
 
-/// What CadAlign did, for report.json.
+/// CadAlign's result: each object id's aligned candidates, best first.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct CadAlignments(pub Vec<(String, Vec<Alignment>)>);
+
+/// What replacement did, for report.json.
 #[derive(Resource, Clone, Debug, Serialize)]
 pub struct CadReport {
     pub database_models: usize,
@@ -34,6 +40,10 @@ pub struct CadReport {
     pub objects: usize,
     pub replaced: Vec<ReplacementRecord>,
     pub mean_alignment_error_m: Option<f32>,
+    /// Objects the physical check moved off their best alignment.
+    pub swapped: usize,
+    /// Objects whose final placement still conflicts (penetration over 1 cm, support test).
+    pub conflicted: Vec<String>,
 }
 
 /// Each entity id's observed surface points.
@@ -79,7 +89,7 @@ fn cad_align_stage(world: &mut World) {
     ) else {
         return;
     };
-    let mut graph = scene.graph.clone();
+    let graph = scene.graph.clone();
     let candidates = candidates.0.clone();
     let db = db.0.clone();
     let points = observed_points(world);
@@ -95,17 +105,35 @@ fn cad_align_stage(world: &mut World) {
         })
         .collect();
     let aligned = align_scene(&objects, &db, &ranked);
-    let results: Vec<(String, Option<_>)> = objects
+    let alignments = objects
         .iter()
         .map(|o| o.id.to_string())
         .zip(aligned)
         .collect();
+    world.insert_resource(CadAlignments(alignments));
+}
+
+fn physical_check_stage(world: &mut World) {
+    if world.resource::<StageError>().0.is_some() {
+        return;
+    }
+    let (Some(scene), Some(alignments), Some(db)) = (
+        world.get_resource::<SceneContactGraph>(),
+        world.get_resource::<CadAlignments>(),
+        world.get_resource::<CadLibrary>(),
+    ) else {
+        return;
+    };
+    let mut graph = scene.graph.clone();
+    let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) =
+        alignments.0.iter().cloned().unzip();
+    let db = db.0.clone();
     let object_count = graph
         .nodes
         .iter()
         .filter(|n| n.kind != crate::classes::EntityKind::Layout)
         .count();
-    let replaced = apply_replacements(&mut graph, &db, &results);
+    let replaced = check_and_place(&mut graph, &db, &ids, &options);
     let by_id: HashMap<String, Entity> = world
         .query::<(Entity, &SceneEntity)>()
         .iter(world)
@@ -123,13 +151,19 @@ fn cad_align_stage(world: &mut World) {
     world.insert_resource(CadReport {
         database_models: db.len(),
         objects: object_count,
+        swapped: replaced.iter().filter(|r| r.check.chosen > 0).count(),
+        conflicted: replaced
+            .iter()
+            .filter(|r| r.check.conflicts > 0)
+            .map(|r| r.id.clone())
+            .collect(),
         replaced,
         mean_alignment_error_m,
     });
     world.resource_mut::<SceneContactGraph>().graph = graph;
 }
 
-/// Adds the CadMatch and CadAlign stages.
+/// Adds the CadMatch, CadAlign and PhysicalCheck stages.
 pub struct CadReplacementPlugin;
 
 impl Plugin for CadReplacementPlugin {
@@ -140,6 +174,7 @@ impl Plugin for CadReplacementPlugin {
             (
                 cad_match_stage.in_set(Stage::CadMatch),
                 cad_align_stage.in_set(Stage::CadAlign),
+                physical_check_stage.in_set(Stage::PhysicalCheck),
             ),
         );
     }
