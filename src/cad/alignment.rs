@@ -133,10 +133,11 @@ pub fn align_candidate(
         }
     }
     let pose = frame.pose(&params);
-    let alignment_error = alignment_error(object.points, model, &pose)?;
+    let world_from_model = pose.world_from_model().as_affine3a();
+    let alignment_error = alignment_error(object.points, model, &world_from_model)?;
     Some(Alignment {
         candidate,
-        world_from_model: pose.world_from_model().as_affine3a(),
+        world_from_model,
         scale: pose.scale.as_vec3(),
         alignment_error,
     })
@@ -207,7 +208,7 @@ impl PoseFrame {
                 .get(object.class)
                 .map(|c| (c.size_min.as_dvec3(), c.size_max.as_dvec3())),
             support_z: f64::from(b.bottom_z()),
-            object_height: f64::from(b.size.z),
+            object_height: f64::from(object.top_z - b.bottom_z()),
             object_yaw: f64::from(b.yaw),
             object_center: b.center.truncate().as_dvec2(),
             object_size: b.size.as_dvec3(),
@@ -423,18 +424,31 @@ impl LeastSquaresProblem<f64, Dyn, U6> for AlignmentProblem<'_> {
     }
 }
 
-/// RMS distance from `points` to the model surface under `pose` (exact for the scaled model).
-fn alignment_error(points: &[Vec3], model: &DatabaseModel, pose: &Pose) -> Option<f32> {
-    let scale = pose.scale.as_vec3();
+/// RMS distance (metres) from `points` to the model placed by `world_from_model` (a rotation
+/// times a per-axis scale, then a translation), exact for the scaled model; `None` without
+/// points or for a degenerate placement.
+pub fn alignment_error(
+    points: &[Vec3],
+    model: &DatabaseModel,
+    world_from_model: &Affine3A,
+) -> Option<f32> {
+    let m = world_from_model.matrix3;
+    let scale = Vec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+    if scale.min_element() < 1e-6 || !scale.is_finite() {
+        return None;
+    }
+    let rotation = Mat3::from_cols(
+        Vec3::from(m.x_axis) / scale.x,
+        Vec3::from(m.y_axis) / scale.y,
+        Vec3::from(m.z_axis) / scale.z,
+    );
     let mut scaled = model.mesh.clone();
     for p in &mut scaled.positions {
         *p *= scale;
     }
     let shape = parry_mesh(&scaled).ok()?;
-    let to_scaled = {
-        let rotation_t = pose.rotation.transpose();
-        move |q: Vec3| (rotation_t * (q.as_dvec3() - pose.translation)).as_vec3()
-    };
+    let rotation_t = rotation.transpose();
+    let translation = Vec3::from(world_from_model.translation);
     let sampled: Vec<Vec3> = stride_sample(points, ERROR_POINTS).collect();
     if sampled.is_empty() {
         return None;
@@ -443,7 +457,7 @@ fn alignment_error(points: &[Vec3], model: &DatabaseModel, pose: &Pose) -> Optio
     let sum: f64 = sampled
         .iter()
         .map(|q| {
-            let local = to_scaled(*q);
+            let local = rotation_t * (*q - translation);
             let d = f64::from(shape.project_local_point(local, false).point.distance(local));
             d * d
         })
@@ -490,6 +504,7 @@ mod tests {
         ObservedObject {
             id,
             class: id.split('_').next().expect("class"),
+            top_z: bbox.top_z(),
             bbox,
             planes: Vec::<Plane>::new(),
             points,

@@ -28,6 +28,9 @@ pub struct ObservedObject<'a> {
     pub class: &'a str,
     /// The refined gravity-aligned box (its bottom on the supporting plane).
     pub bbox: GravityBox,
+    /// Where its top is: the box's top, or the plane the objects it holds rest on when that is
+    /// just under the box's top (a table's box reaches up into the bleeding of the cups on it).
+    pub top_z: f32,
     pub planes: Vec<Plane>,
     /// The surface points seen of it.
     pub points: &'a [Vec3],
@@ -193,6 +196,7 @@ mod tests {
             let object = ObservedObject {
                 id,
                 class,
+                top_z: bbox.top_z(),
                 bbox,
                 planes,
                 points: &points,

@@ -119,10 +119,16 @@ fn height_in_triangle(t: &[Vec3; 3], xy: Vec2) -> Option<f32> {
 /// How deep (metres, 0 when apart) two placed models interpenetrate: the deepest contact of
 /// any two of their convex pieces.
 pub fn penetration_depth(a: &PlacedSolid, b: &PlacedSolid) -> f32 {
+    deepest_contact(a, b).map_or(0.0, |(depth, _)| depth)
+}
+
+/// The deepest interpenetration of two placed models and its normal (out of `a`, towards `b`);
+/// `None` when they do not interpenetrate.
+pub fn deepest_contact(a: &PlacedSolid, b: &PlacedSolid) -> Option<(f32, Vec3)> {
     if !overlap(a.lo, a.hi, b.lo, b.hi) {
-        return 0.0;
+        return None;
     }
-    let mut deepest = 0.0f32;
+    let mut deepest: Option<(f32, Vec3)> = None;
     for (pa, alo, ahi) in &a.pieces {
         if !overlap(*alo, *ahi, b.lo, b.hi) {
             continue;
@@ -133,8 +139,10 @@ pub fn penetration_depth(a: &PlacedSolid, b: &PlacedSolid) -> f32 {
             }
             if let Ok(Some(contact)) =
                 parry3d::query::contact(&Pose::IDENTITY, pa, &Pose::IDENTITY, pb, 0.0)
+                && contact.dist < 0.0
+                && deepest.is_none_or(|(d, _)| -contact.dist > d)
             {
-                deepest = deepest.max(-contact.dist);
+                deepest = Some((-contact.dist, contact.normal1));
             }
         }
     }
@@ -278,10 +286,13 @@ pub fn check_placements(
         }
     }
     let swaps = choice.iter().filter(|c| matches!(c, Some(k) if *k > 0)).count();
-    // Snap parents before children: a child rests on its parent's final surface.
     let mut poses: Vec<Option<Affine3A>> = (0..n)
         .map(|i| choice[i].map(|k| alignments[i][k].1))
         .collect();
+    let models: Vec<Option<&DatabaseModel>> =
+        (0..n).map(|i| choice[i].map(|k| alignments[i][k].0)).collect();
+    separate_neighbours(&models, &mut poses);
+    // Snap parents before children: a child rests on its parent's final surface.
     let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
     for i in support_order(holders) {
         let (Some(k), Some(pose)) = (choice[i], poses[i]) else {
@@ -344,6 +355,93 @@ pub fn check_placements(
         checks,
         swaps,
     }
+}
+
+/// Side by side, neighbours overlapping by at most this much (metres) are pulled apart; more is
+/// a segmentation fault (one object's label over its neighbour) that shrinking would hide.
+const MAX_SEPARATED_M: f32 = 0.1;
+/// Rounds of pulling apart (a pair's separation can push one into a third).
+const SEPARATION_ROUNDS: usize = 4;
+/// Pulled-apart neighbours end this far apart (metres).
+const SEPARATION_GAP_M: f32 = 0.002;
+
+/// Neighbours that interpenetrate side by side (horizontal contact normal) by no more than
+/// `MAX_SEPARATED_M`, each shrunk along the contact normal by half the depth with its far side
+/// kept: both models were widened by the same bleeding across their shared boundary, so the
+/// truth lies in the middle.
+fn separate_neighbours(models: &[Option<&DatabaseModel>], poses: &mut [Option<Affine3A>]) {
+    let n = models.len();
+    for _ in 0..SEPARATION_ROUNDS {
+        let solids: Vec<Option<PlacedSolid>> = (0..n)
+            .map(|i| Some(PlacedSolid::new(models[i]?, &poses[i]?)))
+            .collect();
+        let mut moved = false;
+        for i in 0..n {
+            for j in (i + 1)..n {
+                let (Some(a), Some(b)) = (&solids[i], &solids[j]) else {
+                    continue;
+                };
+                let Some((depth, normal)) = deepest_contact(a, b) else {
+                    continue;
+                };
+                let horizontal = normal.with_z(0.0);
+                if depth <= 0.5 * MAX_PENETRATION_M
+                    || depth > MAX_SEPARATED_M
+                    || horizontal.length() < 0.9
+                {
+                    continue;
+                }
+                let push = 0.5 * depth + SEPARATION_GAP_M;
+                let direction = horizontal.normalize();
+                for (k, away) in [(i, -direction), (j, direction)] {
+                    if let (Some(pose), Some(solid)) = (poses[k], &solids[k]) {
+                        poses[k] = Some(shrink_from(pose, solid, away, push));
+                    }
+                }
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+}
+
+/// `pose` with the model shrunk by `amount` metres along the model axis nearest to `away`, its
+/// side towards `away` kept where it is (the other side retreats).
+fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> Affine3A {
+    let axes = [pose.matrix3.x_axis, pose.matrix3.y_axis, pose.matrix3.z_axis];
+    let Some(k) = (0..3).max_by(|&a, &b| {
+        let along = |v: glam::Vec3A| Vec3::from(v).normalize_or_zero().dot(away).abs();
+        along(axes[a]).total_cmp(&along(axes[b]))
+    }) else {
+        return pose;
+    };
+    let extent = solid
+        .pieces
+        .iter()
+        .flat_map(|(p, _, _)| p.points().iter())
+        .map(|v| v.dot(away))
+        .fold((f32::MAX, f32::MIN), |(lo, hi), d| (lo.min(d), hi.max(d)));
+    let width = extent.1 - extent.0;
+    if width <= 2.0 * amount {
+        return pose;
+    }
+    let mut scale = Vec3::ONE;
+    scale[k] = 1.0 - amount / width;
+    let shrunk = pose * Affine3A::from_scale(scale);
+    // Shrinking about the model's origin moved the kept side; move it back.
+    let kept_before = extent.1;
+    let kept_after = solid
+        .pieces
+        .iter()
+        .flat_map(|(p, _, _)| p.points().iter())
+        .map(|v| {
+            let model_point = pose.inverse().transform_point3(*v);
+            shrunk.transform_point3(model_point).dot(away)
+        })
+        .fold(f32::MIN, f32::max);
+    Affine3A::from_translation(away * (kept_before - kept_after)) * shrunk
 }
 
 /// Object indices with every holder before what it holds (objects in a support cycle, which

@@ -7,7 +7,7 @@ use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::cad::alignment::{Alignment, align_all};
+use crate::cad::alignment::{Alignment, align_all, alignment_error, choice_score};
 use crate::cad::database::{CadDatabase, DatabaseModel};
 use crate::cad::physical_check::{Holder, PlacementCheck, check_placements};
 use crate::cad::matching::{Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates};
@@ -21,6 +21,10 @@ pub const MIN_OBJECT_POINTS: usize = 30;
 
 /// An object whose box comes this close (metres) to a wall has its back to it.
 const BACK_TO_WALL_M: f32 = 0.15;
+/// The objects an object holds define its top when they rest at most this far (metres) under
+/// its box's top.
+const TOP_FROM_CHILDREN_M: f32 = 0.1;
+
 /// Confidence of the weaker prior that an object away from walls faces the room's middle (the
 /// side that was seen): enough to choose between shapes that fit alike, not against the shape.
 const FACES_ROOM_CONFIDENCE: f32 = 0.5;
@@ -59,9 +63,18 @@ pub fn observed_objects<'a>(
             let p = points.get(&n.id)?;
             let bbox = GravityBox::from(&n.bbox);
             let has_front = table.get(&n.class).is_some_and(|c| c.yaw_symmetry == 1);
+            let top_z = graph
+                .support_edges()
+                .filter(|(parent, _)| *parent == n.id)
+                .filter_map(|(_, child)| graph.node(child))
+                .map(|c| GravityBox::from(&c.bbox).bottom_z())
+                .filter(|z| (bbox.top_z() - TOP_FROM_CHILDREN_M..=bbox.top_z()).contains(z))
+                .fold(None, |top: Option<f32>, z| Some(top.map_or(z, |t| t.max(z))))
+                .unwrap_or(bbox.top_z());
             (p.len() >= MIN_OBJECT_POINTS).then(|| ObservedObject {
                 id: &n.id,
                 class: &n.class,
+                top_z,
                 bbox,
                 planes: n.planes.iter().map(|p| Plane::from_array(*p)).collect(),
                 points: p,
@@ -125,6 +138,11 @@ pub fn align_scene(
         .collect()
 }
 
+/// The physical check may choose a candidate whose choice score (AE plus priors) exceeds the
+/// best's by this share of it, or by `SWAP_SLACK_M`, whichever is more.
+const SWAP_SLACK_RATIO: f32 = 0.5;
+const SWAP_SLACK_M: f32 = 0.01;
+
 /// One object's replacement, as report.json lists it.
 #[derive(Clone, Debug, Serialize)]
 pub struct ReplacementRecord {
@@ -143,12 +161,14 @@ pub struct ReplacementRecord {
 /// objects `ids` (`alignments`, best first) so that models neither interpenetrate nor overhang
 /// their supports, snaps them onto what holds them (as `graph`'s support edges say), and writes
 /// each placement into its node's `cad` (the scale there is the geometric mean; the per-axis
-/// scale is in `world_from_model`).
+/// scale is in `world_from_model`) with its alignment error measured again on `points` (the
+/// check moves models by millimetres to centimetres).
 pub fn check_and_place(
     graph: &mut ContactGraph,
     db: &CadDatabase,
     ids: &[String],
     alignments: &[Vec<Alignment>],
+    points: &HashMap<String, Vec<Vec3>>,
 ) -> Vec<ReplacementRecord> {
     let layout_plane = |id: &str| {
         graph
@@ -174,10 +194,14 @@ pub fn check_and_place(
             None => Holder::Other,
         })
         .collect();
+    // Only candidates that explain the points about as well as the best may replace it: a
+    // table lying on its side conflicts with nothing, and explains nothing.
     let options: Vec<Vec<(&DatabaseModel, glam::Affine3A)>> = alignments
         .iter()
         .map(|list| {
+            let best = list.first().map_or(0.0, choice_score);
             list.iter()
+                .take_while(|a| choice_score(a) <= best + (SWAP_SLACK_RATIO * best).max(SWAP_SLACK_M))
                 .map(|a| (&db.models()[a.candidate.model], a.world_from_model))
                 .collect()
         })
@@ -192,19 +216,26 @@ pub fn check_and_place(
             continue;
         };
         let a = &alignments[i][k];
-        let model = &db.models()[a.candidate.model].model;
+        let entry = &db.models()[a.candidate.model];
+        let model = &entry.model;
+        let m = pose.matrix3;
+        let scale = Vec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+        let error = points
+            .get(id)
+            .and_then(|p| alignment_error(p, entry, &pose))
+            .unwrap_or(a.alignment_error);
         node.cad = Some(CadPlacement {
             model: model.id.clone(),
             world_from_model: Mat4::from(pose).to_cols_array(),
-            scale: a.scale.element_product().cbrt(),
-            alignment_error: a.alignment_error,
+            scale: scale.element_product().cbrt(),
+            alignment_error: error,
         });
         records.push(ReplacementRecord {
             id: id.clone(),
             model: model.id.clone(),
-            alignment_error_m: a.alignment_error,
+            alignment_error_m: error,
             matching_error: a.candidate.matching_error,
-            scale: a.scale.to_array(),
+            scale: scale.to_array(),
             check,
         });
     }

@@ -133,7 +133,8 @@ fn physical_check_stage(world: &mut World) {
         .iter()
         .filter(|n| n.kind != crate::classes::EntityKind::Layout)
         .count();
-    let replaced = check_and_place(&mut graph, &db, &ids, &options);
+    let points = observed_points(world);
+    let replaced = check_and_place(&mut graph, &db, &ids, &options, &points);
     let by_id: HashMap<String, Entity> = world
         .query::<(Entity, &SceneEntity)>()
         .iter(world)
