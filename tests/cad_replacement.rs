@@ -1,7 +1,11 @@
 //! CAD replacement on rendered scenes with realistic depth and segmentation noise (issue 5's
 //! bar): the replacing model has the right class for >= 95% of seen objects, the yaw of objects
 //! whose front matters is within 15 degrees for >= 90% of them, the mean alignment error is at
-//! most 2 cm, and articulated objects get articulated models.
+//! most 2 cm, articulated objects get articulated models, every support between two placed
+//! objects passes the area test, nothing reaches over 1 cm into the floor or a wall, and models
+//! interpenetrate by at most 1 cm, except where report.json names the conflict: in the kitchen
+//! two neighbouring cabinets' segments overlap by a third of a metre (label bleeding in the
+//! map, not something replacement may hide by shrinking models).
 
 use std::collections::BTreeMap;
 
@@ -34,6 +38,33 @@ fn every_scene_gets_models_of_the_right_class_facing_the_right_way() {
         match cad.mean_alignment_error_m {
             Some(e) if e <= 0.02 => {}
             other => failures.push(format!("{name}: mean AE {other:?}")),
+        }
+        if cad.supports_passing != cad.supports_tested {
+            failures.push(format!(
+                "{name}: {} of {} supports pass the area test",
+                cad.supports_passing, cad.supports_tested
+            ));
+        }
+        match cad.max_layout_penetration_m {
+            Some(d) if d <= 0.01 => {}
+            other => failures.push(format!("{name}: into the layout by {other:?} m")),
+        }
+        let report: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("report.json")).expect("report.json"),
+        )
+        .expect("report JSON");
+        let conflicted = report["cad"]["conflicted"]
+            .as_array()
+            .expect("cad.conflicted")
+            .len();
+        eprintln!(
+            "{name}: deepest interpenetration {:?} m, conflicts reported for {conflicted} objects",
+            cad.max_penetration_m
+        );
+        match cad.max_penetration_m {
+            Some(d) if d <= 0.01 => {}
+            Some(_) if name == "kitchen" && conflicted > 0 => {}
+            other => failures.push(format!("{name}: models interpenetrate by {other:?} m")),
         }
         let graph = ContactGraph::load(&out.join("contact_graph.json")).expect("graph");
         let objects = graph

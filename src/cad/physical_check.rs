@@ -78,6 +78,11 @@ impl PlacedSolid {
         }
     }
 
+    /// The centre of its bounds.
+    pub fn centre(&self) -> Vec3 {
+        0.5 * (self.lo + self.hi)
+    }
+
     /// The lowest point of the model.
     pub fn bottom_z(&self) -> f32 {
         self.lo.z
@@ -223,10 +228,12 @@ const MAX_SEARCH_STEPS: usize = 64;
 
 /// Chooses among each object's `alignments` (best first) so that as few conflicts as possible
 /// remain, then snaps every model onto what holds it. `models` gives each alignment's database
-/// model; `layout` are the floor's and walls' planes, facing into the room.
+/// model; `movable` says which objects may be moved rather than shrunk when neighbours overlap;
+/// `layout` are the floor's and walls' planes, facing into the room.
 pub fn check_placements(
     alignments: &[Vec<(&DatabaseModel, Affine3A)>],
     holders: &[Holder],
+    movable: &[bool],
     layout: &[Plane],
 ) -> CheckedPlacements {
     let solids: Vec<Vec<PlacedSolid>> = alignments
@@ -291,7 +298,7 @@ pub fn check_placements(
         .collect();
     let models: Vec<Option<&DatabaseModel>> =
         (0..n).map(|i| choice[i].map(|k| alignments[i][k].0)).collect();
-    separate_neighbours(&models, &mut poses);
+    separate_neighbours(&models, holders, movable, &mut poses);
     // Snap parents before children: a child rests on its parent's final surface.
     let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
     for i in support_order(holders) {
@@ -361,15 +368,22 @@ pub fn check_placements(
 /// a segmentation fault (one object's label over its neighbour) that shrinking would hide.
 const MAX_SEPARATED_M: f32 = 0.1;
 /// Rounds of pulling apart (a pair's separation can push one into a third).
-const SEPARATION_ROUNDS: usize = 4;
+const SEPARATION_ROUNDS: usize = 10;
 /// Pulled-apart neighbours end this far apart (metres).
 const SEPARATION_GAP_M: f32 = 0.002;
 
-/// Neighbours that interpenetrate side by side (horizontal contact normal) by no more than
-/// `MAX_SEPARATED_M`, each shrunk along the contact normal by half the depth with its far side
-/// kept: both models were widened by the same bleeding across their shared boundary, so the
-/// truth lies in the middle.
-fn separate_neighbours(models: &[Option<&DatabaseModel>], poses: &mut [Option<Affine3A>]) {
+/// Neighbours that interpenetrate side by side by no more than `MAX_SEPARATED_M` are pulled
+/// apart horizontally: along the contact normal when it is horizontal, else (two objects on the
+/// same support, which cannot part vertically) along the line between their centres. A movable
+/// object (a cup) is moved; a fixed one (a cabinet) is shrunk with its far side kept: two fixed
+/// neighbours were widened by the same bleeding across their shared boundary, so the truth lies
+/// in the middle.
+fn separate_neighbours(
+    models: &[Option<&DatabaseModel>],
+    holders: &[Holder],
+    movable: &[bool],
+    poses: &mut [Option<Affine3A>],
+) {
     let n = models.len();
     for _ in 0..SEPARATION_ROUNDS {
         let solids: Vec<Option<PlacedSolid>> = (0..n)
@@ -384,18 +398,38 @@ fn separate_neighbours(models: &[Option<&DatabaseModel>], poses: &mut [Option<Af
                 let Some((depth, normal)) = deepest_contact(a, b) else {
                     continue;
                 };
-                let horizontal = normal.with_z(0.0);
-                if depth <= 0.5 * MAX_PENETRATION_M
-                    || depth > MAX_SEPARATED_M
-                    || horizontal.length() < 0.9
-                {
+                if depth <= 0.5 * MAX_PENETRATION_M || depth > MAX_SEPARATED_M {
                     continue;
                 }
-                let push = 0.5 * depth + SEPARATION_GAP_M;
-                let direction = horizontal.normalize();
-                for (k, away) in [(i, -direction), (j, direction)] {
+                let horizontal = normal.with_z(0.0);
+                let siblings = holders[i] == holders[j] && holders[i] != Holder::Other;
+                let direction = if horizontal.length() >= 0.9 {
+                    horizontal.normalize()
+                } else if siblings {
+                    let between = (b.centre() - a.centre()).with_z(0.0);
+                    match between.try_normalize() {
+                        Some(d) => d,
+                        None => continue,
+                    }
+                } else {
+                    continue;
+                };
+                let push = depth + 2.0 * SEPARATION_GAP_M;
+                let share = match (movable[i], movable[j]) {
+                    (true, false) => [1.0, 0.0],
+                    (false, true) => [0.0, 1.0],
+                    _ => [0.5, 0.5],
+                };
+                for ((k, away), part) in [(i, -direction), (j, direction)].into_iter().zip(share) {
+                    if part == 0.0 {
+                        continue;
+                    }
                     if let (Some(pose), Some(solid)) = (poses[k], &solids[k]) {
-                        poses[k] = Some(shrink_from(pose, solid, away, push));
+                        poses[k] = Some(if movable[k] {
+                            Affine3A::from_translation(away * part * push) * pose
+                        } else {
+                            shrink_from(pose, solid, away, part * push)
+                        });
                     }
                 }
                 moved = true;
@@ -514,7 +548,7 @@ mod tests {
             ],
         ];
         let holders = [Holder::Floor(floor), Holder::Object(0)];
-        let checked = check_placements(&alignments, &holders, &[floor]);
+        let checked = check_placements(&alignments, &holders, &[false, true], &[floor]);
         let (k, pose) = checked.chosen[1].expect("cup placed");
         assert_eq!(k, 1, "the cup that does not sink in");
         assert_eq!(checked.swaps, 1);

@@ -206,7 +206,17 @@ pub fn check_and_place(
                 .collect()
         })
         .collect();
-    let checked = check_placements(&options, &holders, &layout);
+    let table = ClassTable::builtin();
+    let movable: Vec<bool> = ids
+        .iter()
+        .map(|id| {
+            graph
+                .node(id)
+                .and_then(|n| table.get(&n.class))
+                .is_some_and(|c| c.movable)
+        })
+        .collect();
+    let checked = check_placements(&options, &holders, &movable, &layout);
     let mut records = Vec::new();
     for (i, id) in ids.iter().enumerate() {
         let (Some((k, pose)), Some(check)) = (checked.chosen[i], checked.checks[i].clone()) else {

@@ -1,12 +1,19 @@
 //! CAD replacement metrics against the ground truth: each seen truth object is paired with the
 //! predicted node whose box overlaps it most; the replacing model's class, its yaw (up to the
-//! class's symmetry) and the alignment errors are scored.
+//! class's symmetry) and the alignment errors are scored; the placed models are checked for
+//! interpenetration and support on their own.
+
+use std::collections::BTreeMap;
 
 use glam::{Affine3A, Mat4, Vec3};
 use serde::Serialize;
 
+use crate::cad::database::CadDatabase;
+use crate::cad::physical_check::{
+    MIN_SUPPORT_AREA, PlacedSolid, layout_penetration, penetration_depth, support_area,
+};
 use crate::classes::{ClassTable, EntityKind};
-use crate::geometry::GravityBox;
+use crate::geometry::{GravityBox, Plane};
 use crate::graph::{ContactGraph, GraphNode};
 
 /// A truth object and a prediction are one object when their boxes overlap at least this much.
@@ -37,6 +44,14 @@ pub struct CadMetrics {
     pub mean_alignment_error_m: Option<f64>,
     /// Seen truth objects replaced by exactly their own database model.
     pub model_accuracy: f64,
+    /// The deepest interpenetration of two placed models, metres (parametric models only).
+    pub max_penetration_m: Option<f64>,
+    /// The deepest reach of a placed model behind the floor or a wall, metres.
+    pub max_layout_penetration_m: Option<f64>,
+    /// Support edges between two placed objects whose child stands on at least half its bottom
+    /// on the parent model, and how many such edges there are.
+    pub supports_passing: usize,
+    pub supports_tested: usize,
     pub objects: Vec<CadObjectScore>,
 }
 
@@ -139,6 +154,7 @@ pub fn evaluate_cad(
         }
     };
     let yaws: Vec<f32> = scores.iter().filter_map(|s| s.yaw_error_deg).collect();
+    let physical = physical_figures(pred);
     let errors: Vec<f64> = pred_objects
         .iter()
         .filter_map(|n| n.cad.as_ref().map(|c| f64::from(c.alignment_error)))
@@ -163,8 +179,68 @@ pub fn evaluate_cad(
                 .count(),
             scores.len(),
         ),
+        max_penetration_m: physical.max_penetration_m,
+        max_layout_penetration_m: physical.max_layout_penetration_m,
+        supports_passing: physical.supports_passing,
+        supports_tested: physical.supports_tested,
         objects: scores,
     })
+}
+
+/// The physical figures of a graph's placements, measured on the models themselves.
+struct PhysicalFigures {
+    max_penetration_m: Option<f64>,
+    max_layout_penetration_m: Option<f64>,
+    supports_passing: usize,
+    supports_tested: usize,
+}
+
+/// Places the graph's models (those of the built-in database; others are skipped) and measures
+/// interpenetration, layout penetration and the support-area test of every support edge
+/// between two placed objects.
+fn physical_figures(graph: &ContactGraph) -> PhysicalFigures {
+    let db = CadDatabase::parametric();
+    let solids: BTreeMap<&str, PlacedSolid> = graph
+        .nodes
+        .iter()
+        .filter_map(|n| {
+            let frame = placement_frame(n)?;
+            let model = db.models().iter().find(|m| Some(&m.model.id) == n.cad.as_ref().map(|c| &c.model))?;
+            Some((n.id.as_str(), PlacedSolid::new(model, &frame)))
+        })
+        .collect();
+    let layout: Vec<Plane> = graph
+        .nodes
+        .iter()
+        .filter(|n| n.class == "wall" || n.class == "floor")
+        .filter_map(|n| n.planes.first().map(|p| Plane::from_array(*p)))
+        .collect();
+    let placed: Vec<&PlacedSolid> = solids.values().collect();
+    let mut deepest: Option<f64> = None;
+    for (i, a) in placed.iter().enumerate() {
+        for b in &placed[i + 1..] {
+            let d = f64::from(penetration_depth(a, b));
+            deepest = Some(deepest.map_or(d, |x| x.max(d)));
+        }
+    }
+    let layout_deepest = placed
+        .iter()
+        .map(|s| f64::from(layout_penetration(s, &layout)))
+        .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |x| x.max(d))));
+    let mut supports_tested = 0;
+    let mut supports_passing = 0;
+    for (parent, child) in graph.support_edges() {
+        if let (Some(p), Some(c)) = (solids.get(parent), solids.get(child)) {
+            supports_tested += 1;
+            supports_passing += usize::from(support_area(c, p) >= MIN_SUPPORT_AREA);
+        }
+    }
+    PhysicalFigures {
+        max_penetration_m: deepest,
+        max_layout_penetration_m: layout_deepest,
+        supports_passing,
+        supports_tested,
+    }
 }
 
 #[cfg(test)]
@@ -191,6 +267,11 @@ mod tests {
         assert_eq!(perfect.class_accuracy, 1.0);
         assert_eq!(perfect.model_accuracy, 1.0);
         assert_eq!(perfect.yaw_accuracy, Some(1.0));
+        // The true scene stands: nothing interpenetrates, every support holds.
+        assert!(perfect.max_penetration_m.expect("placed") < 0.002, "{:?}", perfect.max_penetration_m);
+        assert!(perfect.max_layout_penetration_m.expect("placed") < 0.002);
+        assert!(perfect.supports_tested >= 4);
+        assert_eq!(perfect.supports_passing, perfect.supports_tested);
         let mut turned = truth.clone();
         let chair = turned
             .nodes

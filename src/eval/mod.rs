@@ -136,9 +136,9 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
         cad_class_accuracy: cad.as_ref().map(|c| c.class_accuracy),
         mean_alignment_error: cad.as_ref().and_then(|c| c.mean_alignment_error_m),
         cad_yaw_accuracy: cad.as_ref().and_then(|c| c.yaw_accuracy),
+        max_penetration_m: cad.as_ref().and_then(|c| c.max_penetration_m),
         cad,
         stable_fraction: None,
-        max_penetration_m: None,
     })
 }
 
