@@ -2,7 +2,8 @@
 //! on 2 cores). Setup, untimed: render the kitchen and the living room, map every third frame,
 //! build their contact graphs, take 20 of their objects; the database is the parametric library
 //! at several sizes per model (pre-processing it is timed on its own). Timed: ranking every
-//! object's candidates, then aligning the best ten of each.
+//! object's candidates, then aligning the best ten of each; and, apart, the global physical
+//! check of the kitchen's aligned candidates (choice, separation, snapping, verdicts).
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -13,7 +14,7 @@ use glam::Vec3;
 use iscene::cad::ParametricLibrary;
 use iscene::cad::database::CadDatabase;
 use iscene::cad::matching::ObservedObject;
-use iscene::cad::replacement::{align_scene, observed_objects, rank_scene};
+use iscene::cad::replacement::{align_scene, check_and_place, observed_objects, rank_scene};
 use iscene::graph::ContactGraph;
 use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces};
 use iscene::io::panoptic_dir::read_panoptic;
@@ -104,11 +105,29 @@ fn cad_replacement(c: &mut Criterion) {
         db.len(),
         start.elapsed().as_secs_f64()
     );
-    let name = format!("cad_replacement_{}_objects_{}_models", objects.len(), db.len());
+    let name = format!(
+        "cad_replacement_{}_objects_{}_models",
+        objects.len(),
+        db.len()
+    );
     c.bench_function(&name, |b| {
         b.iter(|| {
             let ranked = rank_scene(&objects, &db);
             align_scene(&objects, &db, &ranked)
+        })
+    });
+
+    let (kitchen, points) = &scenes[0];
+    let library = CadDatabase::parametric();
+    let kitchen_objects = observed_objects(kitchen, points);
+    let ranked = rank_scene(&kitchen_objects, &library);
+    let aligned = align_scene(&kitchen_objects, &library, &ranked);
+    let ids: Vec<String> = kitchen_objects.iter().map(|o| o.id.to_string()).collect();
+    let name = format!("physical_check_kitchen_{}_objects", ids.len());
+    c.bench_function(&name, |b| {
+        b.iter(|| {
+            let mut graph = kitchen.clone();
+            check_and_place(&mut graph, &library, &ids, &aligned, points)
         })
     });
 }

@@ -76,15 +76,25 @@ fn every_scene_gets_models_of_the_right_class_facing_the_right_way() {
         for node in &graph.nodes {
             let Some(c) = &node.cad else { continue };
             let entry = ParametricLibrary::get(&c.model).expect("a database model");
-            assert_eq!(entry.class, node.class, "{name}: {} got {}", node.id, c.model);
+            assert_eq!(
+                entry.class, node.class,
+                "{name}: {} got {}",
+                node.id, c.model
+            );
             let articulated = entry.model().is_articulated();
             if articulated != (node.kind == EntityKind::Articulated) {
-                failures.push(format!("{name}: {} ({:?}) got {}", node.id, node.kind, c.model));
+                failures.push(format!(
+                    "{name}: {} ({:?}) got {}",
+                    node.id, node.kind, c.model
+                ));
             }
             placed.insert(node.id.clone(), c.model.clone());
         }
         if placed.len() != objects {
-            failures.push(format!("{name}: {} of {objects} objects placed", placed.len()));
+            failures.push(format!(
+                "{name}: {} of {objects} objects placed",
+                placed.len()
+            ));
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));

@@ -86,8 +86,7 @@ pub fn align_best(
 
 /// What candidates are chosen by: the alignment error plus the ranking's priors, metres.
 pub fn choice_score(a: &Alignment) -> f32 {
-    a.alignment_error
-        + PRIOR_AE_WEIGHT * (a.candidate.facing_error + a.candidate.upright_error)
+    a.alignment_error + PRIOR_AE_WEIGHT * (a.candidate.facing_error + a.candidate.upright_error)
 }
 
 /// Aligns one candidate; `None` when the object has no points or the fit breaks down numerically.
@@ -223,9 +222,21 @@ impl PoseFrame {
         let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
         for i in 0..8 {
             let corner = DVec3::new(
-                if i & 1 == 0 { self.model_lo.x } else { self.model_hi.x },
-                if i & 2 == 0 { self.model_lo.y } else { self.model_hi.y },
-                if i & 4 == 0 { self.model_lo.z } else { self.model_hi.z },
+                if i & 1 == 0 {
+                    self.model_lo.x
+                } else {
+                    self.model_hi.x
+                },
+                if i & 2 == 0 {
+                    self.model_lo.y
+                } else {
+                    self.model_hi.y
+                },
+                if i & 4 == 0 {
+                    self.model_lo.z
+                } else {
+                    self.model_hi.z
+                },
             );
             let p = m * corner;
             lo = lo.min(p);
@@ -279,7 +290,11 @@ impl PoseFrame {
 }
 
 fn mat3_f64(m: &Mat3) -> DMat3 {
-    DMat3::from_cols(m.x_axis.as_dvec3(), m.y_axis.as_dvec3(), m.z_axis.as_dvec3())
+    DMat3::from_cols(
+        m.x_axis.as_dvec3(),
+        m.y_axis.as_dvec3(),
+        m.z_axis.as_dvec3(),
+    )
 }
 
 /// One object point held against a point of the model surface for one LM run.
@@ -458,7 +473,12 @@ pub fn alignment_error(
         .iter()
         .map(|q| {
             let local = rotation_t * (*q - translation);
-            let d = f64::from(shape.project_local_point(local, false).point.distance(local));
+            let d = f64::from(
+                shape
+                    .project_local_point(local, false)
+                    .point
+                    .distance(local),
+            );
             d * d
         })
         .sum();
@@ -520,7 +540,11 @@ mod tests {
             ("fridge_02", -0.2, Vec3::new(0.9, 1.0, 1.05)),
             ("table_03", 2.0, Vec3::new(0.9, 1.1, 1.0)),
         ] {
-            let entry = db.models().iter().find(|m| m.model.id == id).expect("model");
+            let entry = db
+                .models()
+                .iter()
+                .find(|m| m.model.id == id)
+                .expect("model");
             let truth = Affine3A::from_scale_rotation_translation(
                 stretch,
                 Quat::from_rotation_z(yaw),
@@ -530,16 +554,16 @@ mod tests {
             let toward = Quat::from_rotation_z(yaw) * Vec3::new(-0.6, -1.0, 0.6);
             let points = partial_view(entry, truth, toward.normalize());
             let mut object = observe(id, &points, 0.0);
-            let mesh_planes = dominant_planes(
-                &entry.mesh.transformed(&truth),
-                0.02,
-                8,
-            );
+            let mesh_planes = dominant_planes(&entry.mesh.transformed(&truth), 0.02, 8);
             object.planes = mesh_planes.into_iter().map(|(p, _)| p).collect();
             let ranked = rank_candidates(&object, &db, KEEP_CANDIDATES);
             let best = align_best(&object, &db, &ranked).expect("aligned");
             let chosen = &db.models()[best.candidate.model].model.id;
-            assert!(best.alignment_error < 0.01, "{id}: AE {} with {chosen}", best.alignment_error);
+            assert!(
+                best.alignment_error < 0.01,
+                "{id}: AE {} with {chosen}",
+                best.alignment_error
+            );
             assert_eq!(chosen, id, "{id}");
             let yaw_of = |a: &Affine3A| {
                 let x = a.transform_vector3(Vec3::X);

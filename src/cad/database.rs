@@ -6,8 +6,8 @@ use parry3d::query::PointQueryWithLocation;
 use parry3d::shape::TrianglePointLocation;
 use rayon::prelude::*;
 
-use crate::cad::model::CadModel;
 use crate::cad::ParametricLibrary;
+use crate::cad::model::CadModel;
 use crate::geometry::{Plane, TriMesh, plane::dominant_planes};
 
 /// At most this many planes describe a model (the object side keeps as many).
@@ -63,8 +63,9 @@ impl DatabaseModel {
 
     /// The closest point of the surface to `point` (model frame).
     pub fn closest(&self, point: Vec3) -> SurfacePoint {
-        let (projection, (triangle, location)) =
-            self.shape.project_local_point_and_get_location(point, false);
+        let (projection, (triangle, location)) = self
+            .shape
+            .project_local_point_and_get_location(point, false);
         let face_normal = match location {
             TrianglePointLocation::OnFace(..) => self.shape.triangle(triangle).normal(),
             _ => None,
@@ -194,7 +195,8 @@ mod tests {
             table
                 .planes
                 .iter()
-                .any(|p| p.normal.z > 0.99 && (p.signed_distance(Vec3::new(0.0, 0.0, top))).abs() < 1e-3),
+                .any(|p| p.normal.z > 0.99
+                    && (p.signed_distance(Vec3::new(0.0, 0.0, top))).abs() < 1e-3),
             "{:?}",
             table.planes
         );
@@ -203,7 +205,9 @@ mod tests {
     #[test]
     fn duplicate_ids_are_refused() {
         let m = ParametricLibrary::entries()[0].model();
-        let err = CadDatabase::from_models(vec![m.clone(), m]).err().expect("refused");
+        let err = CadDatabase::from_models(vec![m.clone(), m])
+            .err()
+            .expect("refused");
         assert!(err.contains("twice"), "{err}");
     }
 }

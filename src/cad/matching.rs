@@ -71,12 +71,8 @@ pub struct Candidate {
 pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -> Vec<Candidate> {
     let box_from_world = Mat3::from_rotation_z(-object.bbox.yaw);
     let world_from_box = box_from_world.transpose();
-    let object_directions = distinct_directions(
-        object
-            .planes
-            .iter()
-            .map(|p| box_from_world * p.normal),
-    );
+    let object_directions =
+        distinct_directions(object.planes.iter().map(|p| box_from_world * p.normal));
     let object_shape = relative_size(object.bbox.size);
     let rotations = axis_rotations();
     let mut candidates = Vec::new();
@@ -203,8 +199,15 @@ mod tests {
                 facing: None,
             };
             let ranked = rank_candidates(&object, &db, KEEP_CANDIDATES);
-            assert_eq!(ranked.len(), KEEP_CANDIDATES.min(24 * db.of_class(class).count()));
-            assert!(ranked.iter().all(|c| db.models()[c.model].model.class == class));
+            assert_eq!(
+                ranked.len(),
+                KEEP_CANDIDATES.min(24 * db.of_class(class).count())
+            );
+            assert!(
+                ranked
+                    .iter()
+                    .all(|c| db.models()[c.model].model.class == class)
+            );
             let best = ranked[0];
             assert!(
                 upright_yaw(&axis_rotations()[best.orientation]).is_some(),
@@ -212,14 +215,25 @@ mod tests {
                 best.orientation
             );
             assert!(
-                ranked.iter().take(4).any(|c| db.models()[c.model].model.id == id),
+                ranked
+                    .iter()
+                    .take(4)
+                    .any(|c| db.models()[c.model].model.id == id),
                 "{id}: not among the first four: {:?}",
                 ranked
                     .iter()
-                    .map(|c| (&db.models()[c.model].model.id, c.orientation, c.matching_error))
+                    .map(|c| (
+                        &db.models()[c.model].model.id,
+                        c.orientation,
+                        c.matching_error
+                    ))
                     .collect::<Vec<_>>()
             );
-            assert!(ranked.windows(2).all(|w| w[0].matching_error <= w[1].matching_error));
+            assert!(
+                ranked
+                    .windows(2)
+                    .all(|w| w[0].matching_error <= w[1].matching_error)
+            );
         }
     }
 

@@ -18,11 +18,7 @@ pub fn axis_rotations() -> [Mat3; 24] {
     std::array::from_fn(|i| {
         let r = Mat3::from_rotation_z(FRAC_PI_2 * (i % 4) as f32) * stand[i / 4];
         // Exact signed permutations: no 1e-8 residue from the sines and cosines.
-        Mat3::from_cols(
-            r.x_axis.round(),
-            r.y_axis.round(),
-            r.z_axis.round(),
-        )
+        Mat3::from_cols(r.x_axis.round(), r.y_axis.round(), r.z_axis.round())
     })
 }
 
@@ -40,10 +36,17 @@ mod tests {
     fn there_are_24_distinct_proper_rotations_and_the_first_four_are_upright() {
         let all = axis_rotations();
         for (i, r) in all.iter().enumerate() {
-            assert!((r.determinant() - 1.0).abs() < 1e-6, "{i}: det {}", r.determinant());
+            assert!(
+                (r.determinant() - 1.0).abs() < 1e-6,
+                "{i}: det {}",
+                r.determinant()
+            );
             assert!((*r * r.transpose()).abs_diff_eq(Mat3::IDENTITY, 1e-6));
             for (j, s) in all.iter().enumerate().skip(i + 1) {
-                assert!(!r.abs_diff_eq(*s, 1e-3), "{i} and {j} are the same rotation");
+                assert!(
+                    !r.abs_diff_eq(*s, 1e-3),
+                    "{i} and {j} are the same rotation"
+                );
             }
             assert_eq!(upright_yaw(r).is_some(), i < 4, "{i}");
         }

@@ -58,10 +58,7 @@ impl PlacedSolid {
             .filter(|&t| posed.face_normal(t).z > 0.9)
             .map(|t| posed.triangle(t))
             .collect();
-        let (mlo, mhi) = model
-            .mesh
-            .bounds()
-            .unwrap_or((Vec3::ZERO, Vec3::ZERO));
+        let (mlo, mhi) = model.mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
         let footprint = [
             Vec3::new(mlo.x, mlo.y, mlo.z),
             Vec3::new(mhi.x, mlo.y, mlo.z),
@@ -118,7 +115,7 @@ fn height_in_triangle(t: &[Vec3; 3], xy: Vec2) -> Option<f32> {
     let u = (c2 - b2).perp_dot(xy - b2) / area;
     let v = (a2 - c2).perp_dot(xy - c2) / area;
     let w = 1.0 - u - v;
-    (u >= -1e-6 && v >= -1e-6 && w >= -1e-6).then(|| u * a.z + v * b.z + w * c.z)
+    (u >= -1e-6 && v >= -1e-6 && w >= -1e-6).then_some(u * a.z + v * b.z + w * c.z)
 }
 
 /// How deep (metres, 0 when apart) two placed models interpenetrate: the deepest contact of
@@ -282,8 +279,7 @@ pub fn check_placements(
         };
         let best = (0..solids[worst].len())
             .map(|k| (conflicts_of(worst, k, &choice), k))
-            .min()
-            .map(|(c, k)| (c, k));
+            .min();
         match best {
             Some((c, k)) if c < current[worst] => {
                 choice[worst] = Some(k);
@@ -292,12 +288,16 @@ pub fn check_placements(
             _ => tried_in_vain[worst] = true,
         }
     }
-    let swaps = choice.iter().filter(|c| matches!(c, Some(k) if *k > 0)).count();
+    let swaps = choice
+        .iter()
+        .filter(|c| matches!(c, Some(k) if *k > 0))
+        .count();
     let mut poses: Vec<Option<Affine3A>> = (0..n)
         .map(|i| choice[i].map(|k| alignments[i][k].1))
         .collect();
-    let models: Vec<Option<&DatabaseModel>> =
-        (0..n).map(|i| choice[i].map(|k| alignments[i][k].0)).collect();
+    let models: Vec<Option<&DatabaseModel>> = (0..n)
+        .map(|i| choice[i].map(|k| alignments[i][k].0))
+        .collect();
     separate_neighbours(&models, holders, movable, &mut poses);
     // Snap parents before children: a child rests on its parent's final surface.
     let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
@@ -328,7 +328,9 @@ pub fn check_placements(
     let checks = (0..n)
         .map(|i| {
             let me = finals[i].as_ref()?;
-            let others = (0..n).filter(|&j| j != i).filter_map(|j| finals[j].as_ref());
+            let others = (0..n)
+                .filter(|&j| j != i)
+                .filter_map(|j| finals[j].as_ref());
             let max_penetration_m = others
                 .map(|o| penetration_depth(me, o))
                 .fold(0.0f32, f32::max);
@@ -356,9 +358,7 @@ pub fn check_placements(
         })
         .collect();
     CheckedPlacements {
-        chosen: (0..n)
-            .map(|i| Some((choice[i]?, poses[i]?)))
-            .collect(),
+        chosen: (0..n).map(|i| Some((choice[i]?, poses[i]?))).collect(),
         checks,
         swaps,
     }
@@ -444,7 +444,11 @@ fn separate_neighbours(
 /// `pose` with the model shrunk by `amount` metres along the model axis nearest to `away`, its
 /// side towards `away` kept where it is (the other side retreats).
 fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> Affine3A {
-    let axes = [pose.matrix3.x_axis, pose.matrix3.y_axis, pose.matrix3.z_axis];
+    let axes = [
+        pose.matrix3.x_axis,
+        pose.matrix3.y_axis,
+        pose.matrix3.z_axis,
+    ];
     let Some(k) = (0..3).max_by(|&a, &b| {
         let along = |v: glam::Vec3A| Vec3::from(v).normalize_or_zero().dot(away).abs();
         along(axes[a]).total_cmp(&along(axes[b]))
@@ -503,7 +507,11 @@ mod tests {
     use crate::cad::database::CadDatabase;
 
     fn placed(db: &CadDatabase, id: &str, at: Vec3) -> PlacedSolid {
-        let m = db.models().iter().find(|m| m.model.id == id).expect("model");
+        let m = db
+            .models()
+            .iter()
+            .find(|m| m.model.id == id)
+            .expect("model");
         PlacedSolid::new(m, &Affine3A::from_translation(at))
     }
 
@@ -533,7 +541,12 @@ mod tests {
     #[test]
     fn the_search_moves_a_sunk_cup_to_a_candidate_that_rests_on_the_table_and_snaps_it() {
         let db = CadDatabase::parametric();
-        let model = |id: &str| db.models().iter().find(|m| m.model.id == id).expect("model");
+        let model = |id: &str| {
+            db.models()
+                .iter()
+                .find(|m| m.model.id == id)
+                .expect("model")
+        };
         let table = model("table_01");
         let top = table.model.size.z;
         let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
@@ -542,9 +555,15 @@ mod tests {
             vec![(table, Affine3A::IDENTITY)],
             vec![
                 // Best by alignment, but 4 cm into the table top.
-                (cup, Affine3A::from_translation(Vec3::new(0.2, 0.1, top - 0.04))),
+                (
+                    cup,
+                    Affine3A::from_translation(Vec3::new(0.2, 0.1, top - 0.04)),
+                ),
                 // Second best: floating 5 mm above it.
-                (cup, Affine3A::from_translation(Vec3::new(0.2, 0.1, top + 0.005))),
+                (
+                    cup,
+                    Affine3A::from_translation(Vec3::new(0.2, 0.1, top + 0.005)),
+                ),
             ],
         ];
         let holders = [Holder::Floor(floor), Holder::Object(0)];
@@ -552,7 +571,11 @@ mod tests {
         let (k, pose) = checked.chosen[1].expect("cup placed");
         assert_eq!(k, 1, "the cup that does not sink in");
         assert_eq!(checked.swaps, 1);
-        assert!((pose.translation.z - top).abs() < 1e-4, "snapped onto the top: {}", pose.translation.z);
+        assert!(
+            (pose.translation.z - top).abs() < 1e-4,
+            "snapped onto the top: {}",
+            pose.translation.z
+        );
         let check = checked.checks[1].as_ref().expect("cup check");
         assert_eq!(check.conflicts, 0, "{check:?}");
         assert!(check.support_area.expect("held by the table") > 0.99);

@@ -9,8 +9,8 @@ use serde::Serialize;
 
 use crate::cad::alignment::{Alignment, align_all, alignment_error, choice_score};
 use crate::cad::database::{CadDatabase, DatabaseModel};
-use crate::cad::physical_check::{Holder, PlacementCheck, check_placements};
 use crate::cad::matching::{Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates};
+use crate::cad::physical_check::{Holder, PlacementCheck, check_placements};
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
@@ -69,7 +69,9 @@ pub fn observed_objects<'a>(
                 .filter_map(|(_, child)| graph.node(child))
                 .map(|c| GravityBox::from(&c.bbox).bottom_z())
                 .filter(|z| (bbox.top_z() - TOP_FROM_CHILDREN_M..=bbox.top_z()).contains(z))
-                .fold(None, |top: Option<f32>, z| Some(top.map_or(z, |t| t.max(z))))
+                .fold(None, |top: Option<f32>, z| {
+                    Some(top.map_or(z, |t| t.max(z)))
+                })
                 .unwrap_or(bbox.top_z());
             (p.len() >= MIN_OBJECT_POINTS).then(|| ObservedObject {
                 id: &n.id,
@@ -201,7 +203,9 @@ pub fn check_and_place(
         .map(|list| {
             let best = list.first().map_or(0.0, choice_score);
             list.iter()
-                .take_while(|a| choice_score(a) <= best + (SWAP_SLACK_RATIO * best).max(SWAP_SLACK_M))
+                .take_while(|a| {
+                    choice_score(a) <= best + (SWAP_SLACK_RATIO * best).max(SWAP_SLACK_M)
+                })
                 .map(|a| (&db.models()[a.candidate.model], a.world_from_model))
                 .collect()
         })

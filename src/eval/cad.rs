@@ -205,7 +205,10 @@ fn physical_figures(graph: &ContactGraph) -> PhysicalFigures {
         .iter()
         .filter_map(|n| {
             let frame = placement_frame(n)?;
-            let model = db.models().iter().find(|m| Some(&m.model.id) == n.cad.as_ref().map(|c| &c.model))?;
+            let model = db
+                .models()
+                .iter()
+                .find(|m| Some(&m.model.id) == n.cad.as_ref().map(|c| &c.model))?;
             Some((n.id.as_str(), PlacedSolid::new(model, &frame)))
         })
         .collect();
@@ -268,7 +271,11 @@ mod tests {
         assert_eq!(perfect.model_accuracy, 1.0);
         assert_eq!(perfect.yaw_accuracy, Some(1.0));
         // The true scene stands: nothing interpenetrates, every support holds.
-        assert!(perfect.max_penetration_m.expect("placed") < 0.002, "{:?}", perfect.max_penetration_m);
+        assert!(
+            perfect.max_penetration_m.expect("placed") < 0.002,
+            "{:?}",
+            perfect.max_penetration_m
+        );
         assert!(perfect.max_layout_penetration_m.expect("placed") < 0.002);
         assert!(perfect.supports_tested >= 4);
         assert_eq!(perfect.supports_passing, perfect.supports_tested);
@@ -294,6 +301,12 @@ mod tests {
         assert!((chair.yaw_error_deg.expect("yaw") - 180.0).abs() < 0.1);
         assert!(scored.yaw_accuracy.expect("yaws") < 1.0);
         // A cup's yaw never counts: it is round.
-        assert!(scored.objects.iter().filter(|s| s.truth.starts_with("cup")).all(|s| s.yaw_error_deg.is_none()));
+        assert!(
+            scored
+                .objects
+                .iter()
+                .filter(|s| s.truth.starts_with("cup"))
+                .all(|s| s.yaw_error_deg.is_none())
+        );
     }
 }

@@ -125,8 +125,7 @@ fn physical_check_stage(world: &mut World) {
         return;
     };
     let mut graph = scene.graph.clone();
-    let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) =
-        alignments.0.iter().cloned().unzip();
+    let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = alignments.0.iter().cloned().unzip();
     let db = db.0.clone();
     let object_count = graph
         .nodes
@@ -141,14 +140,13 @@ fn physical_check_stage(world: &mut World) {
         .map(|(e, id)| (id.0.clone(), e))
         .collect();
     if let Err(problem) = attach_contact_graph(world, &graph, &by_id) {
-        world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(
-            format!("CAD replacement: {problem}"),
-        ));
+        world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(format!(
+            "CAD replacement: {problem}"
+        )));
         return;
     }
-    let mean_alignment_error_m = (!replaced.is_empty()).then(|| {
-        replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32
-    });
+    let mean_alignment_error_m = (!replaced.is_empty())
+        .then(|| replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32);
     world.insert_resource(CadReport {
         database_models: db.len(),
         objects: object_count,
