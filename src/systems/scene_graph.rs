@@ -18,10 +18,16 @@ use crate::kinematics::JointSpec;
 #[derive(Component, Clone, Copy, Debug, Default)]
 pub struct SceneRoot;
 
-/// The pose of an entity's own frame: its CAD model's frame when it has one, else its box's.
+/// The pose of an entity's own frame: its CAD model's frame without the model's scale when it
+/// has one (links of a kinematic tree are rigid frames; a per-axis scale in a parent's frame
+/// would shear its children), else its box's.
 fn world_from_entity(graph_box: &GravityBox, cad: Option<&crate::graph::CadPlacement>) -> Affine3A {
     match cad {
-        Some(c) => Affine3A::from_mat4(Mat4::from_cols_array(&c.world_from_model)),
+        Some(c) => {
+            let (_, rotation, translation) =
+                Mat4::from_cols_array(&c.world_from_model).to_scale_rotation_translation();
+            Affine3A::from_rotation_translation(rotation.normalize(), translation)
+        }
         None => graph_box.world_from_box(),
     }
 }
@@ -103,7 +109,7 @@ pub fn attach_contact_graph(
         if let Some(c) = &node.cad {
             e.insert(CadModel {
                 model: c.model.clone(),
-                world_from_model: pose,
+                world_from_model: Affine3A::from_mat4(Mat4::from_cols_array(&c.world_from_model)),
                 scale: c.scale,
                 alignment_error: c.alignment_error,
             });
