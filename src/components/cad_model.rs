@@ -12,6 +12,6 @@ pub struct CadModel {
     pub world_from_model: Affine3A,
     /// The geometric mean of the per-axis scale.
     pub scale: f32,
-    /// RMS distance from the segment mesh to the aligned model, metres.
+    /// RMS distance from the observed surface to the placed model, metres.
     pub alignment_error: f32,
 }
