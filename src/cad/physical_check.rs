@@ -2,7 +2,8 @@
 //! interpenetrate each other or the layout, and every object resting on another must stand on
 //! enough of its supporting surface. A min-conflict search over each object's aligned candidates
 //! (start from the best, move the most conflicted object to its least conflicting candidate,
-//! bounded) picks the final models; then every model is snapped onto its supporting plane.
+//! bounded) picks the final models; neighbours still overlapping side by side are pulled apart;
+//! then every model is snapped onto its supporting surface.
 
 use glam::{Affine3A, Vec2, Vec3};
 use parry3d::math::Pose;
@@ -223,10 +224,11 @@ pub struct CheckedPlacements {
 /// Search steps at most (each moves one object to another candidate).
 const MAX_SEARCH_STEPS: usize = 64;
 
-/// Chooses among each object's `alignments` (best first) so that as few conflicts as possible
-/// remain, then snaps every model onto what holds it. `models` gives each alignment's database
-/// model; `movable` says which objects may be moved rather than shrunk when neighbours overlap;
-/// `layout` are the floor's and walls' planes, facing into the room.
+/// Chooses among each object's `alignments` (database model and world-from-model, best first)
+/// so that as few conflicts as possible remain, pulls overlapping neighbours apart, then snaps
+/// every model onto what holds it. `holders` says what holds each object; `movable` which
+/// objects may be moved rather than shrunk when neighbours overlap; `layout` are the floor's
+/// and walls' planes, facing into the room.
 pub fn check_placements(
     alignments: &[Vec<(&DatabaseModel, Affine3A)>],
     holders: &[Holder],

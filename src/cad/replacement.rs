@@ -1,5 +1,6 @@
-//! CAD replacement of a whole scene: the objects of a contact graph with their segment points,
-//! ranked against the database, aligned, and written back into the graph's nodes.
+//! CAD replacement of a whole scene: the objects of a contact graph with their observed surface
+//! points, ranked against the database, aligned, checked together for physical plausibility, and
+//! written back into the graph's nodes.
 
 use std::collections::HashMap;
 
@@ -46,13 +47,13 @@ pub fn observed_objects<'a>(
         .node("floor")
         .map(|f| Vec3::from_array(f.bbox.center))
         .or_else(|| {
-            let walls: Vec<Vec3> = graph
+            let centres: Vec<Vec3> = graph
                 .nodes
                 .iter()
                 .filter(|n| n.class == "wall")
                 .map(|n| Vec3::from_array(n.bbox.center))
                 .collect();
-            (!walls.is_empty()).then(|| walls.iter().sum::<Vec3>() / walls.len() as f32)
+            (!centres.is_empty()).then(|| centres.iter().sum::<Vec3>() / centres.len() as f32)
         });
     let table = ClassTable::builtin();
     graph
