@@ -279,6 +279,21 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 }
             );
             println!("entities   {}   relations {}", r.entities, r.relations);
+            if let Some(cad) = &r.cad {
+                println!(
+                    "cad        {} of {} objects replaced from {} models, mean AE {}; {}",
+                    cad.replaced.len(),
+                    cad.objects,
+                    cad.database_models,
+                    cad.mean_alignment_error_m
+                        .map_or("-".to_string(), |e| format!("{:.1} mm", 1000.0 * e)),
+                    if cad.conflicted.is_empty() {
+                        "no physical conflicts".to_string()
+                    } else {
+                        format!("still in conflict: {}", cad.conflicted.join(", "))
+                    }
+                );
+            }
             for (stage, seconds) in &r.timings {
                 println!("  {stage:<20} {seconds:>8.3} s");
             }
