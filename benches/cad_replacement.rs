@@ -9,6 +9,8 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
 
+mod common;
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
 use iscene::cad::ParametricLibrary;
@@ -17,37 +19,14 @@ use iscene::cad::matching::ObservedObject;
 use iscene::cad::replacement::{align_scene, check_and_place, observed_objects, rank_scene};
 use iscene::graph::ContactGraph;
 use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces};
-use iscene::io::panoptic_dir::read_panoptic;
-use iscene::io::ply::read_mesh_ply;
-use iscene::panoptic::InstanceFusion;
-use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
 
 const OBJECTS: usize = 20;
 const DATABASE_MODELS: usize = 200;
 
 /// A scene's contact graph and each node's observed surface points.
 fn mapped_scene(scene: &str, dir: &Path) -> (ContactGraph, HashMap<String, Vec<Vec3>>) {
-    let out = dir.join(scene);
-    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{scene}.json"));
-    reconstruct(&ReconstructOptions {
-        input: Some(spec),
-        out: out.clone(),
-        frames: Some((0, None, 3)),
-        voxel: 0.02,
-        segmentation: SegmentationChoice::Oracle,
-        fusion: InstanceFusion::Joint,
-        estimate_gravity: false,
-        progress: false,
-    })
-    .expect("reconstruct");
-    let (index, _) = read_panoptic(&out.join("panoptic")).expect("panoptic folder");
-    let meshes: Vec<_> = index
-        .entities
-        .iter()
-        .map(|e| read_mesh_ply(&out.join("panoptic").join(format!("{}.ply", e.id))).expect("mesh"))
-        .collect();
-    let entities: Vec<GraphEntity> = index
-        .entities
+    let (found, meshes) = common::mapped_entities(scene, dir);
+    let entities: Vec<GraphEntity> = found
         .iter()
         .zip(&meshes)
         .map(|(e, mesh)| GraphEntity {

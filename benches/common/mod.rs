@@ -1,0 +1,35 @@
+//! Setup shared by the benchmarks (untimed): a rendered scene mapped into entity meshes.
+
+use std::path::Path;
+
+use iscene::geometry::TriMesh;
+use iscene::io::panoptic_dir::read_panoptic;
+use iscene::io::ply::read_mesh_ply;
+use iscene::panoptic::InstanceFusion;
+use iscene::panoptic::PanopticEntity;
+use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
+
+/// Renders `scenes/<scene>.json`, maps every third frame at 2 cm with the oracle segmentation
+/// into `dir/<scene>`, and returns the entities with their meshes.
+pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<TriMesh>) {
+    let out = dir.join(scene);
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{scene}.json"));
+    reconstruct(&ReconstructOptions {
+        input: Some(spec),
+        out: out.clone(),
+        frames: Some((0, None, 3)),
+        voxel: 0.02,
+        segmentation: SegmentationChoice::Oracle,
+        fusion: InstanceFusion::Joint,
+        estimate_gravity: false,
+        progress: false,
+    })
+    .expect("reconstruct");
+    let (index, _) = read_panoptic(&out.join("panoptic")).expect("panoptic folder");
+    let meshes = index
+        .entities
+        .iter()
+        .map(|e| read_mesh_ply(&out.join("panoptic").join(format!("{}.ply", e.id))).expect("mesh"))
+        .collect();
+    (index.entities, meshes)
+}
