@@ -18,7 +18,7 @@ use iscene::cad::database::CadDatabase;
 use iscene::cad::matching::ObservedObject;
 use iscene::cad::replacement::{align_scene, check_and_place, observed_objects, rank_scene};
 use iscene::graph::ContactGraph;
-use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces};
+use iscene::graph::build::{ContactGraphParams, build_contact_graph_with_surfaces};
 
 const OBJECTS: usize = 20;
 const DATABASE_MODELS: usize = 200;
@@ -26,16 +26,7 @@ const DATABASE_MODELS: usize = 200;
 /// A scene's contact graph and each node's observed surface points.
 fn mapped_scene(scene: &str, dir: &Path) -> (ContactGraph, HashMap<String, Vec<Vec3>>) {
     let (found, meshes) = common::mapped_entities(scene, dir);
-    let entities: Vec<GraphEntity> = found
-        .iter()
-        .zip(&meshes)
-        .map(|(e, mesh)| GraphEntity {
-            id: &e.id,
-            class: &e.class,
-            kind: e.kind,
-            mesh,
-        })
-        .collect();
+    let entities = common::graph_entities(&found, &meshes);
     let built = build_contact_graph_with_surfaces(&entities, &ContactGraphParams::for_voxel(0.02));
     let points = built
         .graph

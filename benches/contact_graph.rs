@@ -5,21 +5,12 @@
 mod common;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph};
+use iscene::graph::build::{ContactGraphParams, build_contact_graph};
 
 fn contact_graph(c: &mut Criterion) {
     let dir = tempfile::tempdir().expect("tempdir");
     let (found, meshes) = common::mapped_entities("office", dir.path());
-    let entities: Vec<GraphEntity> = found
-        .iter()
-        .zip(&meshes)
-        .map(|(e, mesh)| GraphEntity {
-            id: &e.id,
-            class: &e.class,
-            kind: e.kind,
-            mesh,
-        })
-        .collect();
+    let entities = common::graph_entities(&found, &meshes);
     let params = ContactGraphParams::for_voxel(0.02);
     let name = format!("contact_graph_office_{}_entities", entities.len());
     c.bench_function(&name, |b| {

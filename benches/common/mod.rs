@@ -3,6 +3,7 @@
 use std::path::Path;
 
 use iscene::geometry::TriMesh;
+use iscene::graph::build::GraphEntity;
 use iscene::io::panoptic_dir::read_panoptic;
 use iscene::io::ply::read_mesh_ply;
 use iscene::panoptic::InstanceFusion;
@@ -32,4 +33,21 @@ pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<Tri
         .map(|e| read_mesh_ply(&out.join("panoptic").join(format!("{}.ply", e.id))).expect("mesh"))
         .collect();
     (index.entities, meshes)
+}
+
+/// The contact graph's view of mapped entities.
+pub fn graph_entities<'a>(
+    found: &'a [PanopticEntity],
+    meshes: &'a [TriMesh],
+) -> Vec<GraphEntity<'a>> {
+    found
+        .iter()
+        .zip(meshes)
+        .map(|(e, mesh)| GraphEntity {
+            id: &e.id,
+            class: &e.class,
+            kind: e.kind,
+            mesh,
+        })
+        .collect()
 }

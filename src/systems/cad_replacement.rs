@@ -16,6 +16,7 @@ use crate::cad::replacement::{
     ReplacementRecord, align_scene, check_and_place, observed_objects, rank_scene,
 };
 use crate::components::{ObservedSurface, SceneEntity};
+use crate::graph::ContactGraph;
 use crate::systems::contact_graph::SceneContactGraph;
 use crate::systems::ingest::StageError;
 use crate::systems::scene_graph::attach_contact_graph;
@@ -55,19 +56,23 @@ fn observed_points(world: &mut World) -> HashMap<String, Vec<Vec3>> {
         .collect()
 }
 
-fn cad_match_stage(world: &mut World) {
+/// The contact graph and every entity's observed surface, when the stages before succeeded.
+fn observed_scene(world: &mut World) -> Option<(ContactGraph, HashMap<String, Vec<Vec3>>)> {
     if world.resource::<StageError>().0.is_some() {
-        return;
+        return None;
     }
-    let Some(scene) = world.get_resource::<SceneContactGraph>() else {
+    let graph = world.get_resource::<SceneContactGraph>()?.graph.clone();
+    Some((graph, observed_points(world)))
+}
+
+fn cad_match_stage(world: &mut World) {
+    let Some((graph, points)) = observed_scene(world) else {
         return;
     };
-    let graph = scene.graph.clone();
     let db = world
         .get_resource_or_insert_with(|| CadLibrary(Arc::new(CadDatabase::parametric())))
         .0
         .clone();
-    let points = observed_points(world);
     let objects = observed_objects(&graph, &points);
     let ranked = rank_scene(&objects, &db);
     let candidates = objects
@@ -79,20 +84,17 @@ fn cad_match_stage(world: &mut World) {
 }
 
 fn cad_align_stage(world: &mut World) {
-    if world.resource::<StageError>().0.is_some() {
+    let Some((graph, points)) = observed_scene(world) else {
         return;
-    }
-    let (Some(scene), Some(candidates), Some(db)) = (
-        world.get_resource::<SceneContactGraph>(),
+    };
+    let (Some(candidates), Some(db)) = (
         world.get_resource::<CadCandidates>(),
         world.get_resource::<CadLibrary>(),
     ) else {
         return;
     };
-    let graph = scene.graph.clone();
-    let candidates = candidates.0.clone();
+    let candidates = &candidates.0;
     let db = db.0.clone();
-    let points = observed_points(world);
     let objects = observed_objects(&graph, &points);
     let ranked: Vec<Vec<Candidate>> = objects
         .iter()
@@ -114,17 +116,15 @@ fn cad_align_stage(world: &mut World) {
 }
 
 fn physical_check_stage(world: &mut World) {
-    if world.resource::<StageError>().0.is_some() {
+    let Some((mut graph, points)) = observed_scene(world) else {
         return;
-    }
-    let (Some(scene), Some(alignments), Some(db)) = (
-        world.get_resource::<SceneContactGraph>(),
+    };
+    let (Some(alignments), Some(db)) = (
         world.get_resource::<CadAlignments>(),
         world.get_resource::<CadLibrary>(),
     ) else {
         return;
     };
-    let mut graph = scene.graph.clone();
     let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = alignments.0.iter().cloned().unzip();
     let db = db.0.clone();
     let object_count = graph
@@ -132,7 +132,6 @@ fn physical_check_stage(world: &mut World) {
         .iter()
         .filter(|n| n.kind != crate::classes::EntityKind::Layout)
         .count();
-    let points = observed_points(world);
     let replaced = check_and_place(&mut graph, &db, &ids, &options, &points);
     let by_id: HashMap<String, Entity> = world
         .query::<(Entity, &SceneEntity)>()

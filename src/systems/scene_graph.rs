@@ -159,15 +159,19 @@ mod tests {
     use crate::scene::{SceneSpec, SceneWorld};
     use std::path::Path;
 
-    fn kitchen_app() -> (App, HashMap<String, Entity>) {
+    fn kitchen_graph() -> ContactGraph {
         let spec = SceneSpec::parse(
             include_str!("../../scenes/kitchen.json"),
             Path::new("kitchen.json"),
         )
         .expect("spec");
-        let graph = SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
+        SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
             .expect("world")
-            .contact_graph();
+            .contact_graph()
+    }
+
+    fn kitchen_app() -> (App, HashMap<String, Entity>) {
+        let graph = kitchen_graph();
         let mut app = App::new();
         app.add_plugins((MinimalPlugins, TransformPlugin));
         let entities = spawn_contact_graph(app.world_mut(), &graph).expect("spawn");
@@ -212,14 +216,7 @@ mod tests {
 
     #[test]
     fn a_stretched_table_model_neither_moves_nor_shears_the_cup_on_it() {
-        let spec = SceneSpec::parse(
-            include_str!("../../scenes/kitchen.json"),
-            Path::new("kitchen.json"),
-        )
-        .expect("spec");
-        let mut graph = SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
-            .expect("world")
-            .contact_graph();
+        let mut graph = kitchen_graph();
         let table = graph
             .nodes
             .iter_mut()
