@@ -51,7 +51,11 @@ impl DatabaseModel {
             .map(|(p, _)| p)
             .collect();
         let shape = parry_mesh(&mesh).map_err(|e| format!("model {}: {e}", model.id))?;
-        let pieces = connected_pieces(&mesh);
+        let pieces = mesh
+            .connected_components()
+            .into_iter()
+            .map(|c| c.positions)
+            .collect();
         Ok(Self {
             model,
             mesh,
@@ -75,42 +79,6 @@ impl DatabaseModel {
             face_normal,
         }
     }
-}
-
-/// The vertices of each set of triangles connected through shared vertex indices.
-fn connected_pieces(mesh: &TriMesh) -> Vec<Vec<Vec3>> {
-    let n = mesh.positions.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for t in &mesh.triangles {
-        let a = root(&mut parent, t[0] as usize);
-        for &v in &t[1..] {
-            let b = root(&mut parent, v as usize);
-            parent[b] = a;
-        }
-    }
-    let mut index_of_root = std::collections::HashMap::new();
-    let mut pieces: Vec<Vec<Vec3>> = Vec::new();
-    let used: std::collections::BTreeSet<usize> = mesh
-        .triangles
-        .iter()
-        .flat_map(|t| t.iter().map(|&v| v as usize))
-        .collect();
-    for v in used {
-        let r = root(&mut parent, v);
-        let k = *index_of_root.entry(r).or_insert_with(|| {
-            pieces.push(Vec::new());
-            pieces.len() - 1
-        });
-        pieces[k].push(mesh.positions[v]);
-    }
-    pieces
 }
 
 /// A parry triangle mesh (with its BVH) of `mesh`.

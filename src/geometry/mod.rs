@@ -3,6 +3,7 @@
 pub mod clusters;
 pub mod gravity_box;
 pub mod mesh;
+pub mod mesh_topology;
 pub mod min_area_rect;
 pub mod pinhole;
 pub mod plane;

@@ -1,5 +1,7 @@
 //! Joints between links of a kinematic tree, shared by CAD models, the contact graph and the ECS.
 
+pub mod inertial;
 pub mod joint;
+pub mod link;
 
 pub use joint::{JointKind, JointSpec};

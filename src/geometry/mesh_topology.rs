@@ -1,0 +1,120 @@
+//! How a triangle mesh is put together: its connected components, whether it is closed, and
+//! its convex hull. Mass properties and collision shapes are computed per component.
+
+use std::collections::HashMap;
+
+use crate::geometry::TriMesh;
+
+impl TriMesh {
+    /// The sets of triangles connected through shared vertex indices, each re-indexed as its own
+    /// mesh, in the order of their first triangle.
+    pub fn connected_components(&self) -> Vec<TriMesh> {
+        let n = self.positions.len();
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn root(parent: &mut [usize], mut i: usize) -> usize {
+            while parent[i] != i {
+                parent[i] = parent[parent[i]];
+                i = parent[i];
+            }
+            i
+        }
+        for t in &self.triangles {
+            let a = root(&mut parent, t[0] as usize);
+            for &v in &t[1..] {
+                let b = root(&mut parent, v as usize);
+                parent[b] = a;
+            }
+        }
+        let mut component_of_root: HashMap<usize, usize> = HashMap::new();
+        let mut components: Vec<(TriMesh, HashMap<u32, u32>)> = Vec::new();
+        for t in &self.triangles {
+            let r = root(&mut parent, t[0] as usize);
+            let k = *component_of_root.entry(r).or_insert_with(|| {
+                components.push((TriMesh::default(), HashMap::new()));
+                components.len() - 1
+            });
+            let (mesh, index) = &mut components[k];
+            let tri = t.map(|v| {
+                *index.entry(v).or_insert_with(|| {
+                    mesh.positions.push(self.positions[v as usize]);
+                    (mesh.positions.len() - 1) as u32
+                })
+            });
+            mesh.triangles.push(tri);
+        }
+        components.into_iter().map(|(mesh, _)| mesh).collect()
+    }
+
+    /// Whether every edge is shared by exactly two triangles, once in each direction: a closed,
+    /// consistently wound surface whose signed volume is its volume.
+    pub fn is_closed(&self) -> bool {
+        if self.triangles.is_empty() {
+            return false;
+        }
+        let mut directed: HashMap<(u32, u32), i32> = HashMap::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                if a == b {
+                    return false;
+                }
+                *directed.entry((a, b)).or_default() += 1;
+            }
+        }
+        directed
+            .iter()
+            .all(|(&(a, b), &count)| count == 1 && directed.get(&(b, a)) == Some(&1))
+    }
+
+    /// The convex hull of the vertices, wound outwards; `None` when they span no volume.
+    pub fn convex_hull(&self) -> Option<TriMesh> {
+        if self.positions.len() < 4 {
+            return None;
+        }
+        let (positions, triangles) = parry3d::transformation::try_convex_hull(&self.positions).ok()?;
+        let hull = TriMesh {
+            positions,
+            triangles,
+        };
+        (hull.signed_volume() > 1e-12).then_some(hull)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    #[test]
+    fn two_boxes_are_two_closed_components() {
+        let mut mesh = TriMesh::cuboid(Vec3::ZERO, Vec3::ONE);
+        mesh.append(&TriMesh::cuboid(Vec3::splat(2.0), Vec3::splat(3.0)));
+        let components = mesh.connected_components();
+        assert_eq!(components.len(), 2);
+        for c in &components {
+            assert!(c.is_closed());
+            assert_eq!(c.positions.len(), 8);
+            assert!((c.signed_volume() - 1.0).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn an_open_box_is_not_closed_and_its_hull_is_the_box() {
+        let mut mesh = TriMesh::cuboid(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5));
+        mesh.triangles.truncate(10);
+        assert!(!mesh.is_closed());
+        let hull = mesh.convex_hull().expect("a box spans volume");
+        assert!(hull.is_closed());
+        assert!((hull.signed_volume() - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_flat_mesh_has_no_hull() {
+        let mesh = TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE.with_z(0.0)],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+        };
+        assert!(mesh.convex_hull().is_none());
+    }
+}

@@ -1,0 +1,378 @@
+//! The links a contact-graph node becomes: what each is made of (visual mesh, convex collision
+//! pieces, mass properties, friction) and, for the parts of an articulated CAD model, where each
+//! sits on its parent and how it moves.
+//!
+//! A CAD model is placed with a per-axis scale, but links are rigid frames. The object's link is
+//! the rigid part of the placement and carries the scale in its mesh; each moving part gets a
+//! rigid frame at its scaled origin, its mesh scaled in that frame and its joint axis turned
+//! with the scale (a drawer of a widened cabinet slides as far as the cabinet is deep).
+
+use glam::{Affine3A, Mat3, Vec2, Vec3};
+
+use crate::cad::model::CadModel;
+use crate::classes::{ClassTable, EntityKind};
+use crate::geometry::{GravityBox, Plane, TriMesh};
+use crate::graph::GraphNode;
+use crate::kinematics::JointSpec;
+use crate::kinematics::inertial::Inertial;
+
+/// Thickness given to the floor and ceiling slabs and the least given to a wall.
+pub const LAYOUT_THICKNESS_M: f32 = 0.05;
+
+/// How far the floor slab reaches beyond the floor's observed footprint.
+const FLOOR_MARGIN_M: f32 = 0.5;
+
+/// What a link is made of, in the link's frame.
+#[derive(Clone, Debug)]
+pub struct LinkGeometry {
+    pub visual: TriMesh,
+    /// Linear RGB in 0..1.
+    pub color: [f32; 3],
+    /// Convex pieces covering the visual mesh (the hull of each connected component).
+    pub collision: Vec<TriMesh>,
+    pub inertial: Inertial,
+    pub friction: f32,
+}
+
+impl LinkGeometry {
+    /// Collision pieces, mass and friction of `visual` for a link of `class`.
+    pub fn new(visual: TriMesh, color: [f32; 3], class: &str) -> Self {
+        let info = ClassTable::builtin().get(class);
+        let density = info.map_or(500.0, |c| c.density);
+        let friction = info.map_or(0.5, |c| c.friction);
+        let collision = visual
+            .connected_components()
+            .iter()
+            .filter_map(TriMesh::convex_hull)
+            .collect();
+        let inertial = Inertial::of_mesh(&visual, density);
+        Self {
+            visual,
+            color,
+            collision,
+            inertial,
+            friction,
+        }
+    }
+}
+
+/// One link of a node: the node's own link (first) or a moving part of its CAD model.
+#[derive(Clone, Debug)]
+pub struct NodeLink {
+    /// The part's name in the model (`door`, `drawer_1`); `None` for the node's own link.
+    pub part: Option<String>,
+    /// Index of the parent among the node's links (`None` for the node's own link).
+    pub parent: Option<usize>,
+    /// The link's frame in its parent's at joint value zero (identity for the node's own link,
+    /// whose place is the support tree's).
+    pub parent_from_link: Affine3A,
+    pub joint: JointSpec,
+    /// The joint value the contact graph records (0 when none).
+    pub value: f32,
+    pub geometry: LinkGeometry,
+}
+
+/// The links of `node`, whose own frame is `world_from_link` (the rigid part of its CAD
+/// placement, else its box). `model` is its CAD model when it was replaced; `floor` is the floor
+/// node, which tells walls which side is the room's.
+pub fn node_links(
+    node: &GraphNode,
+    model: Option<&CadModel>,
+    world_from_link: Affine3A,
+    floor: Option<&GraphNode>,
+) -> Vec<NodeLink> {
+    let link_from_world = world_from_link.inverse();
+    if let (Some(model), Some(cad)) = (model, node.cad.as_ref()) {
+        let world_from_model = Affine3A::from_mat4(glam::Mat4::from_cols_array(&cad.world_from_model));
+        let link_from_model = link_from_world * world_from_model;
+        return cad_links(node, model, link_from_model);
+    }
+    let gbox = GravityBox::from(&node.bbox);
+    let world_mesh = match (node.kind, node.class.as_str()) {
+        (EntityKind::Layout, "floor") => floor_slab(node, &gbox),
+        (EntityKind::Layout, "ceiling") => {
+            let bottom = gbox.bottom_z();
+            slab(&gbox, Vec2::ZERO, bottom, bottom + LAYOUT_THICKNESS_M)
+        }
+        (EntityKind::Layout, _) => wall_block(&gbox, floor.map(|f| Vec3::from_array(f.bbox.center))),
+        _ => TriMesh::cuboid_centered(gbox.center, gbox.size.max(Vec3::splat(0.01)))
+            .transformed(&Affine3A::from_rotation_z(gbox.yaw).with_fixed_point(gbox.center)),
+    };
+    let color = match node.kind {
+        EntityKind::Layout => [0.75, 0.73, 0.70],
+        _ => [0.55, 0.55, 0.6],
+    };
+    vec![NodeLink {
+        part: None,
+        parent: None,
+        parent_from_link: Affine3A::IDENTITY,
+        joint: JointSpec::FIXED,
+        value: 0.0,
+        geometry: LinkGeometry::new(world_mesh.transformed(&link_from_world), color, &node.class),
+    }]
+}
+
+/// Rotation about a fixed point, for boxes turned about their centre.
+trait WithFixedPoint {
+    fn with_fixed_point(self, point: Vec3) -> Affine3A;
+}
+
+impl WithFixedPoint for Affine3A {
+    fn with_fixed_point(self, point: Vec3) -> Affine3A {
+        Affine3A::from_translation(point) * self * Affine3A::from_translation(-point)
+    }
+}
+
+/// A model's parts as links: part 0 is the node's own link (`link_from_model` places the model
+/// in it, scale included); every other part gets a rigid frame at its scaled origin.
+fn cad_links(node: &GraphNode, model: &CadModel, link_from_model: Affine3A) -> Vec<NodeLink> {
+    let (scale, rotation, translation) = link_from_model.to_scale_rotation_translation();
+    let link_rotation = Affine3A::from_rotation_translation(rotation, translation);
+    let scale_matrix = Mat3::from_diagonal(scale);
+    let model_from_parts = model.model_from_parts(&[]);
+    // Each part's rigid frame in the node's link frame.
+    let frames: Vec<Affine3A> = model_from_parts
+        .iter()
+        .map(|model_from_part| {
+            let (_, r, t) = model_from_part.to_scale_rotation_translation();
+            link_rotation * Affine3A::from_rotation_translation(r, scale * t)
+        })
+        .collect();
+    model
+        .parts
+        .iter()
+        .enumerate()
+        .map(|(k, part)| {
+            let (_, r, _) = model_from_parts[k].to_scale_rotation_translation();
+            let part_rotation = Mat3::from_quat(r);
+            // The scale as seen in the part's frame: R^-1 S R.
+            let scale_in_part = part_rotation.transpose() * scale_matrix * part_rotation;
+            let mesh_in_link = part.mesh.transformed(&Affine3A::from_mat3(scale_in_part));
+            let (parent, parent_from_link, joint) = match (k, part.parent) {
+                (0, _) | (_, None) => (None, Affine3A::IDENTITY, JointSpec::FIXED),
+                (_, Some(p)) => (
+                    Some(p),
+                    frames[p].inverse() * frames[k],
+                    scaled_joint(&part.joint, scale_in_part),
+                ),
+            };
+            let value = node.joints.get(&part.name).copied().unwrap_or(0.0);
+            NodeLink {
+                part: (k > 0).then(|| part.name.clone()),
+                parent,
+                parent_from_link,
+                joint,
+                value: joint.clamp(value),
+                geometry: LinkGeometry::new(mesh_in_link, part.color, &node.class),
+            }
+        })
+        .collect()
+}
+
+/// The joint of a part whose frame sees the scale `scale_in_part`: the axis turns with it, and a
+/// prismatic joint's travel stretches with the axis.
+fn scaled_joint(joint: &JointSpec, scale_in_part: Mat3) -> JointSpec {
+    let stretched = scale_in_part * joint.axis;
+    let Some(axis) = stretched.try_normalize() else {
+        return *joint;
+    };
+    let stretch = stretched.length();
+    let limits = match joint.kind {
+        crate::kinematics::JointKind::Prismatic => {
+            joint.limits.map(|(lo, hi)| (lo * stretch, hi * stretch))
+        }
+        _ => joint.limits,
+    };
+    JointSpec {
+        kind: joint.kind,
+        axis,
+        limits,
+    }
+}
+
+/// A slab over the box's footprint grown by `margin` (x, y in the box frame), from `bottom` to
+/// `top`, in world coordinates.
+fn slab(gbox: &GravityBox, margin: Vec2, bottom: f32, top: f32) -> TriMesh {
+    let half = gbox.size.truncate() / 2.0 + margin;
+    let center = gbox.center.truncate().extend((bottom + top) / 2.0);
+    TriMesh::cuboid_centered(center, (2.0 * half).extend(top - bottom))
+        .transformed(&Affine3A::from_rotation_z(gbox.yaw).with_fixed_point(center))
+}
+
+/// The floor: a slab whose top face lies in the floor's plane (so objects snapped onto that
+/// plane rest on it exactly, even where it tilts a little), reaching past the observed floor.
+fn floor_slab(node: &GraphNode, gbox: &GravityBox) -> TriMesh {
+    let plane = node
+        .planes
+        .iter()
+        .map(|p| Plane::from_array(*p))
+        .find(|p| p.normal.z > 0.9)
+        .unwrap_or(Plane {
+            normal: Vec3::Z,
+            offset: -gbox.top_z(),
+        });
+    let half = gbox.size.truncate() / 2.0 + Vec2::splat(FLOOR_MARGIN_M);
+    let world_from_box = gbox.world_from_box();
+    let height_at = |xy: Vec2| -(plane.normal.x * xy.x + plane.normal.y * xy.y + plane.offset) / plane.normal.z;
+    let mut corners = Vec::with_capacity(8);
+    for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+        let xy = world_from_box
+            .transform_point3(Vec3::new(sx * half.x, sy * half.y, 0.0))
+            .truncate();
+        let top = height_at(xy);
+        corners.push(xy.extend(top));
+        corners.push(xy.extend(top - LAYOUT_THICKNESS_M));
+    }
+    TriMesh {
+        positions: corners,
+        triangles: Vec::new(),
+    }
+    .convex_hull()
+    .unwrap_or_else(|| slab(gbox, Vec2::ZERO, -LAYOUT_THICKNESS_M, 0.0))
+}
+
+/// A wall: its box thickened to at least `LAYOUT_THICKNESS_M`, growing away from the room's
+/// middle so the room keeps its size.
+fn wall_block(gbox: &GravityBox, room_middle: Option<Vec3>) -> TriMesh {
+    let thin_is_x = gbox.size.x < gbox.size.y;
+    let thin_axis = if thin_is_x { Vec3::X } else { Vec3::Y };
+    let thin_world = glam::Quat::from_rotation_z(gbox.yaw) * thin_axis;
+    let thickness = if thin_is_x { gbox.size.x } else { gbox.size.y };
+    let grow = (LAYOUT_THICKNESS_M - thickness).max(0.0);
+    let outward = match room_middle {
+        Some(m) if (gbox.center - m).truncate().dot(thin_world.truncate()) < 0.0 => -thin_world,
+        _ => thin_world,
+    };
+    let mut grown = *gbox;
+    grown.center += outward * grow / 2.0;
+    if thin_is_x {
+        grown.size.x += grow;
+    } else {
+        grown.size.y += grow;
+    }
+    slab(&grown, Vec2::ZERO, grown.bottom_z(), grown.top_z())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cad::ParametricLibrary;
+    use crate::graph::{BoxJson, CadPlacement};
+    use crate::kinematics::JointKind;
+
+    fn node(id: &str, class: &str, kind: EntityKind, gbox: GravityBox) -> GraphNode {
+        GraphNode {
+            id: id.into(),
+            class: class.into(),
+            kind,
+            bbox: BoxJson::from(gbox),
+            planes: Vec::new(),
+            cad: None,
+            joints: Default::default(),
+        }
+    }
+
+    #[test]
+    fn a_wall_thickens_away_from_the_room() {
+        let floor = node(
+            "floor",
+            "floor",
+            EntityKind::Layout,
+            GravityBox {
+                center: Vec3::new(2.0, 2.0, 0.0),
+                yaw: 0.0,
+                size: Vec3::new(4.0, 4.0, 0.0),
+            },
+        );
+        let wall_box = GravityBox {
+            center: Vec3::new(4.0, 2.0, 1.3),
+            yaw: 0.0,
+            size: Vec3::new(0.01, 4.0, 2.6),
+        };
+        let wall = node("wall_0", "wall", EntityKind::Layout, wall_box);
+        let links = node_links(&wall, None, wall_box.world_from_box(), Some(&floor));
+        let (lo, hi) = links[0].geometry.visual.bounds().expect("mesh");
+        let lo = lo + wall_box.center;
+        let hi = hi + wall_box.center;
+        assert!((lo.x - 3.995).abs() < 1e-4, "inner face stays: {lo}");
+        assert!((hi.x - (3.995 + LAYOUT_THICKNESS_M)).abs() < 1e-4, "{hi}");
+    }
+
+    #[test]
+    fn the_floor_slab_lies_under_its_plane() {
+        let gbox = GravityBox {
+            center: Vec3::new(2.0, 2.0, 0.0),
+            yaw: 0.0,
+            size: Vec3::new(4.0, 4.0, 0.0),
+        };
+        let mut floor = node("floor", "floor", EntityKind::Layout, gbox);
+        floor.planes = vec![[0.0, 0.0, 1.0, -0.01]];
+        let links = node_links(&floor, None, gbox.world_from_box(), None);
+        let (lo, hi) = links[0].geometry.visual.bounds().expect("mesh");
+        assert!((hi.z - 0.01).abs() < 1e-5 && (lo.z - (0.01 - LAYOUT_THICKNESS_M)).abs() < 1e-5);
+        assert!((hi.x - lo.x - (4.0 + 2.0 * FLOOR_MARGIN_M)).abs() < 1e-4);
+        assert_eq!(links[0].geometry.collision.len(), 1);
+    }
+
+    #[test]
+    fn a_scaled_cabinet_keeps_rigid_part_frames_and_stretches_drawer_travel() {
+        let model = ParametricLibrary::entries()
+            .iter()
+            .map(|e| e.model())
+            .find(|m| m.parts.iter().any(|p| p.joint.kind == JointKind::Prismatic))
+            .expect("a model with a drawer");
+        let scale = Vec3::new(1.5, 2.0, 1.0);
+        let world_from_model = Affine3A::from_scale_rotation_translation(
+            scale,
+            glam::Quat::from_rotation_z(0.3),
+            Vec3::new(1.0, 2.0, 0.0),
+        );
+        let mut n = node(
+            "cabinet_1",
+            &model.class,
+            EntityKind::Articulated,
+            GravityBox {
+                center: Vec3::ZERO,
+                yaw: 0.0,
+                size: Vec3::ONE,
+            },
+        );
+        n.cad = Some(CadPlacement {
+            model: model.id.clone(),
+            world_from_model: glam::Mat4::from(world_from_model).to_cols_array(),
+            scale: 1.0,
+            alignment_error: 0.0,
+        });
+        let rigid = Affine3A::from_rotation_translation(
+            glam::Quat::from_rotation_z(0.3),
+            Vec3::new(1.0, 2.0, 0.0),
+        );
+        let links = node_links(&n, Some(&model), rigid, None);
+        assert_eq!(links.len(), model.parts.len());
+        // The links, posed along the tree at joint zero, cover what the scaled model covers.
+        let mut world_from_links: Vec<Affine3A> = Vec::new();
+        let mut merged = TriMesh::default();
+        for link in &links {
+            let pose = match link.parent {
+                Some(p) => world_from_links[p] * link.parent_from_link,
+                None => rigid,
+            };
+            let (s, _, _) = pose.to_scale_rotation_translation();
+            assert!((s - Vec3::ONE).abs().max_element() < 1e-4, "rigid frames");
+            merged.append(&link.geometry.visual.transformed(&pose));
+            world_from_links.push(pose);
+        }
+        let expected = model.merged_mesh(&[]).transformed(&world_from_model);
+        let (a, b) = (merged.bounds().expect("m"), expected.bounds().expect("e"));
+        assert!(a.0.distance(b.0) < 1e-4 && a.1.distance(b.1) < 1e-4);
+        let (k, part) = model
+            .parts
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.joint.kind == JointKind::Prismatic)
+            .expect("drawer");
+        let travel = |j: &JointSpec| j.limits.map_or(0.0, |(lo, hi)| hi - lo);
+        let stretch = (Mat3::from_diagonal(scale) * part.joint.axis).length();
+        assert!((travel(&links[k].joint) - travel(&part.joint) * stretch).abs() < 1e-5);
+    }
+}
