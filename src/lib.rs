@@ -10,6 +10,7 @@ pub mod classes;
 pub mod components;
 pub mod error;
 pub mod eval;
+pub mod export;
 pub mod geometry;
 pub mod graph;
 pub mod io;
@@ -37,6 +38,7 @@ impl PluginGroup for ReconstructionPlugins {
             .add(systems::PanopticMappingPlugin)
             .add(systems::ContactGraphPlugin)
             .add(systems::CadReplacementPlugin)
+            .add(systems::KinematicTreePlugin)
     }
 }
 

@@ -8,6 +8,7 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::error::{InputError, IsceneError};
+use crate::export::write_tree_exports;
 use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
 use crate::io::atomic::StagedDir;
@@ -20,6 +21,7 @@ use crate::scene::SceneSpec;
 use crate::systems::cad_replacement::CadReport;
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
+use crate::systems::kinematic_tree::SceneKinematicTree;
 use crate::systems::panoptic_mapping::{MappingConfig, PanopticMap, PanopticSurface};
 use crate::systems::stages::StageMarks;
 use crate::systems::{Reconstruct, ReconstructionStage};
@@ -79,7 +81,7 @@ pub struct PanopticReport {
 }
 
 /// Stages with systems in this build.
-const BUILT_STAGES: [ReconstructionStage; 8] = [
+const BUILT_STAGES: [ReconstructionStage; 9] = [
     ReconstructionStage::Ingest,
     ReconstructionStage::Segment,
     ReconstructionStage::Integrate,
@@ -88,6 +90,7 @@ const BUILT_STAGES: [ReconstructionStage; 8] = [
     ReconstructionStage::CadMatch,
     ReconstructionStage::CadAlign,
     ReconstructionStage::PhysicalCheck,
+    ReconstructionStage::KinematicTree,
 ];
 
 fn fusion_name(fusion: InstanceFusion) -> &'static str {
@@ -256,6 +259,9 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             &scene.graph.to_json(),
         )?;
         outputs.push("contact_graph.json".into());
+    }
+    if let Some(tree) = app.world().get_resource::<SceneKinematicTree>() {
+        outputs.extend(write_tree_exports(staged.path(), &tree.0, "scene")?);
     }
     let mut report = ReconstructReport {
         input: sequence_dir,

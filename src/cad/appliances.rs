@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::cad::builder::{BOARD, HingeSide, PartsBuilder};
+use crate::cad::builder::{BOARD, DRAWER_CLEARANCE, HingeSide, PartsBuilder};
 use crate::cad::model::CadModel;
 use crate::geometry::TriMesh;
 
@@ -98,9 +98,13 @@ pub fn fridge_freezer(id: &str, s: Vec3) -> CadModel {
         "freezer",
         PartsBuilder::BODY,
         (-0.5 * s.x, 0.5 * s.x),
-        (0.0, split - 0.003),
+        // The tray, 1 cm above the front's bottom edge, clears the shell's floor.
+        (SHELL - 0.005, split - 0.003),
         front,
-        s.y - door - 2.0 * SHELL,
+        (
+            0.5 * s.x - SHELL - DRAWER_CLEARANCE,
+            s.y - door - 2.0 * SHELL,
+        ),
         STEEL,
         BLACK,
     );

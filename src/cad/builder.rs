@@ -10,6 +10,8 @@ use crate::kinematics::JointSpec;
 pub const BOARD: f32 = 0.018;
 /// How far a handle stands out of a front, metres.
 pub const HANDLE_DEPTH: f32 = 0.025;
+/// Play (metres) between a drawer's tray and the sides of the opening it slides in.
+pub const DRAWER_CLEARANCE: f32 = 0.005;
 /// Opening range of side-hinged doors, radians (a little over 100 degrees).
 pub const DOOR_OPEN: f32 = 1.8;
 
@@ -197,10 +199,12 @@ impl PartsBuilder {
         color: [f32; 3],
         handle_color: [f32; 3],
     ) -> usize {
+        // The hinge runs along the door's outer bottom edge: turning about it, the door folds
+        // out and down in front of the body, never below the hinge line into the body's floor.
         let door = self.part(
             name,
             parent,
-            Affine3A::from_translation(Vec3::new(0.5 * (x0 + x1), front_y, z0)),
+            Affine3A::from_translation(Vec3::new(0.5 * (x0 + x1), front_y - BOARD, z0)),
             JointSpec::revolute(Vec3::X, 0.0, std::f32::consts::FRAC_PI_2),
             color,
         );
@@ -208,7 +212,7 @@ impl PartsBuilder {
         let h = z1 - z0;
         self.add(
             door,
-            TriMesh::cuboid(Vec3::new(-0.5 * w, -BOARD, 0.0), Vec3::new(0.5 * w, 0.0, h)),
+            TriMesh::cuboid(Vec3::new(-0.5 * w, 0.0, 0.0), Vec3::new(0.5 * w, BOARD, h)),
         );
         let handle = self.part(
             &format!("{name}_handle"),
@@ -220,15 +224,16 @@ impl PartsBuilder {
         self.add(
             handle,
             TriMesh::cuboid(
-                Vec3::new(-0.35 * w, -BOARD - HANDLE_DEPTH, h - 0.07),
-                Vec3::new(0.35 * w, -BOARD, h - 0.05),
+                Vec3::new(-0.35 * w, -HANDLE_DEPTH, h - 0.07),
+                Vec3::new(0.35 * w, 0.0, h - 0.05),
             ),
         );
         door
     }
 
-    /// A drawer whose front covers `x0..x1` by `z0..z1` on `front_y`, with a tray `depth` deep behind
-    /// it; it slides out along -y by up to three quarters of its depth.
+    /// A drawer whose front covers `x0..x1` by `z0..z1` on `front_y`, with a tray `depth` deep and
+    /// `2 tray_half_width` wide behind it (narrower than the opening, so it never rubs the sides);
+    /// it slides out along -y by up to three quarters of its depth.
     #[expect(
         clippy::too_many_arguments,
         reason = "a drawer is described by its rectangle, depth and colours"
@@ -240,7 +245,7 @@ impl PartsBuilder {
         (x0, x1): (f32, f32),
         (z0, z1): (f32, f32),
         front_y: f32,
-        depth: f32,
+        (tray_half_width, depth): (f32, f32),
         color: [f32; 3],
         handle_color: [f32; 3],
     ) -> usize {
@@ -254,7 +259,7 @@ impl PartsBuilder {
         let w = x1 - x0;
         let h = z1 - z0;
         let t = BOARD;
-        let inner = 0.5 * w - 0.01;
+        let inner = tray_half_width;
         let tray_h = (0.8 * h).max(0.03);
         self.add(
             drawer,

@@ -130,6 +130,11 @@ impl CadDatabase {
     }
 
     /// The models of `class` with their indices.
+    /// The model with id `id`.
+    pub fn get(&self, id: &str) -> Option<&DatabaseModel> {
+        self.models.iter().find(|m| m.model.id == id)
+    }
+
     pub fn of_class<'a>(
         &'a self,
         class: &'a str,

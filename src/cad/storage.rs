@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::cad::builder::{BOARD, HingeSide, PartsBuilder};
+use crate::cad::builder::{BOARD, DRAWER_CLEARANCE, HingeSide, PartsBuilder};
 use crate::cad::model::CadModel;
 
 const RED: [f32; 3] = [0.62, 0.12, 0.1];
@@ -85,7 +85,10 @@ pub fn cabinet_drawers(id: &str, s: Vec3) -> CadModel {
             (-0.5 * s.x + GAP, 0.5 * s.x - GAP),
             (z0 + GAP, z0 + h - GAP),
             front,
-            s.y - 2.0 * BOARD - 0.03,
+            (
+                0.5 * s.x - BOARD - DRAWER_CLEARANCE,
+                s.y - 2.0 * BOARD - 0.03,
+            ),
             WHITE,
             STEEL,
         );
@@ -107,7 +110,10 @@ pub fn cabinet_drawer_door(id: &str, s: Vec3) -> CadModel {
         x,
         (s.z - drawer_h + GAP, s.z - GAP),
         front,
-        s.y - 2.0 * BOARD - 0.03,
+        (
+            0.5 * s.x - BOARD - DRAWER_CLEARANCE,
+            s.y - 2.0 * BOARD - 0.03,
+        ),
         BIRCH,
         STEEL,
     );

@@ -2,12 +2,16 @@
 //!
 //! A scene entity (a piece of layout or an object) carries its `SceneEntity` id and `Panoptic`
 //! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, the
-//! `ObservedSurface` the contact graph kept of it, and once replaced its `CadModel`. Support is Bevy's `ChildOf`: the parent supports the child, and the
+//! `ObservedSurface` the contact graph kept of it, once replaced its `CadModel`, and in the
+//! kinematic tree its `LinkBody`; each moving part of its model is a child entity with a
+//! `ModelPart`, a `LinkBody` and a `Joint`. Support is Bevy's `ChildOf`: the parent supports the child, and the
 //! child's `Joint` says how it may move relative to it. `ProximalTo` lists its proximal
 //! neighbours.
 
 pub mod cad_model;
 pub mod joint;
+pub mod link_body;
+pub mod model_part;
 pub mod observed_surface;
 pub mod oriented_box;
 pub mod panoptic;
@@ -17,6 +21,8 @@ pub mod surface_planes;
 
 pub use cad_model::CadModel;
 pub use joint::Joint;
+pub use link_body::LinkBody;
+pub use model_part::ModelPart;
 pub use observed_surface::ObservedSurface;
 pub use oriented_box::OrientedBox;
 pub use panoptic::{Panoptic, SceneEntity};

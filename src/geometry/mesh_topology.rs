@@ -71,7 +71,8 @@ impl TriMesh {
         if self.positions.len() < 4 {
             return None;
         }
-        let (positions, triangles) = parry3d::transformation::try_convex_hull(&self.positions).ok()?;
+        let (positions, triangles) =
+            parry3d::transformation::try_convex_hull(&self.positions).ok()?;
         let hull = TriMesh {
             positions,
             triangles,

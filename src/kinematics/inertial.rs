@@ -33,7 +33,8 @@ impl Inertial {
                 component.convex_hull()
             };
             if let Some(solid) = solid {
-                let part = MassProperties::from_trimesh(density, &solid.positions, &solid.triangles);
+                let part =
+                    MassProperties::from_trimesh(density, &solid.positions, &solid.triangles);
                 total = Some(total.map_or(part, |t| t + part));
             }
         }

@@ -83,7 +83,8 @@ pub fn node_links(
 ) -> Vec<NodeLink> {
     let link_from_world = world_from_link.inverse();
     if let (Some(model), Some(cad)) = (model, node.cad.as_ref()) {
-        let world_from_model = Affine3A::from_mat4(glam::Mat4::from_cols_array(&cad.world_from_model));
+        let world_from_model =
+            Affine3A::from_mat4(glam::Mat4::from_cols_array(&cad.world_from_model));
         let link_from_model = link_from_world * world_from_model;
         return cad_links(node, model, link_from_model);
     }
@@ -94,7 +95,9 @@ pub fn node_links(
             let bottom = gbox.bottom_z();
             slab(&gbox, Vec2::ZERO, bottom, bottom + LAYOUT_THICKNESS_M)
         }
-        (EntityKind::Layout, _) => wall_block(&gbox, floor.map(|f| Vec3::from_array(f.bbox.center))),
+        (EntityKind::Layout, _) => {
+            wall_block(&gbox, floor.map(|f| Vec3::from_array(f.bbox.center)))
+        }
         _ => TriMesh::cuboid_centered(gbox.center, gbox.size.max(Vec3::splat(0.01)))
             .transformed(&Affine3A::from_rotation_z(gbox.yaw).with_fixed_point(gbox.center)),
     };
@@ -213,7 +216,8 @@ fn floor_slab(node: &GraphNode, gbox: &GravityBox) -> TriMesh {
         });
     let half = gbox.size.truncate() / 2.0 + Vec2::splat(FLOOR_MARGIN_M);
     let world_from_box = gbox.world_from_box();
-    let height_at = |xy: Vec2| -(plane.normal.x * xy.x + plane.normal.y * xy.y + plane.offset) / plane.normal.z;
+    let height_at =
+        |xy: Vec2| -(plane.normal.x * xy.x + plane.normal.y * xy.y + plane.offset) / plane.normal.z;
     let mut corners = Vec::with_capacity(8);
     for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
         let xy = world_from_box

@@ -2,6 +2,8 @@
 
 pub mod inertial;
 pub mod joint;
+pub mod joint_sweep;
 pub mod link;
+pub mod tree;
 
 pub use joint::{JointKind, JointSpec};

@@ -4,6 +4,7 @@
 pub mod cad_replacement;
 pub mod contact_graph;
 pub mod ingest;
+pub mod kinematic_tree;
 pub mod panoptic_mapping;
 pub mod scene_graph;
 pub mod stages;
@@ -11,5 +12,6 @@ pub mod stages;
 pub use cad_replacement::CadReplacementPlugin;
 pub use contact_graph::ContactGraphPlugin;
 pub use ingest::IngestPlugin;
+pub use kinematic_tree::KinematicTreePlugin;
 pub use panoptic_mapping::PanopticMappingPlugin;
 pub use stages::{Reconstruct, ReconstructionStage, StagesPlugin};

@@ -1,0 +1,275 @@
+//! The kinematic tree as URDF (written with urdf-rs) plus its OBJ meshes: one visual mesh per
+//! link and one collision mesh per convex piece, referenced by paths relative to the URDF.
+
+use glam::{Affine3A, EulerRot, Mat3, Vec3};
+
+use crate::export::obj::obj_text;
+use crate::kinematics::JointKind;
+use crate::kinematics::tree::{KinematicTree, drive_limits};
+
+/// The folder of the meshes, beside the URDF.
+pub const MESH_DIR: &str = "meshes";
+
+/// A file of the export: its path relative to the output folder and its text.
+pub struct ExportFile {
+    pub path: String,
+    pub text: String,
+}
+
+pub fn visual_mesh_path(link: &str) -> String {
+    format!("{MESH_DIR}/{link}.obj")
+}
+
+pub fn collision_mesh_path(link: &str, piece: usize) -> String {
+    format!("{MESH_DIR}/{link}_collision_{piece}.obj")
+}
+
+/// The f64 that prints as the shortest decimal of `x` (no `0.7300000190734863` for 0.73).
+pub fn tidy(x: f32) -> f64 {
+    format!("{x}").parse().unwrap_or(x as f64)
+}
+
+fn tidy3(v: Vec3) -> urdf_rs::Vec3 {
+    urdf_rs::Vec3(v.to_array().map(tidy))
+}
+
+/// URDF's pose: `xyz` and fixed-axis roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll)).
+pub fn urdf_pose(a: &Affine3A) -> urdf_rs::Pose {
+    let (_, rotation, translation) = a.to_scale_rotation_translation();
+    let (yaw, pitch, roll) = rotation.normalize().to_euler(EulerRot::ZYX);
+    urdf_rs::Pose {
+        xyz: tidy3(translation),
+        rpy: tidy3(Vec3::new(roll, pitch, yaw)),
+    }
+}
+
+fn inertia(m: &Mat3) -> urdf_rs::Inertia {
+    urdf_rs::Inertia {
+        ixx: tidy(m.x_axis.x),
+        ixy: tidy(m.y_axis.x),
+        ixz: tidy(m.z_axis.x),
+        iyy: tidy(m.y_axis.y),
+        iyz: tidy(m.z_axis.y),
+        izz: tidy(m.z_axis.z),
+    }
+}
+
+fn joint_type(kind: JointKind) -> urdf_rs::JointType {
+    match kind {
+        JointKind::Fixed => urdf_rs::JointType::Fixed,
+        JointKind::Floating => urdf_rs::JointType::Floating,
+        JointKind::Revolute => urdf_rs::JointType::Revolute,
+        JointKind::Prismatic => urdf_rs::JointType::Prismatic,
+    }
+}
+
+/// The URDF robot of `tree`.
+pub fn urdf_robot(tree: &KinematicTree, name: &str) -> urdf_rs::Robot {
+    let mut links = Vec::with_capacity(tree.links.len());
+    let mut joints = Vec::new();
+    for (i, link) in tree.links.iter().enumerate() {
+        let mut urdf_link = urdf_rs::Link {
+            name: link.name.clone(),
+            inertial: urdf_rs::Inertial::default(),
+            visual: Vec::new(),
+            collision: Vec::new(),
+        };
+        if let Some(g) = &link.geometry {
+            urdf_link.inertial = urdf_rs::Inertial {
+                origin: urdf_rs::Pose {
+                    xyz: tidy3(g.inertial.center_of_mass),
+                    rpy: urdf_rs::Vec3::default(),
+                },
+                mass: urdf_rs::Mass {
+                    value: tidy(g.inertial.mass),
+                },
+                inertia: inertia(&g.inertial.inertia),
+            };
+            let [r, gr, b] = g.color;
+            urdf_link.visual.push(urdf_rs::Visual {
+                name: None,
+                origin: urdf_rs::Pose::default(),
+                geometry: urdf_rs::Geometry::Mesh {
+                    filename: visual_mesh_path(&link.name),
+                    scale: None,
+                },
+                material: Some(urdf_rs::Material {
+                    name: format!("{}_material", link.name),
+                    color: Some(urdf_rs::Color {
+                        rgba: urdf_rs::Vec4([tidy(r), tidy(gr), tidy(b), 1.0]),
+                    }),
+                    texture: None,
+                }),
+            });
+            for k in 0..g.collision.len() {
+                urdf_link.collision.push(urdf_rs::Collision {
+                    name: None,
+                    origin: urdf_rs::Pose::default(),
+                    geometry: urdf_rs::Geometry::Mesh {
+                        filename: collision_mesh_path(&link.name, k),
+                        scale: None,
+                    },
+                });
+            }
+        }
+        links.push(urdf_link);
+        let Some(parent) = link.parent else {
+            continue;
+        };
+        let (effort, velocity) = drive_limits(link.joint.kind);
+        let (lower, upper) = link.joint.limits.unwrap_or((0.0, 0.0));
+        joints.push(urdf_rs::Joint {
+            name: tree.joint_name(i),
+            joint_type: joint_type(link.joint.kind),
+            origin: urdf_pose(&link.parent_from_link),
+            parent: urdf_rs::LinkName {
+                link: tree.links[parent].name.clone(),
+            },
+            child: urdf_rs::LinkName {
+                link: link.name.clone(),
+            },
+            axis: urdf_rs::Axis {
+                xyz: tidy3(link.joint.axis),
+            },
+            limit: urdf_rs::JointLimit {
+                lower: tidy(lower),
+                upper: tidy(upper),
+                effort: tidy(effort),
+                velocity: tidy(velocity),
+                ..Default::default()
+            },
+            calibration: None,
+            dynamics: None,
+            mimic: None,
+            safety_controller: None,
+        });
+    }
+    urdf_rs::Robot {
+        name: name.into(),
+        version: None,
+        links,
+        joints,
+        materials: Vec::new(),
+    }
+}
+
+/// `scene.urdf` and every mesh it references.
+pub fn urdf_files(tree: &KinematicTree, name: &str) -> Result<Vec<ExportFile>, String> {
+    let robot = urdf_robot(tree, name);
+    let text = urdf_rs::write_to_string(&robot).map_err(|e| format!("writing URDF: {e}"))?;
+    let mut files = vec![ExportFile {
+        path: "scene.urdf".into(),
+        text,
+    }];
+    for link in &tree.links {
+        let Some(g) = &link.geometry else { continue };
+        files.push(ExportFile {
+            path: visual_mesh_path(&link.name),
+            text: obj_text(&g.visual),
+        });
+        for (k, piece) in g.collision.iter().enumerate() {
+            files.push(ExportFile {
+                path: collision_mesh_path(&link.name, k),
+                text: obj_text(piece),
+            });
+        }
+    }
+    Ok(files)
+}
+
+/// The inverse of `urdf_pose`, for tests and importers.
+pub fn affine_of_urdf_pose(pose: &urdf_rs::Pose) -> Affine3A {
+    let [x, y, z] = pose.xyz.0;
+    let [roll, pitch, yaw] = pose.rpy.0;
+    Affine3A::from_rotation_translation(
+        glam::Quat::from_euler(EulerRot::ZYX, yaw as f32, pitch as f32, roll as f32),
+        Vec3::new(x as f32, y as f32, z as f32),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::geometry::TriMesh;
+    use crate::kinematics::JointSpec;
+    use crate::kinematics::link::LinkGeometry;
+    use crate::kinematics::tree::{ROOT_LINK, TreeLink};
+
+    fn tree() -> KinematicTree {
+        let body = |size: Vec3| {
+            Some(Arc::new(LinkGeometry::new(
+                TriMesh::cuboid_centered(Vec3::Z * size.z / 2.0, size),
+                [0.8, 0.2, 0.2],
+                "cabinet",
+            )))
+        };
+        let pose = Affine3A::from_rotation_translation(
+            glam::Quat::from_euler(EulerRot::ZYX, 0.7, 0.1, -0.2),
+            Vec3::new(1.0, 2.0, 3.0),
+        );
+        KinematicTree {
+            links: vec![
+                TreeLink {
+                    name: ROOT_LINK.into(),
+                    node: None,
+                    class: None,
+                    parent: None,
+                    joint: JointSpec::FIXED,
+                    value: 0.0,
+                    parent_from_link: Affine3A::IDENTITY,
+                    geometry: None,
+                },
+                TreeLink {
+                    name: "cabinet_1".into(),
+                    node: Some("cabinet_1".into()),
+                    class: Some("cabinet".into()),
+                    parent: Some(0),
+                    joint: JointSpec::FIXED,
+                    value: 0.0,
+                    parent_from_link: pose,
+                    geometry: body(Vec3::new(0.6, 0.5, 0.8)),
+                },
+                TreeLink {
+                    name: "cabinet_1_door".into(),
+                    node: Some("cabinet_1".into()),
+                    class: Some("cabinet".into()),
+                    parent: Some(1),
+                    joint: JointSpec::revolute(Vec3::Z, 0.0, 1.9),
+                    value: 0.5,
+                    parent_from_link: Affine3A::from_translation(Vec3::new(-0.3, -0.25, 0.0)),
+                    geometry: body(Vec3::new(0.6, 0.02, 0.8)),
+                },
+            ],
+        }
+    }
+
+    #[test]
+    fn the_urdf_reads_back_with_the_same_links_joints_and_poses() {
+        let tree = tree();
+        let files = urdf_files(&tree, "kitchen").expect("writes");
+        let robot = urdf_rs::read_from_string(&files[0].text).expect("urdf-rs reads it back");
+        assert_eq!(robot.links.len(), 3);
+        assert_eq!(robot.joints.len(), 2);
+        let cabinet = &robot.joints[0];
+        assert_eq!(cabinet.child.link, "cabinet_1");
+        let back = affine_of_urdf_pose(&cabinet.origin);
+        assert!(back.abs_diff_eq(tree.links[1].parent_from_link, 1e-5));
+        let door = &robot.joints[1];
+        assert_eq!(door.joint_type, urdf_rs::JointType::Revolute);
+        assert!((door.limit.upper - 1.9).abs() < 1e-6 && door.limit.effort > 0.0);
+        let mass = robot.links[1].inertial.mass.value;
+        assert!((mass - 500.0 * 0.6 * 0.5 * 0.8).abs() < 0.1, "{mass}");
+        // Every mesh the URDF names is among the files.
+        for link in &robot.links {
+            for v in &link.visual {
+                let urdf_rs::Geometry::Mesh { filename, .. } = &v.geometry else {
+                    panic!("mesh geometry")
+                };
+                assert!(files.iter().any(|f| &f.path == filename), "{filename}");
+            }
+        }
+        assert_eq!(files.len(), 1 + 2 * 2);
+    }
+}

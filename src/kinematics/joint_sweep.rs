@@ -1,0 +1,312 @@
+//! Sweeps every door and drawer of a kinematic tree across its range and reports what it hits:
+//! a door must open without hitting its neighbour, a drawer must slide out of its cabinet.
+//!
+//! The moving side is the joint's link and everything it carries; the other side is every
+//! other link, its own cabinet included. Collisions are contacts between convex collision
+//! pieces (parry), deeper than the tolerance, at any of the sampled joint values.
+
+use glam::{Affine3A, Vec3};
+use parry3d::math::Pose;
+use parry3d::shape::ConvexPolyhedron;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::kinematics::JointKind;
+use crate::kinematics::tree::KinematicTree;
+
+/// Overlaps up to this depth (metres) are contact, not collision (the physical check's bar).
+pub const SWEEP_TOLERANCE_M: f32 = 0.01;
+
+/// Joint values tried from the lower to the upper limit.
+pub const SWEEP_SAMPLES: usize = 9;
+
+/// What one joint's sweep found.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointSweep {
+    /// The moving link (its joint is `<link>_joint`).
+    pub link: String,
+    /// The deepest overlap with any other link at any sampled value, metres.
+    pub max_penetration_m: f32,
+    /// The link hit deepest and the joint value where it happened.
+    pub hits: Option<(String, f32)>,
+    /// No collision deeper than the tolerance anywhere in the range.
+    pub free: bool,
+    /// Other joints of the same object that had to be open first (a dishwasher's rack slides
+    /// out once its door is down); empty when the joint moves from the scene as it stands.
+    pub after_opening: Vec<String>,
+}
+
+/// A link's collision pieces as parry shapes in the link frame, with the frame's local bounds.
+struct LinkSolids {
+    pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)>,
+}
+
+impl LinkSolids {
+    fn of(tree: &KinematicTree, link: usize) -> Self {
+        let pieces = tree.links[link]
+            .geometry
+            .iter()
+            .flat_map(|g| g.collision.iter())
+            .filter_map(|piece| {
+                let (lo, hi) = piece.bounds()?;
+                Some((
+                    ConvexPolyhedron::from_convex_hull(&piece.positions)?,
+                    lo,
+                    hi,
+                ))
+            })
+            .collect();
+        Self { pieces }
+    }
+}
+
+fn pose_of(a: &Affine3A) -> Pose {
+    let (_, rotation, translation) = a.to_scale_rotation_translation();
+    Pose::from_parts(translation, rotation.normalize())
+}
+
+/// World-frame bounds of a local box under `pose`.
+fn world_bounds(pose: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+    let center = pose.transform_point3((lo + hi) / 2.0);
+    let half = (hi - lo) / 2.0;
+    let m = glam::Mat3A::from(pose.matrix3);
+    let extent = m.x_axis.abs() * half.x + m.y_axis.abs() * half.y + m.z_axis.abs() * half.z;
+    (center - Vec3::from(extent), center + Vec3::from(extent))
+}
+
+/// The deepest overlap between two posed links, metres (0 when apart).
+fn link_penetration(a: &LinkSolids, pose_a: &Affine3A, b: &LinkSolids, pose_b: &Affine3A) -> f32 {
+    let (pa, pb) = (pose_of(pose_a), pose_of(pose_b));
+    let mut deepest = 0.0f32;
+    for (sa, alo, ahi) in &a.pieces {
+        let (alo, ahi) = world_bounds(pose_a, *alo, *ahi);
+        for (sb, blo, bhi) in &b.pieces {
+            let (blo, bhi) = world_bounds(pose_b, *blo, *bhi);
+            if !(alo.cmple(bhi).all() && blo.cmple(ahi).all()) {
+                continue;
+            }
+            if let Ok(Some(c)) = parry3d::query::contact(&pa, sa, &pb, sb, 0.0) {
+                deepest = deepest.max(-c.dist);
+            }
+        }
+    }
+    deepest
+}
+
+/// Whether `link` is `ancestor` or hangs below it.
+fn descends_from(tree: &KinematicTree, mut link: usize, ancestor: usize) -> bool {
+    loop {
+        if link == ancestor {
+            return true;
+        }
+        match tree.links[link].parent {
+            Some(p) => link = p,
+            None => return false,
+        }
+    }
+}
+
+/// Sweeps every revolute and prismatic joint of `tree` (the others stay at their values).
+pub fn sweep_joints(tree: &KinematicTree) -> Vec<JointSweep> {
+    let solids: Vec<LinkSolids> = (0..tree.links.len())
+        .map(|i| LinkSolids::of(tree, i))
+        .collect();
+    let joints: Vec<usize> = (0..tree.links.len())
+        .filter(|&i| {
+            matches!(
+                tree.links[i].joint.kind,
+                JointKind::Revolute | JointKind::Prismatic
+            ) && tree.links[i].joint.limits.is_some()
+        })
+        .collect();
+    joints
+        .par_iter()
+        .map(|&j| {
+            let as_is = sweep_one(tree, &solids, j, &[]);
+            let blocked_by_own_part = as_is.hits.as_ref().is_some_and(|(hit, _)| {
+                let hit = tree.links.iter().find(|l| &l.name == hit);
+                hit.is_some_and(|l| l.node.is_some() && l.node == tree.links[j].node)
+            });
+            if as_is.free || !blocked_by_own_part {
+                return as_is;
+            }
+            // Open the object's other doors and drawers (not those carrying this one) and try again.
+            let others: Vec<usize> = joints
+                .iter()
+                .copied()
+                .filter(|&o| {
+                    o != j
+                        && tree.links[o].node == tree.links[j].node
+                        && !descends_from(tree, j, o)
+                        && !descends_from(tree, o, j)
+                })
+                .collect();
+            let opened = sweep_one(tree, &solids, j, &others);
+            if opened.free { opened } else { as_is }
+        })
+        .collect()
+}
+
+/// The open end of a joint's range: the limit farther from zero.
+fn open_value(tree: &KinematicTree, link: usize) -> f32 {
+    let (lo, hi) = tree.links[link].joint.limits.unwrap_or((0.0, 0.0));
+    if hi.abs() >= lo.abs() { hi } else { lo }
+}
+
+/// Sweeps joint `j` with the joints `open` set to their open ends.
+fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usize]) -> JointSweep {
+    let (lo, hi) = tree.links[j].joint.limits.unwrap_or((0.0, 0.0));
+    let moving: Vec<usize> = (0..tree.links.len())
+        .filter(|&i| descends_from(tree, i, j))
+        .collect();
+    let still: Vec<usize> = (0..tree.links.len())
+        .filter(|i| !moving.contains(i) && !solids[*i].pieces.is_empty())
+        .collect();
+    let mut swept = tree.clone();
+    for &o in open {
+        swept.links[o].value = open_value(tree, o);
+    }
+    let mut worst: Option<(f32, usize, f32)> = None;
+    for k in 0..SWEEP_SAMPLES {
+        let value = lo + (hi - lo) * k as f32 / (SWEEP_SAMPLES - 1) as f32;
+        swept.links[j].value = value;
+        let poses = swept.world_from_links();
+        for &m in &moving {
+            for &s in &still {
+                let depth = link_penetration(&solids[m], &poses[m], &solids[s], &poses[s]);
+                if worst.is_none_or(|(d, _, _)| depth > d) {
+                    worst = Some((depth, s, value));
+                }
+            }
+        }
+    }
+    let max_penetration_m = worst.map_or(0.0, |(d, _, _)| d);
+    JointSweep {
+        link: tree.links[j].name.clone(),
+        max_penetration_m,
+        hits: worst
+            .filter(|(d, _, _)| *d > SWEEP_TOLERANCE_M)
+            .map(|(_, s, v)| (tree.links[s].name.clone(), v)),
+        free: max_penetration_m <= SWEEP_TOLERANCE_M,
+        after_opening: open.iter().map(|&o| tree.links[o].name.clone()).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::cad::ParametricLibrary;
+    use crate::geometry::TriMesh;
+    use crate::kinematics::JointSpec;
+    use crate::kinematics::link::LinkGeometry;
+    use crate::kinematics::tree::{ROOT_LINK, TreeLink};
+
+    /// One model of the library as a tree under the world (scale 1, at the origin).
+    fn model_tree(model: &crate::cad::model::CadModel) -> KinematicTree {
+        let mut links = vec![TreeLink {
+            name: ROOT_LINK.into(),
+            node: None,
+            class: None,
+            parent: None,
+            joint: JointSpec::FIXED,
+            value: 0.0,
+            parent_from_link: Affine3A::IDENTITY,
+            geometry: None,
+        }];
+        for (k, part) in model.parts.iter().enumerate() {
+            links.push(TreeLink {
+                name: format!("{}_{}", model.id, part.name),
+                node: Some(model.id.clone()),
+                class: Some(model.class.clone()),
+                parent: Some(part.parent.map_or(0, |p| p + 1)),
+                joint: part.joint,
+                value: 0.0,
+                parent_from_link: if k == 0 {
+                    Affine3A::IDENTITY
+                } else {
+                    part.parent_from_part
+                },
+                geometry: Some(Arc::new(LinkGeometry::new(
+                    part.mesh.clone(),
+                    part.color,
+                    &model.class,
+                ))),
+            });
+        }
+        KinematicTree { links }
+    }
+
+    #[test]
+    fn every_door_and_drawer_of_the_library_moves_freely_through_its_range() {
+        let mut stuck = Vec::new();
+        for entry in ParametricLibrary::entries() {
+            let model = entry.model();
+            if !model.is_articulated() {
+                continue;
+            }
+            for sweep in sweep_joints(&model_tree(&model)) {
+                if !sweep.free {
+                    stuck.push(format!("{}: {sweep:?}", model.id));
+                }
+            }
+        }
+        assert!(stuck.is_empty(), "{stuck:#?}");
+    }
+
+    #[test]
+    fn a_door_swinging_into_a_wall_is_reported_with_the_wall() {
+        let board = |size: Vec3| {
+            Some(Arc::new(LinkGeometry::new(
+                TriMesh::cuboid(Vec3::ZERO, size),
+                [0.5; 3],
+                "cabinet",
+            )))
+        };
+        let link = |name: &str, parent, joint, at: Vec3, size: Vec3| TreeLink {
+            name: String::from(name),
+            node: Some(name.into()),
+            class: Some("cabinet".into()),
+            parent: Some(parent),
+            joint,
+            value: 0.0,
+            parent_from_link: Affine3A::from_translation(at),
+            geometry: board(size),
+        };
+        let mut tree = KinematicTree {
+            links: vec![TreeLink {
+                name: ROOT_LINK.into(),
+                node: None,
+                class: None,
+                parent: None,
+                joint: JointSpec::FIXED,
+                value: 0.0,
+                parent_from_link: Affine3A::IDENTITY,
+                geometry: None,
+            }],
+        };
+        // A 0.5 m door along +x, hinged at the origin, opening towards -y; a wall 0.3 m in front.
+        tree.links.push(link(
+            "door",
+            0,
+            JointSpec::revolute(Vec3::Z, -1.6, 0.0),
+            Vec3::ZERO,
+            Vec3::new(0.5, 0.02, 1.0),
+        ));
+        tree.links.push(link(
+            "wall",
+            0,
+            JointSpec::FIXED,
+            Vec3::new(-1.0, -0.4, 0.0),
+            Vec3::new(2.0, 0.1, 1.0),
+        ));
+        let sweeps = sweep_joints(&tree);
+        assert_eq!(sweeps.len(), 1);
+        assert!(!sweeps[0].free);
+        assert_eq!(sweeps[0].hits.as_ref().map(|h| h.0.as_str()), Some("wall"));
+        // Moved out of the way, the same door is free.
+        tree.links[2].parent_from_link = Affine3A::from_translation(Vec3::new(-1.0, -0.8, 0.0));
+        assert!(sweep_joints(&tree)[0].free);
+    }
+}

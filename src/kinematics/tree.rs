@@ -1,0 +1,162 @@
+//! The kinematic tree as plain data, read off the ECS hierarchy and handed to the exporters and
+//! the physics check: links in depth-first order from the `world` root, each with the joint to
+//! its parent.
+
+use std::sync::Arc;
+
+use glam::Affine3A;
+
+use crate::kinematics::link::LinkGeometry;
+use crate::kinematics::{JointKind, JointSpec};
+
+/// The name of the root link (the world frame, aligned: z up, floor at 0).
+pub const ROOT_LINK: &str = "world";
+
+#[derive(Clone, Debug)]
+pub struct TreeLink {
+    /// Unique: the contact-graph id for a node's own link, `<id>_<part>` for a CAD part.
+    pub name: String,
+    /// The contact-graph node the link belongs to (`None` for the root).
+    pub node: Option<String>,
+    pub class: Option<String>,
+    /// Index of the parent link; `None` only for the root (index 0).
+    pub parent: Option<usize>,
+    pub joint: JointSpec,
+    /// The joint's current value (radians or metres; 0 for fixed and floating joints).
+    pub value: f32,
+    /// The link's frame in its parent's at joint value zero (the joint frame, as in URDF).
+    pub parent_from_link: Affine3A,
+    /// `None` for the root.
+    pub geometry: Option<Arc<LinkGeometry>>,
+}
+
+impl TreeLink {
+    /// The link's frame in its parent's at the current joint value.
+    pub fn parent_from_link_now(&self) -> Affine3A {
+        self.parent_from_link * self.joint.motion(self.value)
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct KinematicTree {
+    pub links: Vec<TreeLink>,
+}
+
+impl KinematicTree {
+    /// Every link's pose in the world at the current joint values.
+    pub fn world_from_links(&self) -> Vec<Affine3A> {
+        let mut poses: Vec<Affine3A> = Vec::with_capacity(self.links.len());
+        for link in &self.links {
+            let parent = link.parent.map_or(Affine3A::IDENTITY, |p| poses[p]);
+            poses.push(parent * link.parent_from_link_now());
+        }
+        poses
+    }
+
+    /// The joint's name: `<child>_joint` (link names are unique, so joint names are).
+    pub fn joint_name(&self, link: usize) -> String {
+        format!("{}_joint", self.links[link].name)
+    }
+
+    /// For each link, the link that carries it as one rigid body: itself when its joint moves
+    /// (floating, revolute, prismatic), else its parent's body; the root's body is the root.
+    /// Links of body 0 are static.
+    pub fn bodies(&self) -> Vec<usize> {
+        let mut body = Vec::with_capacity(self.links.len());
+        for (i, link) in self.links.iter().enumerate() {
+            body.push(match (link.parent, link.joint.kind) {
+                (None, _) => i,
+                (Some(p), JointKind::Fixed) => body[p],
+                (Some(_), _) => i,
+            });
+        }
+        body
+    }
+
+    /// Whether the tree is well formed: one root first, parents before children, unique names,
+    /// finite rigid frames and a geometry on every link but the root.
+    pub fn check(&self) -> Result<(), String> {
+        let mut names = std::collections::HashSet::new();
+        for (i, link) in self.links.iter().enumerate() {
+            if !names.insert(link.name.as_str()) {
+                return Err(format!("two links are named {:?}", link.name));
+            }
+            match link.parent {
+                None if i != 0 => return Err(format!("link {:?} has no parent", link.name)),
+                Some(p) if p >= i => {
+                    return Err(format!("link {:?} comes before its parent", link.name));
+                }
+                _ => {}
+            }
+            if i > 0 && link.geometry.is_none() {
+                return Err(format!("link {:?} has no geometry", link.name));
+            }
+            let m = glam::Mat4::from(link.parent_from_link);
+            if !m.is_finite() || !link.value.is_finite() {
+                return Err(format!("link {:?} has a non-finite pose", link.name));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Effort and velocity limits written for a moving joint: what a person's hand or a mobile
+/// manipulator's arm applies to a door (N m, rad/s) or a drawer (N, m/s).
+pub fn drive_limits(kind: JointKind) -> (f32, f32) {
+    match kind {
+        JointKind::Revolute => (30.0, 1.5),
+        JointKind::Prismatic => (100.0, 0.5),
+        JointKind::Fixed | JointKind::Floating => (0.0, 0.0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::TriMesh;
+    use glam::Vec3;
+
+    fn link(name: &str, parent: Option<usize>, joint: JointSpec, at: Vec3) -> TreeLink {
+        TreeLink {
+            name: name.into(),
+            node: parent.map(|_| name.into()),
+            class: None,
+            parent,
+            joint,
+            value: 0.0,
+            parent_from_link: Affine3A::from_translation(at),
+            geometry: parent.map(|_| {
+                Arc::new(LinkGeometry::new(
+                    TriMesh::cuboid(Vec3::ZERO, Vec3::ONE),
+                    [0.5; 3],
+                    "box",
+                ))
+            }),
+        }
+    }
+
+    #[test]
+    fn bodies_follow_fixed_joints_and_poses_follow_joint_values() {
+        let mut tree = KinematicTree {
+            links: vec![
+                link(ROOT_LINK, None, JointSpec::FIXED, Vec3::ZERO),
+                link("table_1", Some(0), JointSpec::FIXED, Vec3::X),
+                link("cup_1", Some(1), JointSpec::FLOATING, Vec3::Z),
+                link(
+                    "fridge_1_door",
+                    Some(1),
+                    JointSpec::revolute(Vec3::Z, 0.0, 2.0),
+                    Vec3::Y,
+                ),
+            ],
+        };
+        assert_eq!(tree.bodies(), vec![0, 0, 2, 3]);
+        tree.check().expect("well formed");
+        tree.links[3].value = std::f32::consts::FRAC_PI_2;
+        let poses = tree.world_from_links();
+        let p = poses[3].transform_point3(Vec3::X);
+        assert!(p.distance(Vec3::new(1.0, 2.0, 0.0)) < 1e-5, "{p}");
+        tree.links[2].name = "table_1".into();
+        assert!(tree.check().is_err());
+    }
+}

@@ -1,0 +1,211 @@
+//! The KinematicTree stage: every scene entity becomes a link (its `LinkBody`: mesh, collision
+//! pieces, mass properties), every moving part of its CAD model a child entity with its own joint,
+//! and the whole transform hierarchy is read off as the `SceneKinematicTree` the exports and the
+//! physics check use. Reading the tree from the ECS (not from the contact graph) means it can be
+//! read again after any simulated action.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use glam::Affine3A;
+use rayon::prelude::*;
+
+use crate::components::{Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
+use crate::kinematics::JointSpec;
+use crate::kinematics::link::{NodeLink, node_links};
+use crate::kinematics::tree::{KinematicTree, ROOT_LINK, TreeLink};
+use crate::systems::cad_replacement::CadLibrary;
+use crate::systems::contact_graph::SceneContactGraph;
+use crate::systems::ingest::StageError;
+use crate::systems::scene_graph::SceneRoot;
+
+/// The kinematic tree as the ECS held it at the end of the KinematicTree stage.
+#[derive(Resource, Clone, Debug)]
+pub struct SceneKinematicTree(pub KinematicTree);
+
+fn affine_of(t: &Transform) -> Affine3A {
+    Affine3A::from_scale_rotation_translation(t.scale, t.rotation, t.translation)
+}
+
+/// The entity's pose in the world, composed along its `ChildOf` chain (the reconstruction runs
+/// once, without Bevy's transform propagation).
+pub fn world_from_entity(world: &World, entity: Entity) -> Affine3A {
+    let mut pose = Affine3A::IDENTITY;
+    let mut at = Some(entity);
+    while let Some(e) = at {
+        if let Some(t) = world.get::<Transform>(e) {
+            pose = affine_of(t) * pose;
+        }
+        at = world.get::<ChildOf>(e).map(ChildOf::parent);
+    }
+    pose
+}
+
+fn kinematic_tree_stage(world: &mut World) {
+    if world.resource::<StageError>().0.is_some() {
+        return;
+    }
+    let Some(graph) = world
+        .get_resource::<SceneContactGraph>()
+        .map(|s| s.graph.clone())
+    else {
+        return;
+    };
+    let db = world.get_resource::<CadLibrary>().map(|l| l.0.clone());
+    let mut entities: Vec<(Entity, String)> = world
+        .query::<(Entity, &SceneEntity)>()
+        .iter(world)
+        .map(|(e, id)| (e, id.0.clone()))
+        .collect();
+    entities.sort_by(|a, b| a.1.cmp(&b.1));
+    let poses: Vec<Affine3A> = entities
+        .iter()
+        .map(|(e, _)| world_from_entity(world, *e))
+        .collect();
+    let floor = graph.nodes.iter().find(|n| n.class == "floor");
+    let links: Vec<Vec<NodeLink>> = entities
+        .par_iter()
+        .zip(poses.par_iter())
+        .map(|((_, id), pose)| {
+            let Some(node) = graph.node(id) else {
+                return Vec::new();
+            };
+            let model = node
+                .cad
+                .as_ref()
+                .zip(db.as_ref())
+                .and_then(|(c, db)| db.get(&c.model))
+                .map(|m| &m.model);
+            node_links(node, model, *pose, floor)
+        })
+        .collect();
+    for ((entity, id), links) in entities.iter().zip(links) {
+        spawn_links(world, *entity, id, links);
+    }
+    match read_kinematic_tree(world) {
+        Ok(tree) => {
+            world.insert_resource(SceneKinematicTree(tree));
+        }
+        Err(problem) => {
+            world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(
+                format!("kinematic tree: {problem}"),
+            ));
+        }
+    }
+}
+
+/// Gives `entity` its own link's body and spawns the moving parts below it.
+fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>) {
+    let mut part_entities: Vec<Entity> = Vec::with_capacity(links.len());
+    for link in links {
+        let body = LinkBody(Arc::new(link.geometry));
+        let (Some(part), Some(parent)) = (link.part, link.parent) else {
+            world.entity_mut(entity).insert(body);
+            part_entities.push(entity);
+            continue;
+        };
+        let local = link.parent_from_link * link.joint.motion(link.value);
+        let (scale, rotation, translation) = local.to_scale_rotation_translation();
+        let e = world
+            .spawn((
+                Name::new(format!("{id}_{part}")),
+                ModelPart {
+                    object: id.to_string(),
+                    part,
+                },
+                body,
+                Joint {
+                    spec: link.joint,
+                    value: link.value,
+                },
+                Transform {
+                    translation,
+                    rotation: rotation.normalize(),
+                    scale,
+                },
+                ChildOf(part_entities[parent]),
+            ))
+            .id();
+        part_entities.push(e);
+    }
+}
+
+/// The transform hierarchy under the `SceneRoot` as a kinematic tree, depth first, children in
+/// name order (so the same scene always gives the same files).
+pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, String> {
+    let root = world
+        .query_filtered::<Entity, With<SceneRoot>>()
+        .iter(world)
+        .next()
+        .ok_or("no scene root")?;
+    let mut children_of: HashMap<Entity, Vec<(String, Entity)>> = HashMap::new();
+    for (e, parent, name) in world.query::<(Entity, &ChildOf, &Name)>().iter(world) {
+        children_of
+            .entry(parent.parent())
+            .or_default()
+            .push((name.as_str().to_string(), e));
+    }
+    let mut tree = KinematicTree {
+        links: vec![TreeLink {
+            name: ROOT_LINK.into(),
+            node: None,
+            class: None,
+            parent: None,
+            joint: JointSpec::FIXED,
+            value: 0.0,
+            parent_from_link: Affine3A::IDENTITY,
+            geometry: None,
+        }],
+    };
+    let mut stack: Vec<(Entity, usize)> = vec![(root, 0)];
+    while let Some((entity, index)) = stack.pop() {
+        let mut children = children_of.remove(&entity).unwrap_or_default();
+        children.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut pushed = Vec::with_capacity(children.len());
+        for (name, child) in children {
+            let e = world.entity(child);
+            let joint = e.get::<Joint>().copied().unwrap_or(Joint {
+                spec: JointSpec::FIXED,
+                value: 0.0,
+            });
+            let local = e.get::<Transform>().map_or(Affine3A::IDENTITY, affine_of);
+            // A part's class is its object's.
+            let (node, class) = match (e.get::<SceneEntity>(), e.get::<ModelPart>()) {
+                (Some(id), _) => (
+                    Some(id.0.clone()),
+                    e.get::<Panoptic>().map(|p| p.class.clone()),
+                ),
+                (None, Some(part)) => (Some(part.object.clone()), tree.links[index].class.clone()),
+                (None, None) => (None, None),
+            };
+            tree.links.push(TreeLink {
+                name,
+                node,
+                class,
+                parent: Some(index),
+                joint: joint.spec,
+                value: joint.value,
+                parent_from_link: local * joint.spec.motion(joint.value).inverse(),
+                geometry: e.get::<LinkBody>().map(|b| b.0.clone()),
+            });
+            pushed.push((child, tree.links.len() - 1));
+        }
+        // Depth first: the stack pops from the back, so the first child goes on last.
+        stack.extend(pushed.into_iter().rev());
+    }
+    tree.check()?;
+    Ok(tree)
+}
+
+/// Adds the KinematicTree stage.
+pub struct KinematicTreePlugin;
+
+impl Plugin for KinematicTreePlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(
+            crate::systems::Reconstruct,
+            kinematic_tree_stage.in_set(crate::systems::ReconstructionStage::KinematicTree),
+        );
+    }
+}
