@@ -8,7 +8,7 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::error::{InputError, IsceneError};
-use crate::export::write_tree_exports;
+use crate::export::{write_occupancy, write_tree_exports};
 use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
 use crate::io::atomic::StagedDir;
@@ -260,8 +260,23 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         )?;
         outputs.push("contact_graph.json".into());
     }
-    if let Some(tree) = app.world().get_resource::<SceneKinematicTree>() {
-        outputs.extend(write_tree_exports(staged.path(), &tree.0, "scene")?);
+    let tree = app.world().get_resource::<SceneKinematicTree>().map(|t| &t.0);
+    if let Some(tree) = tree {
+        outputs.extend(write_tree_exports(staged.path(), tree, "scene")?);
+    }
+    if let (Some(surface), Some(scene)) = (
+        app.world().get_resource::<PanopticSurface>(),
+        contact_graph,
+    ) {
+        let aligned_from_world = glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(
+            &scene.gravity.aligned_from_world,
+        ));
+        let map_points: Vec<glam::Vec3> = surface
+            .voxels
+            .iter()
+            .map(|(p, _)| aligned_from_world.transform_point3(*p))
+            .collect();
+        outputs.extend(write_occupancy(staged.path(), &map_points, tree)?);
     }
     let mut report = ReconstructReport {
         input: sequence_dir,

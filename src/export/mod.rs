@@ -3,6 +3,8 @@
 
 pub mod mjcf;
 pub mod obj;
+pub mod occupancy;
+pub mod scene_glb;
 pub mod urdf;
 
 use std::path::Path;
@@ -29,9 +31,51 @@ pub fn write_tree_exports(
         write_text(&dir.join(&file.path), &file.text)?;
     }
     write_text(&dir.join("scene.xml"), &mjcf::mjcf_text(tree, name))?;
+    let glb = scene_glb::scene_glb(tree).map_err(|e| IsceneError::Internal(format!("scene.glb: {e}")))?;
+    std::fs::write(dir.join("scene.glb"), glb)
+        .map_err(|e| IsceneError::io(format!("writing {}", dir.join("scene.glb").display()), e))?;
     Ok(vec![
         "scene.urdf".into(),
         "scene.xml".into(),
+        "scene.glb".into(),
         format!("{}/", urdf::MESH_DIR),
     ])
+}
+
+/// Writes `occupancy.pgm/.yaml` (the map layer from `map_points`, aligned frame) and
+/// `occupancy_objects.pgm/.yaml` (plus the tree's objects projected); returns the paths.
+pub fn write_occupancy(
+    dir: &Path,
+    map_points: &[glam::Vec3],
+    tree: Option<&KinematicTree>,
+) -> Result<Vec<String>, IsceneError> {
+    let Some(grid) = occupancy::OccupancyGrid::from_map(map_points) else {
+        return Ok(Vec::new());
+    };
+    let mut layers = vec![("occupancy", grid.clone())];
+    if let Some(tree) = tree {
+        let poses = tree.world_from_links();
+        let layout = |class: &Option<String>| {
+            class.as_deref().and_then(|c| crate::classes::ClassTable::builtin().get(c))
+                .is_none_or(|info| info.kind == crate::classes::EntityKind::Layout)
+        };
+        let objects: Vec<crate::geometry::TriMesh> = tree
+            .links
+            .iter()
+            .zip(&poses)
+            .filter(|(link, _)| !layout(&link.class))
+            .filter_map(|(link, pose)| link.geometry.as_ref().map(|g| g.visual.transformed(pose)))
+            .collect();
+        layers.push(("occupancy_objects", grid.with_objects(&objects)));
+    }
+    let mut written = Vec::new();
+    for (name, layer) in layers {
+        let pgm = format!("{name}.pgm");
+        std::fs::write(dir.join(&pgm), layer.pgm_bytes())
+            .map_err(|e| IsceneError::io(format!("writing {}", dir.join(&pgm).display()), e))?;
+        write_text(&dir.join(format!("{name}.yaml")), &layer.yaml_text(&pgm))?;
+        written.push(pgm);
+        written.push(format!("{name}.yaml"));
+    }
+    Ok(written)
 }
