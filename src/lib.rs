@@ -39,6 +39,7 @@ impl PluginGroup for ReconstructionPlugins {
             .add(systems::ContactGraphPlugin)
             .add(systems::CadReplacementPlugin)
             .add(systems::KinematicTreePlugin)
+            .add(systems::PhysicsValidationPlugin)
     }
 }
 

@@ -23,6 +23,7 @@ use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::kinematic_tree::SceneKinematicTree;
 use crate::systems::panoptic_mapping::{MappingConfig, PanopticMap, PanopticSurface};
+use crate::systems::physics_validation::PhysicsReport;
 use crate::systems::stages::StageMarks;
 use crate::systems::{Reconstruct, ReconstructionStage};
 
@@ -58,6 +59,8 @@ pub struct ReconstructReport {
     pub panoptic: Option<PanopticReport>,
     /// The CAD models that replaced objects, with their alignment errors.
     pub cad: Option<CadReport>,
+    /// The rest test's verdict per object and the sweep of every door and drawer.
+    pub physics: Option<PhysicsReport>,
     /// Stages that ran, with wall-clock seconds; rendering and writing are listed too.
     pub timings: Vec<(String, f64)>,
     /// Stages of the pipeline that have no implementation yet and did not run.
@@ -81,7 +84,7 @@ pub struct PanopticReport {
 }
 
 /// Stages with systems in this build.
-const BUILT_STAGES: [ReconstructionStage; 9] = [
+const BUILT_STAGES: [ReconstructionStage; 10] = [
     ReconstructionStage::Ingest,
     ReconstructionStage::Segment,
     ReconstructionStage::Integrate,
@@ -91,6 +94,7 @@ const BUILT_STAGES: [ReconstructionStage; 9] = [
     ReconstructionStage::CadAlign,
     ReconstructionStage::PhysicalCheck,
     ReconstructionStage::KinematicTree,
+    ReconstructionStage::PhysicsValidation,
 ];
 
 fn fusion_name(fusion: InstanceFusion) -> &'static str {
@@ -260,14 +264,16 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         )?;
         outputs.push("contact_graph.json".into());
     }
-    let tree = app.world().get_resource::<SceneKinematicTree>().map(|t| &t.0);
+    let tree = app
+        .world()
+        .get_resource::<SceneKinematicTree>()
+        .map(|t| &t.0);
     if let Some(tree) = tree {
         outputs.extend(write_tree_exports(staged.path(), tree, "scene")?);
     }
-    if let (Some(surface), Some(scene)) = (
-        app.world().get_resource::<PanopticSurface>(),
-        contact_graph,
-    ) {
+    if let (Some(surface), Some(scene)) =
+        (app.world().get_resource::<PanopticSurface>(), contact_graph)
+    {
         let aligned_from_world = glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(
             &scene.gravity.aligned_from_world,
         ));
@@ -288,6 +294,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         gravity: contact_graph.map(|c| c.gravity.clone()),
         panoptic,
         cad: app.world().get_resource::<CadReport>().cloned(),
+        physics: app.world().get_resource::<PhysicsReport>().cloned(),
         timings,
         stages_not_built: ReconstructionStage::ALL
             .iter()

@@ -31,7 +31,8 @@ pub fn write_tree_exports(
         write_text(&dir.join(&file.path), &file.text)?;
     }
     write_text(&dir.join("scene.xml"), &mjcf::mjcf_text(tree, name))?;
-    let glb = scene_glb::scene_glb(tree).map_err(|e| IsceneError::Internal(format!("scene.glb: {e}")))?;
+    let glb =
+        scene_glb::scene_glb(tree).map_err(|e| IsceneError::Internal(format!("scene.glb: {e}")))?;
     std::fs::write(dir.join("scene.glb"), glb)
         .map_err(|e| IsceneError::io(format!("writing {}", dir.join("scene.glb").display()), e))?;
     Ok(vec![
@@ -56,7 +57,9 @@ pub fn write_occupancy(
     if let Some(tree) = tree {
         let poses = tree.world_from_links();
         let layout = |class: &Option<String>| {
-            class.as_deref().and_then(|c| crate::classes::ClassTable::builtin().get(c))
+            class
+                .as_deref()
+                .and_then(|c| crate::classes::ClassTable::builtin().get(c))
                 .is_none_or(|info| info.kind == crate::classes::EntityKind::Layout)
         };
         let objects: Vec<crate::geometry::TriMesh> = tree

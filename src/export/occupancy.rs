@@ -119,13 +119,15 @@ impl OccupancyGrid {
     pub fn pgm_bytes(&self) -> Vec<u8> {
         let mut bytes = format!("P5\n{} {}\n255\n", self.width, self.height).into_bytes();
         for row in (0..self.height).rev() {
-            bytes.extend(self.cells[row * self.width..(row + 1) * self.width].iter().map(|c| {
-                match c {
-                    Cell::Occupied => 0u8,
-                    Cell::Free => 254,
-                    Cell::Unknown => 205,
-                }
-            }));
+            bytes.extend(
+                self.cells[row * self.width..(row + 1) * self.width]
+                    .iter()
+                    .map(|c| match c {
+                        Cell::Occupied => 0u8,
+                        Cell::Free => 254,
+                        Cell::Unknown => 205,
+                    }),
+            );
         }
         bytes
     }
@@ -169,13 +171,20 @@ mod tests {
         assert_eq!(at(-0.02, 1.0), Cell::Unknown, "the margin beyond the floor");
         let top = TriMesh::cuboid(Vec3::new(0.3, 1.2, 0.68), Vec3::new(0.7, 1.6, 0.7));
         let objects = grid.with_objects(&[top]);
-        assert_eq!(at(0.5, 1.4), Cell::Free, "the map layer does not see the table");
+        assert_eq!(
+            at(0.5, 1.4),
+            Cell::Free,
+            "the map layer does not see the table"
+        );
         assert_eq!(
             objects.cells[objects.index(Vec2::new(0.5, 1.4)).expect("inside")],
             Cell::Occupied
         );
         let covered = objects.count(Cell::Occupied) - grid.count(Cell::Occupied);
-        assert!((60..=100).contains(&covered), "about 8 x 8 cells: {covered}");
+        assert!(
+            (60..=100).contains(&covered),
+            "about 8 x 8 cells: {covered}"
+        );
     }
 
     #[test]

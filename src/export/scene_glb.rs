@@ -14,7 +14,8 @@ pub fn scene_glb(tree: &KinematicTree) -> Result<Vec<u8>, String> {
         .iter()
         .map(|link| {
             let mut node = GltfNode::new(link.name.clone());
-            let (_, rotation, translation) = link.parent_from_link_now().to_scale_rotation_translation();
+            let (_, rotation, translation) =
+                link.parent_from_link_now().to_scale_rotation_translation();
             node.translation = translation;
             node.rotation = rotation.normalize();
             if let Some(g) = &link.geometry {

@@ -36,13 +36,13 @@ pub struct JointSweep {
     pub after_opening: Vec<String>,
 }
 
-/// A link's collision pieces as parry shapes in the link frame, with the frame's local bounds.
-struct LinkSolids {
+/// A link's collision pieces as parry shapes in the link frame, each with its local bounds.
+pub struct LinkSolids {
     pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)>,
 }
 
 impl LinkSolids {
-    fn of(tree: &KinematicTree, link: usize) -> Self {
+    pub fn of(tree: &KinematicTree, link: usize) -> Self {
         let pieces = tree.links[link]
             .geometry
             .iter()
@@ -58,6 +58,10 @@ impl LinkSolids {
             .collect();
         Self { pieces }
     }
+
+    pub fn is_empty(&self) -> bool {
+        self.pieces.is_empty()
+    }
 }
 
 fn pose_of(a: &Affine3A) -> Pose {
@@ -69,13 +73,18 @@ fn pose_of(a: &Affine3A) -> Pose {
 fn world_bounds(pose: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
     let center = pose.transform_point3((lo + hi) / 2.0);
     let half = (hi - lo) / 2.0;
-    let m = glam::Mat3A::from(pose.matrix3);
+    let m = pose.matrix3;
     let extent = m.x_axis.abs() * half.x + m.y_axis.abs() * half.y + m.z_axis.abs() * half.z;
     (center - Vec3::from(extent), center + Vec3::from(extent))
 }
 
 /// The deepest overlap between two posed links, metres (0 when apart).
-fn link_penetration(a: &LinkSolids, pose_a: &Affine3A, b: &LinkSolids, pose_b: &Affine3A) -> f32 {
+pub fn link_penetration(
+    a: &LinkSolids,
+    pose_a: &Affine3A,
+    b: &LinkSolids,
+    pose_b: &Affine3A,
+) -> f32 {
     let (pa, pb) = (pose_of(pose_a), pose_of(pose_b));
     let mut deepest = 0.0f32;
     for (sa, alo, ahi) in &a.pieces {
@@ -160,7 +169,7 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
         .filter(|&i| descends_from(tree, i, j))
         .collect();
     let still: Vec<usize> = (0..tree.links.len())
-        .filter(|i| !moving.contains(i) && !solids[*i].pieces.is_empty())
+        .filter(|i| !moving.contains(i) && !solids[*i].is_empty())
         .collect();
     let mut swept = tree.clone();
     for &o in open {

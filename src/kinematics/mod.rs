@@ -4,6 +4,7 @@ pub mod inertial;
 pub mod joint;
 pub mod joint_sweep;
 pub mod link;
+pub mod rest_test;
 pub mod tree;
 
 pub use joint::{JointKind, JointSpec};

@@ -6,6 +6,7 @@ pub mod contact_graph;
 pub mod ingest;
 pub mod kinematic_tree;
 pub mod panoptic_mapping;
+pub mod physics_validation;
 pub mod scene_graph;
 pub mod stages;
 
@@ -14,4 +15,5 @@ pub use contact_graph::ContactGraphPlugin;
 pub use ingest::IngestPlugin;
 pub use kinematic_tree::KinematicTreePlugin;
 pub use panoptic_mapping::PanopticMappingPlugin;
+pub use physics_validation::PhysicsValidationPlugin;
 pub use stages::{Reconstruct, ReconstructionStage, StagesPlugin};

@@ -1,0 +1,317 @@
+//! The PhysicsValidation stage: the kinematic tree as rapier bodies in an ECS world of its own
+//! (bevy_rapier3d), simulated at rest for `REST_SECONDS` at a fixed step, each object judged
+//! stable, unstable or penetrating with the reason; and every door and drawer swept across its
+//! range for collisions.
+
+use bevy::prelude::*;
+use bevy_rapier3d::prelude::*;
+use bevy_rapier3d::rapier::prelude::MassProperties as ParryMassProperties;
+use glam::Affine3A;
+use serde::Serialize;
+
+use crate::kinematics::joint_sweep::{JointSweep, sweep_joints};
+use crate::kinematics::rest_test::{
+    ObjectVerdict, REST_SECONDS, REST_STEP_S, REST_SUBSTEPS, RestBody, Verdict, judge, rest_bodies,
+    start_penetrations,
+};
+use crate::kinematics::tree::KinematicTree;
+use crate::systems::ingest::StageError;
+use crate::systems::kinematic_tree::SceneKinematicTree;
+
+/// What physics validation found, for report.json.
+#[derive(Resource, Clone, Debug, Serialize)]
+pub struct PhysicsReport {
+    pub simulated_s: f32,
+    pub step_s: f32,
+    pub objects: Vec<ObjectVerdict>,
+    /// Share of objects judged stable.
+    pub stable_fraction: f32,
+    pub joints: Vec<JointSweep>,
+    /// Wall-clock seconds of the rest simulation.
+    pub rest_wall_s: f64,
+}
+
+/// Marks a simulated body with its index among the rest test's bodies.
+#[derive(Component)]
+struct RestBodyIndex(usize);
+
+fn rigid(a: &Affine3A) -> Transform {
+    let (_, rotation, translation) = a.to_scale_rotation_translation();
+    Transform::from_translation(translation).with_rotation(rotation.normalize())
+}
+
+/// The collider of a dynamic body: a compound of the convex pieces of all its links, with the
+/// links' own mass properties summed in the body's frame.
+fn dynamic_collider(
+    tree: &KinematicTree,
+    body: &RestBody,
+    body_from_links: &[Affine3A],
+) -> Option<(Collider, ColliderMassProperties, f32)> {
+    let mut pieces: Vec<(Vec3, Quat, Collider)> = Vec::new();
+    let mut mass: Option<ParryMassProperties> = None;
+    let mut friction = 0.5;
+    for (&l, body_from_link) in body.links.iter().zip(body_from_links) {
+        let Some(g) = tree.links[l].geometry.as_ref() else {
+            continue;
+        };
+        let (_, rotation, translation) = body_from_link.to_scale_rotation_translation();
+        let rotation = rotation.normalize();
+        pieces.extend(
+            g.collision
+                .iter()
+                .filter_map(|piece| Collider::convex_hull(&piece.positions))
+                .map(|c| (translation, rotation, c)),
+        );
+        let link_mass = ParryMassProperties::with_inertia_matrix(
+            g.inertial.center_of_mass,
+            g.inertial.mass,
+            g.inertial.inertia,
+        )
+        .transform_by(&bevy_rapier3d::rapier::math::Pose::from_parts(
+            translation,
+            rotation,
+        ));
+        mass = Some(mass.map_or(link_mass, |m| m + link_mass));
+        if l == body.links[0] {
+            friction = g.friction;
+        }
+    }
+    let mass = mass?;
+    (!pieces.is_empty()).then(|| {
+        (
+            Collider::compound(pieces),
+            ColliderMassProperties::MassProperties(MassProperties::from_rapier(mass)),
+            friction,
+        )
+    })
+}
+
+fn spawn_bodies(world: &mut World, tree: &KinematicTree, bodies: &[RestBody]) -> Vec<Affine3A> {
+    let poses = tree.world_from_links();
+    let mut starts = Vec::with_capacity(bodies.len());
+    for (b, body) in bodies.iter().enumerate() {
+        let world_from_body = body.links.first().map_or(Affine3A::IDENTITY, |&l| poses[l]);
+        starts.push(world_from_body);
+        if body.dynamic {
+            let body_from_world = world_from_body.inverse();
+            let body_from_links: Vec<Affine3A> = body
+                .links
+                .iter()
+                .map(|&l| body_from_world * poses[l])
+                .collect();
+            let Some((collider, mass, friction)) = dynamic_collider(tree, body, &body_from_links)
+            else {
+                continue;
+            };
+            world.spawn((
+                RigidBody::Dynamic,
+                collider,
+                mass,
+                Friction::coefficient(friction),
+                rigid(&world_from_body),
+                RestBodyIndex(b),
+            ));
+            continue;
+        }
+        // The static body: each link's exact triangle mesh where it stands.
+        for &l in &body.links {
+            let Some(g) = tree.links[l].geometry.as_ref() else {
+                continue;
+            };
+            let Ok(collider) =
+                Collider::trimesh(g.visual.positions.clone(), g.visual.triangles.clone())
+            else {
+                continue;
+            };
+            world.spawn((
+                RigidBody::Fixed,
+                collider,
+                Friction::coefficient(g.friction),
+                rigid(&poses[l]),
+            ));
+        }
+    }
+    starts
+}
+
+/// Simulates `tree` at rest and judges every object; sweeps its joints.
+pub fn validate_physics(tree: &KinematicTree) -> PhysicsReport {
+    let bodies = rest_bodies(tree);
+    let penetrations = start_penetrations(tree, &bodies);
+    let mut app = App::new();
+    app.add_plugins((
+        bevy::time::TimePlugin,
+        bevy::transform::TransformPlugin,
+        RapierPhysicsPlugin::<NoUserData>::default(),
+    ));
+    app.insert_resource(TimestepMode::Fixed {
+        dt: REST_STEP_S,
+        substeps: REST_SUBSTEPS,
+    });
+    app.finish();
+    app.cleanup();
+    app.update();
+    // Bevy's convention is y up; the scene is z up.
+    for mut config in app
+        .world_mut()
+        .query::<&mut RapierConfiguration>()
+        .iter_mut(app.world_mut())
+    {
+        config.gravity = Vec3::new(0.0, 0.0, -9.81);
+    }
+    let starts = spawn_bodies(app.world_mut(), tree, &bodies);
+    let started = std::time::Instant::now();
+    let steps = (REST_SECONDS / REST_STEP_S).round() as usize;
+    // One update registers the new bodies (and steps once); the rest are the simulated time.
+    for _ in 0..steps {
+        app.update();
+    }
+    let rest_wall_s = started.elapsed().as_secs_f64();
+    let mut ends = starts.clone();
+    for (index, transform) in app
+        .world_mut()
+        .query::<(&RestBodyIndex, &Transform)>()
+        .iter(app.world())
+    {
+        ends[index.0] =
+            Affine3A::from_rotation_translation(transform.rotation, transform.translation);
+    }
+    let objects: Vec<ObjectVerdict> = bodies
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.dynamic)
+        .map(|(i, b)| judge(tree, b, starts[i], ends[i], penetrations[i]))
+        .collect();
+    let stable = objects
+        .iter()
+        .filter(|o| o.verdict == Verdict::Stable)
+        .count();
+    PhysicsReport {
+        simulated_s: steps as f32 * REST_STEP_S,
+        step_s: REST_STEP_S,
+        stable_fraction: if objects.is_empty() {
+            1.0
+        } else {
+            stable as f32 / objects.len() as f32
+        },
+        objects,
+        joints: sweep_joints(tree),
+        rest_wall_s,
+    }
+}
+
+fn physics_validation_stage(world: &mut World) {
+    if world.resource::<StageError>().0.is_some() {
+        return;
+    }
+    let Some(tree) = world.get_resource::<SceneKinematicTree>() else {
+        return;
+    };
+    let report = validate_physics(&tree.0);
+    world.insert_resource(report);
+}
+
+/// Adds the PhysicsValidation stage.
+pub struct PhysicsValidationPlugin;
+
+impl Plugin for PhysicsValidationPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(
+            crate::systems::Reconstruct,
+            physics_validation_stage.in_set(crate::systems::ReconstructionStage::PhysicsValidation),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::geometry::TriMesh;
+    use crate::kinematics::JointSpec;
+    use crate::kinematics::link::LinkGeometry;
+    use crate::kinematics::tree::{ROOT_LINK, TreeLink};
+
+    fn link(
+        name: &str,
+        class: &str,
+        parent: Option<usize>,
+        joint: JointSpec,
+        mesh: TriMesh,
+        at: Vec3,
+    ) -> TreeLink {
+        TreeLink {
+            name: name.into(),
+            node: parent.map(|_| name.into()),
+            class: parent.map(|_| class.into()),
+            parent,
+            joint,
+            value: 0.0,
+            parent_from_link: Affine3A::from_translation(at),
+            geometry: parent.map(|_| Arc::new(LinkGeometry::new(mesh, [0.5; 3], class))),
+        }
+    }
+
+    /// A floor, a box standing on it and a box `gap` above it.
+    fn scene(gap: f32) -> KinematicTree {
+        KinematicTree {
+            links: vec![
+                link(
+                    ROOT_LINK,
+                    "",
+                    None,
+                    JointSpec::FIXED,
+                    TriMesh::default(),
+                    Vec3::ZERO,
+                ),
+                link(
+                    "floor",
+                    "floor",
+                    Some(0),
+                    JointSpec::FIXED,
+                    TriMesh::cuboid(Vec3::new(-2.0, -2.0, -0.05), Vec3::new(2.0, 2.0, 0.0)),
+                    Vec3::ZERO,
+                ),
+                link(
+                    "box_1",
+                    "box",
+                    Some(1),
+                    JointSpec::FLOATING,
+                    TriMesh::cuboid(Vec3::new(-0.2, -0.2, 0.0), Vec3::new(0.2, 0.2, 0.3)),
+                    Vec3::new(0.5, 0.0, 0.0),
+                ),
+                link(
+                    "box_2",
+                    "box",
+                    Some(1),
+                    JointSpec::FLOATING,
+                    TriMesh::cuboid(Vec3::new(-0.2, -0.2, 0.0), Vec3::new(0.2, 0.2, 0.3)),
+                    Vec3::new(-0.5, 0.0, gap),
+                ),
+            ],
+        }
+    }
+
+    #[test]
+    fn a_box_on_the_floor_stands_and_a_box_in_the_air_falls() {
+        let report = validate_physics(&scene(0.2));
+        let verdict = |name: &str| {
+            report
+                .objects
+                .iter()
+                .find(|o| o.object == name)
+                .expect("judged")
+                .clone()
+        };
+        let standing = verdict("box_1");
+        assert_eq!(standing.verdict, Verdict::Stable, "{standing:?}");
+        assert!(standing.displacement_m < 0.002, "{standing:?}");
+        let falling = verdict("box_2");
+        assert_eq!(falling.verdict, Verdict::Unstable, "{falling:?}");
+        assert!(
+            (falling.displacement_m - 0.2).abs() < 0.01,
+            "lands on the floor: {falling:?}"
+        );
+    }
+}

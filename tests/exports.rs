@@ -1,0 +1,233 @@
+//! The exports of reconstructed rendered scenes, checked by tools nobody here wrote (issue 6's
+//! bar, ../shared/VALIDATORS.md): check_urdf parses the URDF with nothing on stderr and the link
+//! count of the contact graph plus the CAD models' parts; MuJoCo loads the URDF and the MJCF and
+//! its free bodies rest; PyBullet loads the URDF; the Khronos validator finds no error in the
+//! .glb, whose node names include every contact-graph id. The rapier verdicts name a reason for
+//! every object they do not call stable.
+//!
+//! The validators are installed by scripts/setup-validators.sh (the README's test command runs
+//! it). Known exception, asserted by name: in the kitchen the segments of cabinet_1 and
+//! cabinet_2 overlap by a third of a metre in the map (see tests/cad_replacement.rs), so those
+//! two start inside each other and what stands on them does not rest.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+mod common;
+
+use iscene::cad::ParametricLibrary;
+use iscene::graph::ContactGraph;
+
+fn validator(relative: &str) -> PathBuf {
+    let path = common::root().join(relative);
+    assert!(
+        path.exists(),
+        "{} is missing: run scripts/setup-validators.sh (the README's test command does)",
+        path.display()
+    );
+    path
+}
+
+/// Runs a command; returns (exit code, stdout, stderr).
+fn run(program: &Path, args: &[&Path]) -> (i32, String, String) {
+    let out = Command::new(program)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("running {}: {e}", program.display()));
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn json_line(stdout: &str) -> serde_json::Value {
+    let line = stdout
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or_else(|| panic!("no JSON in {stdout:?}"));
+    serde_json::from_str(line).expect("JSON")
+}
+
+/// Links the URDF must have: the root, one per contact-graph node, one per further part of each
+/// node's CAD model.
+fn expected_links(graph: &ContactGraph) -> usize {
+    let models: Vec<_> = ParametricLibrary::entries()
+        .iter()
+        .map(|e| e.model())
+        .collect();
+    1 + graph
+        .nodes
+        .iter()
+        .map(|n| {
+            n.cad
+                .as_ref()
+                .and_then(|c| models.iter().find(|m| m.id == c.model))
+                .map_or(1, |m| m.parts.len())
+        })
+        .sum::<usize>()
+}
+
+/// Whether a MuJoCo body or link name belongs to one of `objects` (its own link or a part).
+fn belongs_to(name: &str, objects: &BTreeSet<String>) -> bool {
+    objects
+        .iter()
+        .any(|o| name == o || name.starts_with(&format!("{o}_")))
+}
+
+#[test]
+fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
+    let python = validator(".venv-validators/bin/python");
+    let mujoco_rest = validator("tests/external/mujoco_rest.py");
+    let pybullet_load = validator("tests/external/pybullet_load.py");
+    let gltf_validate = validator("tests/external/gltf_validate.js");
+    validator(".validators/node_modules/gltf-validator/package.json");
+    let check_urdf = PathBuf::from("check_urdf");
+    let mut failures = Vec::new();
+    for name in ["kitchen", "office", "living_room", "bedroom"] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let (_, out) = common::render_and_map_every_second_frame(name, dir.path(), false);
+        let graph = ContactGraph::load(&out.join("contact_graph.json")).expect("graph");
+        let report: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("report.json")).expect("report.json"),
+        )
+        .expect("report JSON");
+        let urdf = out.join("scene.urdf");
+        let links = expected_links(&graph);
+
+        // check_urdf: exit 0, silent stderr, every link in the printed tree.
+        let (code, stdout, stderr) = run(&check_urdf, &[&urdf]);
+        let printed = 1 + stdout.matches("child(").count();
+        if code != 0 || !stderr.trim().is_empty() || printed != links {
+            failures.push(format!(
+                "{name}: check_urdf exit {code}, {printed} of {links} links, stderr {stderr:?}"
+            ));
+        }
+
+        // The rapier verdicts: every object judged, every exception with its reason.
+        let objects = report["physics"]["objects"].as_array().expect("physics");
+        let not_stable: BTreeSet<String> = objects
+            .iter()
+            .filter(|o| o["verdict"] != "stable")
+            .map(|o| o["object"].as_str().expect("id").to_string())
+            .collect();
+        let penetrating: BTreeSet<String> = objects
+            .iter()
+            .filter(|o| o["verdict"] == "penetrating")
+            .map(|o| o["object"].as_str().expect("id").to_string())
+            .collect();
+        for o in objects.iter().filter(|o| o["verdict"] != "stable") {
+            if !o["reason"].is_string() {
+                failures.push(format!(
+                    "{name}: {} is {} without a reason",
+                    o["object"], o["verdict"]
+                ));
+            }
+        }
+        let stable_fraction = report["physics"]["stable_fraction"]
+            .as_f64()
+            .expect("fraction");
+        eprintln!("{name}: rapier stable {stable_fraction:.3}, not stable {not_stable:?}");
+        let allowed_penetrating: BTreeSet<String> = if name == "kitchen" {
+            ["cabinet_1", "cabinet_2"].map(String::from).into()
+        } else {
+            BTreeSet::new()
+        };
+        if !penetrating.is_subset(&allowed_penetrating) {
+            failures.push(format!("{name}: penetrating {penetrating:?}"));
+        }
+        // Apart from the known overlap, an unstable object stands on a penetrating one.
+        for id in not_stable.difference(&penetrating) {
+            let parent = graph.parent_of(id).unwrap_or("");
+            if !penetrating.contains(parent) {
+                failures.push(format!("{name}: {id} is not stable (on {parent})"));
+            }
+        }
+        // Every door and drawer opens without hitting anything, but where the overlap is.
+        for sweep in report["physics"]["joints"]
+            .as_array()
+            .expect("joint sweeps")
+        {
+            let link = sweep["link"].as_str().expect("link");
+            let hit = sweep["hits"][0].as_str().unwrap_or("");
+            if sweep["free"] != true
+                && !(belongs_to(link, &penetrating) || belongs_to(hit, &penetrating))
+            {
+                failures.push(format!("{name}: {link} does not move freely: {sweep}"));
+            }
+        }
+
+        // MuJoCo: both files load, free bodies rest, nothing new overlaps at a joint limit.
+        for file in [urdf.clone(), out.join("scene.xml")] {
+            let (code, stdout, stderr) = run(&python, &[&mujoco_rest, &file]);
+            if code != 0 {
+                failures.push(format!("{name}: MuJoCo: {stderr}"));
+                continue;
+            }
+            let result = json_line(&stdout);
+            for (joint, moved) in result["free_moved"].as_object().expect("free_moved") {
+                let object = joint.trim_end_matches("_joint");
+                let moved = moved.as_f64().expect("metres");
+                let excused = not_stable.contains(object)
+                    || graph
+                        .parent_of(object)
+                        .is_some_and(|p| penetrating.contains(p));
+                if moved > 0.001 && !excused {
+                    failures.push(format!(
+                        "{name}: {} in MuJoCo: {object} moved {:.2} mm at rest",
+                        file.display(),
+                        moved * 1000.0
+                    ));
+                }
+            }
+            for overlap in result["start_overlaps"].as_array().expect("overlaps") {
+                let a = overlap[1].as_str().unwrap_or("");
+                let b = overlap[2].as_str().unwrap_or("");
+                if !(belongs_to(a, &penetrating) || belongs_to(b, &penetrating)) {
+                    failures.push(format!("{name}: MuJoCo starts with overlap {overlap}"));
+                }
+            }
+            for overlap in result["limit_overlaps"].as_array().expect("limit overlaps") {
+                let a = overlap[3].as_str().unwrap_or("");
+                let b = overlap[4].as_str().unwrap_or("");
+                if !(belongs_to(a, &penetrating) || belongs_to(b, &penetrating)) {
+                    failures.push(format!("{name}: MuJoCo at a joint limit: {overlap}"));
+                }
+            }
+        }
+
+        // PyBullet (in a subprocess: it segfaults on some files).
+        let (code, stdout, stderr) = run(&python, &[&pybullet_load, &urdf]);
+        if code != 0 {
+            failures.push(format!("{name}: PyBullet: {stderr}"));
+        } else if json_line(&stdout)["links"].as_u64() != Some(links as u64) {
+            failures.push(format!("{name}: PyBullet links {stdout}"));
+        }
+
+        // The Khronos validator: no errors, every contact-graph id a node name.
+        let (code, stdout, stderr) =
+            run(Path::new("node"), &[&gltf_validate, &out.join("scene.glb")]);
+        if code != 0 {
+            failures.push(format!("{name}: glTF validator: {stderr}"));
+            continue;
+        }
+        let result = json_line(&stdout);
+        if result["errors"].as_u64() != Some(0) {
+            failures.push(format!("{name}: glTF errors {}", result["messages"]));
+        }
+        let nodes: BTreeSet<&str> = result["nodes"]
+            .as_array()
+            .expect("nodes")
+            .iter()
+            .filter_map(|n| n.as_str())
+            .collect();
+        for node in &graph.nodes {
+            if !nodes.contains(node.id.as_str()) {
+                failures.push(format!("{name}: no glTF node named {}", node.id));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
