@@ -6,9 +6,11 @@
 //! every object they do not call stable.
 //!
 //! The validators are installed by scripts/setup-validators.sh (the README's test command runs
-//! it). Known exception, asserted by name: in the kitchen the segments of cabinet_1 and
-//! cabinet_2 overlap by a third of a metre in the map (see tests/cad_replacement.rs), so those
-//! two start inside each other and what stands on them does not rest.
+//! it). Known exception: in the kitchen the segments of two neighbouring cabinets overlap by a
+//! third of a metre in the map (see tests/cad_replacement.rs); the CAD stage reports them in
+//! conflict, the rest test calls them penetrating, and what stands on them may not rest. Only
+//! objects the CAD stage reported may be penetrating. Not asserted (yet): the 98 %
+//! stable bar; the figures are printed (a bottle and a monitor on furniture move about 1 cm).
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -130,13 +132,22 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
             .as_f64()
             .expect("fraction");
         eprintln!("{name}: rapier stable {stable_fraction:.3}, not stable {not_stable:?}");
-        let allowed_penetrating: BTreeSet<String> = if name == "kitchen" {
-            ["cabinet_1", "cabinet_2"].map(String::from).into()
-        } else {
-            BTreeSet::new()
-        };
-        if !penetrating.is_subset(&allowed_penetrating) {
-            failures.push(format!("{name}: penetrating {penetrating:?}"));
+        // Only what the CAD stage already reported in conflict may start inside another body.
+        let conflicted: BTreeSet<String> = report["cad"]["conflicted"]
+            .as_array()
+            .expect("cad.conflicted")
+            .iter()
+            .filter_map(|c| c.as_str().map(String::from))
+            .collect();
+        if !penetrating.is_subset(&conflicted) {
+            failures.push(format!(
+                "{name}: penetrating {penetrating:?}, CAD conflicts {conflicted:?}"
+            ));
+        }
+        if name != "kitchen" && stable_fraction < 0.9 {
+            failures.push(format!(
+                "{name}: rapier stable fraction {stable_fraction:.3}"
+            ));
         }
         // Apart from the known overlap, an unstable object stands on a penetrating one.
         for id in not_stable.difference(&penetrating) {
@@ -153,6 +164,7 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
             let link = sweep["link"].as_str().expect("link");
             let hit = sweep["hits"][0].as_str().unwrap_or("");
             if sweep["free"] != true
+                && sweep["reachable"].is_null()
                 && !(belongs_to(link, &penetrating) || belongs_to(hit, &penetrating))
             {
                 failures.push(format!("{name}: {link} does not move freely: {sweep}"));

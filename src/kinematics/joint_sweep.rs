@@ -31,6 +31,9 @@ pub struct JointSweep {
     pub hits: Option<(String, f32)>,
     /// No collision deeper than the tolerance anywhere in the range.
     pub free: bool,
+    /// Where the joint moves freely from its lower limit when it cannot go all the way (a door
+    /// stopped by the wall beside it): the range the tree should keep.
+    pub reachable: Option<(f32, f32)>,
     /// Other joints of the same object that had to be open first (a dishwasher's rack slides
     /// out once its door is down); empty when the joint moves from the scene as it stands.
     pub after_opening: Vec<String>,
@@ -176,6 +179,7 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
         swept.links[o].value = open_value(tree, o);
     }
     let mut worst: Option<(f32, usize, f32)> = None;
+    let mut first_hit: Option<usize> = None;
     for k in 0..SWEEP_SAMPLES {
         let value = lo + (hi - lo) * k as f32 / (SWEEP_SAMPLES - 1) as f32;
         swept.links[j].value = value;
@@ -186,9 +190,18 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
                 if worst.is_none_or(|(d, _, _)| depth > d) {
                     worst = Some((depth, s, value));
                 }
+                if depth > SWEEP_TOLERANCE_M && first_hit.is_none() {
+                    first_hit = Some(k);
+                }
             }
         }
     }
+    let reachable = first_hit.filter(|&k| k > 1).map(|k| {
+        (
+            lo,
+            lo + (hi - lo) * (k - 1) as f32 / (SWEEP_SAMPLES - 1) as f32,
+        )
+    });
     let max_penetration_m = worst.map_or(0.0, |(d, _, _)| d);
     JointSweep {
         link: tree.links[j].name.clone(),
@@ -197,6 +210,7 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
             .filter(|(d, _, _)| *d > SWEEP_TOLERANCE_M)
             .map(|(_, s, v)| (tree.links[s].name.clone(), v)),
         free: max_penetration_m <= SWEEP_TOLERANCE_M,
+        reachable,
         after_opening: open.iter().map(|&o| tree.links[o].name.clone()).collect(),
     }
 }

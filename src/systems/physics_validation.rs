@@ -11,8 +11,8 @@ use serde::Serialize;
 
 use crate::kinematics::joint_sweep::{JointSweep, sweep_joints};
 use crate::kinematics::rest_test::{
-    ObjectVerdict, REST_SECONDS, REST_STEP_S, REST_SUBSTEPS, RestBody, Verdict, judge, rest_bodies,
-    start_penetrations,
+    MAX_START_PENETRATION_M, ObjectVerdict, REST_SECONDS, REST_STEP_S, REST_SUBSTEPS, RestBody,
+    Verdict, judge, rest_bodies, start_penetrations,
 };
 use crate::kinematics::tree::KinematicTree;
 use crate::systems::ingest::StageError;
@@ -86,7 +86,14 @@ fn dynamic_collider(
     })
 }
 
-fn spawn_bodies(world: &mut World, tree: &KinematicTree, bodies: &[RestBody]) -> Vec<Affine3A> {
+/// Spawns the bodies; those in `frozen` (they start inside another body, already judged
+/// penetrating) stay where they are, so their overlap does not throw their neighbours about.
+fn spawn_bodies(
+    world: &mut World,
+    tree: &KinematicTree,
+    bodies: &[RestBody],
+    frozen: &[bool],
+) -> Vec<Affine3A> {
     let poses = tree.world_from_links();
     let mut starts = Vec::with_capacity(bodies.len());
     for (b, body) in bodies.iter().enumerate() {
@@ -103,8 +110,13 @@ fn spawn_bodies(world: &mut World, tree: &KinematicTree, bodies: &[RestBody]) ->
             else {
                 continue;
             };
+            let kind = if frozen[b] {
+                RigidBody::Fixed
+            } else {
+                RigidBody::Dynamic
+            };
             world.spawn((
-                RigidBody::Dynamic,
+                kind,
                 collider,
                 mass,
                 Friction::coefficient(friction),
@@ -159,7 +171,11 @@ pub fn validate_physics(tree: &KinematicTree) -> PhysicsReport {
     {
         config.gravity = Vec3::new(0.0, 0.0, -9.81);
     }
-    let starts = spawn_bodies(app.world_mut(), tree, &bodies);
+    let frozen: Vec<bool> = penetrations
+        .iter()
+        .map(|(depth, _)| *depth > MAX_START_PENETRATION_M)
+        .collect();
+    let starts = spawn_bodies(app.world_mut(), tree, &bodies, &frozen);
     let started = std::time::Instant::now();
     let steps = (REST_SECONDS / REST_STEP_S).round() as usize;
     // One update registers the new bodies (and steps once); the rest are the simulated time.
@@ -208,7 +224,36 @@ fn physics_validation_stage(world: &mut World) {
         return;
     };
     let report = validate_physics(&tree.0);
+    narrow_blocked_joints(world, &report.joints);
     world.insert_resource(report);
+}
+
+/// Narrows each joint whose sweep hit something partway to the range it moves freely in, in the
+/// ECS and in the tree the exports write: a door that meets the wall at 80 degrees opens to 80.
+fn narrow_blocked_joints(world: &mut World, sweeps: &[JointSweep]) {
+    let blocked: Vec<(&str, (f32, f32))> = sweeps
+        .iter()
+        .filter(|s| !s.free)
+        .filter_map(|s| s.reachable.map(|r| (s.link.as_str(), r)))
+        .collect();
+    if blocked.is_empty() {
+        return;
+    }
+    for (name, mut joint) in world
+        .query::<(&Name, &mut crate::components::Joint)>()
+        .iter_mut(world)
+    {
+        if let Some((_, range)) = blocked.iter().find(|(link, _)| *link == name.as_str()) {
+            joint.spec.limits = Some(*range);
+        }
+    }
+    if let Some(mut tree) = world.get_resource_mut::<SceneKinematicTree>() {
+        for link in &mut tree.0.links {
+            if let Some((_, range)) = blocked.iter().find(|(l, _)| *l == link.name) {
+                link.joint.limits = Some(*range);
+            }
+        }
+    }
 }
 
 /// Adds the PhysicsValidation stage.

@@ -14,4 +14,5 @@ except Exception as e:  # noqa: BLE001
     print(f"PyBullet could not load {sys.argv[1]}: {e}", file=sys.stderr)
     sys.exit(1)
 n = p.getNumJoints(body)
-print(json.dumps({"joints": n, "links": n + 1}))
+# PyBullet's own warnings end without a newline: start the JSON on a line of its own.
+print("\n" + json.dumps({"joints": n, "links": n + 1}))
