@@ -63,8 +63,8 @@ pub fn fridge_single(id: &str, s: Vec3) -> CadModel {
     b.add(
         d,
         TriMesh::cuboid(
-            Vec3::new(-s.x + 0.04, -door, 0.04),
-            Vec3::new(-0.04, -BOARD, s.z - 0.04),
+            Vec3::new(-s.x + 0.04, BOARD - door, 0.04),
+            Vec3::new(-0.04, 0.0, s.z - 0.04),
         ),
     );
     b.finish(id, "fridge")
@@ -98,8 +98,8 @@ pub fn fridge_freezer(id: &str, s: Vec3) -> CadModel {
         "freezer",
         PartsBuilder::BODY,
         (-0.5 * s.x, 0.5 * s.x),
-        // The tray, 1 cm above the front's bottom edge, clears the shell's floor.
-        (SHELL - 0.005, split - 0.003),
+        // The front starts where the tray, a board above its bottom edge, clears the shell.
+        (SHELL - BOARD, split - 0.003),
         front,
         (
             0.5 * s.x - SHELL - DRAWER_CLEARANCE,

@@ -140,10 +140,12 @@ impl PartsBuilder {
             HingeSide::Left => (x0, -Vec3::Z, 1.0),
             HingeSide::Right => (x1, Vec3::Z, -1.0),
         };
+        // The hinge runs along the door's outer edge, so the open door never swings back into
+        // the side of its own body.
         let door = self.part(
             name,
             parent,
-            Affine3A::from_translation(Vec3::new(hinge_x, front_y, z0)),
+            Affine3A::from_translation(Vec3::new(hinge_x, front_y - BOARD, z0)),
             JointSpec::revolute(axis, 0.0, DOOR_OPEN),
             color,
         );
@@ -154,7 +156,7 @@ impl PartsBuilder {
         };
         self.add(
             door,
-            TriMesh::cuboid(Vec3::new(lo, -BOARD, 0.0), Vec3::new(hi, 0.0, height)),
+            TriMesh::cuboid(Vec3::new(lo, 0.0, 0.0), Vec3::new(hi, BOARD, height)),
         );
         let handle_x = sign * (width - 0.06f32.min(0.25 * width));
         let handle_len = (0.3 * height).clamp(0.05, 0.35);
@@ -173,12 +175,8 @@ impl PartsBuilder {
         self.add(
             handle,
             TriMesh::cuboid(
-                Vec3::new(
-                    handle_x - 0.008,
-                    -BOARD - HANDLE_DEPTH,
-                    handle_z - 0.5 * handle_len,
-                ),
-                Vec3::new(handle_x + 0.008, -BOARD, handle_z + 0.5 * handle_len),
+                Vec3::new(handle_x - 0.008, -HANDLE_DEPTH, handle_z - 0.5 * handle_len),
+                Vec3::new(handle_x + 0.008, 0.0, handle_z + 0.5 * handle_len),
             ),
         );
         door
@@ -260,7 +258,10 @@ impl PartsBuilder {
         let h = z1 - z0;
         let t = BOARD;
         let inner = tray_half_width;
-        let tray_h = (0.8 * h).max(0.03);
+        // The tray stands a board and some play above the front's bottom edge, clear of the
+        // board under the opening.
+        const TRAY_BOTTOM: f32 = BOARD + DRAWER_CLEARANCE;
+        let tray_h = (0.8 * h).max(TRAY_BOTTOM + 0.03);
         self.add(
             drawer,
             TriMesh::cuboid(Vec3::new(-0.5 * w, -t, 0.0), Vec3::new(0.5 * w, 0.0, h)),
@@ -268,28 +269,28 @@ impl PartsBuilder {
         .add(
             drawer,
             TriMesh::cuboid(
-                Vec3::new(-inner, 0.0, 0.01),
-                Vec3::new(inner, depth, 0.01 + t),
+                Vec3::new(-inner, 0.0, TRAY_BOTTOM),
+                Vec3::new(inner, depth, TRAY_BOTTOM + t),
             ),
         )
         .add(
             drawer,
             TriMesh::cuboid(
-                Vec3::new(-inner, 0.0, 0.01),
+                Vec3::new(-inner, 0.0, TRAY_BOTTOM),
                 Vec3::new(-inner + t, depth, tray_h),
             ),
         )
         .add(
             drawer,
             TriMesh::cuboid(
-                Vec3::new(inner - t, 0.0, 0.01),
+                Vec3::new(inner - t, 0.0, TRAY_BOTTOM),
                 Vec3::new(inner, depth, tray_h),
             ),
         )
         .add(
             drawer,
             TriMesh::cuboid(
-                Vec3::new(-inner, depth - t, 0.01),
+                Vec3::new(-inner, depth - t, TRAY_BOTTOM),
                 Vec3::new(inner, depth, tray_h),
             ),
         );
