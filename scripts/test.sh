@@ -13,6 +13,9 @@ echo "== format and lints"
 cargo fmt --all -- --check
 cargo clippy --locked --all-targets -- -D warnings
 
+echo "== validators (check_urdf, MuJoCo, PyBullet, Khronos glTF validator)"
+./scripts/setup-validators.sh
+
 echo "== tests"
 cargo test --locked --lib --bins --tests --no-fail-fast
 

@@ -34,8 +34,10 @@ fn validator(relative: &str) -> PathBuf {
 
 /// Runs a command; returns (exit code, stdout, stderr).
 fn run(program: &Path, args: &[&Path]) -> (i32, String, String) {
+    // MuJoCo writes MUJOCO_LOG.TXT into its working folder: keep it out of the checkout.
     let out = Command::new(program)
         .args(args)
+        .current_dir(std::env::temp_dir())
         .output()
         .unwrap_or_else(|e| panic!("running {}: {e}", program.display()));
     (
