@@ -101,6 +101,14 @@ impl ClassTable {
         self.classes.get(class)
     }
 
+    /// Whether `class` is room layout (floor, wall, ceiling); an unknown or missing class counts
+    /// as layout, so nothing unknown is treated as an object that moves.
+    pub fn is_layout(&self, class: Option<&str>) -> bool {
+        class
+            .and_then(|c| self.get(c))
+            .is_none_or(|info| info.kind == EntityKind::Layout)
+    }
+
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.classes.keys().map(String::as_str)
     }

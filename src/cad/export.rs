@@ -9,7 +9,7 @@ use crate::cad::library::ParametricLibrary;
 use crate::cad::model::CadModel;
 use crate::error::IsceneError;
 use crate::io::atomic::write_file_atomically;
-use crate::io::gltf_write::{GltfNode, glb_bytes};
+use crate::io::gltf_write::{GltfNode, glb_bytes, nest};
 use crate::kinematics::JointSpec;
 
 /// The metadata file `<id>.json` beside `<id>.glb`.
@@ -67,7 +67,7 @@ pub fn metadata(model: &CadModel) -> ModelMetadata {
 
 /// The model as a glTF node tree: a node per part under its parent, joints in the nodes' extras.
 pub fn model_glb(model: &CadModel) -> Result<Vec<u8>, String> {
-    let mut nodes: Vec<GltfNode> = model
+    let nodes: Vec<GltfNode> = model
         .parts
         .iter()
         .map(|p| {
@@ -83,15 +83,11 @@ pub fn model_glb(model: &CadModel) -> Result<Vec<u8>, String> {
             node
         })
         .collect();
-    // Children come after their parents: attach from the back so indices stay valid.
-    for i in (1..nodes.len()).rev() {
-        let parent = model.parts[i].parent.unwrap_or(0);
-        let node = nodes.remove(i);
-        nodes[parent].children.insert(0, node);
-    }
     let mut root = GltfNode::new(model.id.clone());
     root.extras = Some(serde_json::json!({ "class": model.class, "size": model.size.to_array() }));
-    root.children = nodes;
+    root.children = nest(nodes, |i| model.parts[i].parent.unwrap_or(0))
+        .into_iter()
+        .collect();
     glb_bytes(&root, "z_up")
 }
 

@@ -185,58 +185,35 @@ fn write_joint(xml: &mut String, tree: &KinematicTree, i: usize, pad: &str) {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
     use glam::Vec3;
 
     use super::*;
     use crate::geometry::TriMesh;
     use crate::kinematics::JointSpec;
-    use crate::kinematics::link::LinkGeometry;
-    use crate::kinematics::tree::ROOT_LINK;
 
-    fn link(name: &str, parent: Option<usize>, joint: JointSpec, at: Vec3) -> TreeLink {
-        TreeLink {
-            name: name.into(),
-            node: Some(name.into()),
-            class: Some("chair".into()),
+    fn link(name: &str, parent: usize, joint: JointSpec, at: Vec3) -> TreeLink {
+        let mesh = TriMesh::cuboid(Vec3::splat(-0.1), Vec3::splat(0.1));
+        TreeLink::body(
+            name,
+            "chair",
             parent,
             joint,
-            value: 0.0,
-            parent_from_link: Affine3A::from_translation(at),
-            geometry: parent.map(|_| {
-                Arc::new(LinkGeometry::new(
-                    TriMesh::cuboid(Vec3::splat(-0.1), Vec3::splat(0.1)),
-                    [0.5; 3],
-                    "chair",
-                ))
-            }),
-        }
+            Affine3A::from_translation(at),
+            mesh,
+        )
     }
 
     #[test]
     fn floating_links_become_top_level_free_bodies_at_their_world_pose() {
-        let mut root = link(ROOT_LINK, None, JointSpec::FIXED, Vec3::ZERO);
-        root.geometry = None;
         let tree = KinematicTree {
             links: vec![
-                root,
-                link("floor", Some(0), JointSpec::FIXED, Vec3::ZERO),
-                link(
-                    "chair_1",
-                    Some(1),
-                    JointSpec::FLOATING,
-                    Vec3::new(1.0, 0.0, 0.5),
-                ),
-                link(
-                    "book_1",
-                    Some(2),
-                    JointSpec::FLOATING,
-                    Vec3::new(0.0, 0.0, 0.3),
-                ),
+                TreeLink::root(),
+                link("floor", 0, JointSpec::FIXED, Vec3::ZERO),
+                link("chair_1", 1, JointSpec::FLOATING, Vec3::new(1.0, 0.0, 0.5)),
+                link("book_1", 2, JointSpec::FLOATING, Vec3::new(0.0, 0.0, 0.3)),
                 link(
                     "cabinet_1_door",
-                    Some(1),
+                    1,
                     JointSpec::revolute(Vec3::Z, 0.0, 1.5),
                     Vec3::Y,
                 ),

@@ -56,17 +56,12 @@ pub fn write_occupancy(
     let mut layers = vec![("occupancy", grid.clone())];
     if let Some(tree) = tree {
         let poses = tree.world_from_links();
-        let layout = |class: &Option<String>| {
-            class
-                .as_deref()
-                .and_then(|c| crate::classes::ClassTable::builtin().get(c))
-                .is_none_or(|info| info.kind == crate::classes::EntityKind::Layout)
-        };
+        let classes = crate::classes::ClassTable::builtin();
         let objects: Vec<crate::geometry::TriMesh> = tree
             .links
             .iter()
             .zip(&poses)
-            .filter(|(link, _)| !layout(&link.class))
+            .filter(|(link, _)| !classes.is_layout(link.class.as_deref()))
             .filter_map(|(link, pose)| link.geometry.as_ref().map(|g| g.visual.transformed(pose)))
             .collect();
         layers.push(("occupancy_objects", grid.with_objects(&objects)));

@@ -2,14 +2,14 @@
 //! the link (contact-graph ids for objects and layout, `<id>_<part>` for moving parts), posed at
 //! the current joint values, with the joint, class and mass in the node's extras.
 
-use crate::io::gltf_write::{GltfNode, glb_bytes};
+use crate::io::gltf_write::{GltfNode, glb_bytes, nest};
 use crate::kinematics::tree::KinematicTree;
 
 /// The name of the node that turns the scene's +z up into glTF's +y up.
 pub const UP_AXIS_NODE: &str = "z_up";
 
 pub fn scene_glb(tree: &KinematicTree) -> Result<Vec<u8>, String> {
-    let mut nodes: Vec<GltfNode> = tree
+    let nodes: Vec<GltfNode> = tree
         .links
         .iter()
         .map(|link| {
@@ -31,12 +31,7 @@ pub fn scene_glb(tree: &KinematicTree) -> Result<Vec<u8>, String> {
             node
         })
         .collect();
-    // Links come after their parents: attach from the back so indices stay valid.
-    for i in (1..nodes.len()).rev() {
-        let parent = tree.links[i].parent.unwrap_or(0);
-        let node = nodes.remove(i);
-        nodes[parent].children.insert(0, node);
-    }
-    let root = nodes.pop().ok_or("an empty kinematic tree")?;
+    let root =
+        nest(nodes, |i| tree.links[i].parent.unwrap_or(0)).ok_or("an empty kinematic tree")?;
     glb_bytes(&root, UP_AXIS_NODE)
 }

@@ -189,58 +189,39 @@ pub fn affine_of_urdf_pose(pose: &urdf_rs::Pose) -> Affine3A {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
     use super::*;
     use crate::geometry::TriMesh;
     use crate::kinematics::JointSpec;
-    use crate::kinematics::link::LinkGeometry;
-    use crate::kinematics::tree::{ROOT_LINK, TreeLink};
+    use crate::kinematics::tree::TreeLink;
 
     fn tree() -> KinematicTree {
-        let body = |size: Vec3| {
-            Some(Arc::new(LinkGeometry::new(
-                TriMesh::cuboid_centered(Vec3::Z * size.z / 2.0, size),
-                [0.8, 0.2, 0.2],
-                "cabinet",
-            )))
-        };
+        let board = |size: Vec3| TriMesh::cuboid_centered(Vec3::Z * size.z / 2.0, size);
         let pose = Affine3A::from_rotation_translation(
             glam::Quat::from_euler(EulerRot::ZYX, 0.7, 0.1, -0.2),
             Vec3::new(1.0, 2.0, 3.0),
         );
+        let mut door = TreeLink::body(
+            "cabinet_1_door",
+            "cabinet",
+            1,
+            JointSpec::revolute(Vec3::Z, 0.0, 1.9),
+            Affine3A::from_translation(Vec3::new(-0.3, -0.25, 0.0)),
+            board(Vec3::new(0.6, 0.02, 0.8)),
+        );
+        door.node = Some("cabinet_1".into());
+        door.value = 0.5;
         KinematicTree {
             links: vec![
-                TreeLink {
-                    name: ROOT_LINK.into(),
-                    node: None,
-                    class: None,
-                    parent: None,
-                    joint: JointSpec::FIXED,
-                    value: 0.0,
-                    parent_from_link: Affine3A::IDENTITY,
-                    geometry: None,
-                },
-                TreeLink {
-                    name: "cabinet_1".into(),
-                    node: Some("cabinet_1".into()),
-                    class: Some("cabinet".into()),
-                    parent: Some(0),
-                    joint: JointSpec::FIXED,
-                    value: 0.0,
-                    parent_from_link: pose,
-                    geometry: body(Vec3::new(0.6, 0.5, 0.8)),
-                },
-                TreeLink {
-                    name: "cabinet_1_door".into(),
-                    node: Some("cabinet_1".into()),
-                    class: Some("cabinet".into()),
-                    parent: Some(1),
-                    joint: JointSpec::revolute(Vec3::Z, 0.0, 1.9),
-                    value: 0.5,
-                    parent_from_link: Affine3A::from_translation(Vec3::new(-0.3, -0.25, 0.0)),
-                    geometry: body(Vec3::new(0.6, 0.02, 0.8)),
-                },
+                TreeLink::root(),
+                TreeLink::body(
+                    "cabinet_1",
+                    "cabinet",
+                    0,
+                    JointSpec::FIXED,
+                    pose,
+                    board(Vec3::new(0.6, 0.5, 0.8)),
+                ),
+                door,
             ],
         }
     }

@@ -35,6 +35,17 @@ impl GltfNode {
     }
 }
 
+/// Hangs each node under its parent (`parent_of(i) < i` for every `i > 0`) and returns node 0
+/// with the whole tree below it; `None` for no nodes.
+pub fn nest(mut nodes: Vec<GltfNode>, parent_of: impl Fn(usize) -> usize) -> Option<GltfNode> {
+    // Children come after their parents: attach from the back so indices stay valid.
+    for i in (1..nodes.len()).rev() {
+        let node = nodes.remove(i);
+        nodes[parent_of(i)].children.insert(0, node);
+    }
+    nodes.pop()
+}
+
 /// Serialises `root` as a .glb. glTF is y up: the scene's z-up content is wrapped in a node named
 /// `up_axis_node` that turns +z into +y, so any viewer shows it upright.
 pub fn glb_bytes(root: &GltfNode, up_axis_node: &str) -> Result<Vec<u8>, String> {

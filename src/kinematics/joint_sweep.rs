@@ -217,46 +217,31 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
     use super::*;
     use crate::cad::ParametricLibrary;
     use crate::geometry::TriMesh;
     use crate::kinematics::JointSpec;
-    use crate::kinematics::link::LinkGeometry;
-    use crate::kinematics::tree::{ROOT_LINK, TreeLink};
+    use crate::kinematics::tree::TreeLink;
 
     /// One model of the library as a tree under the world (scale 1, at the origin).
     fn model_tree(model: &crate::cad::model::CadModel) -> KinematicTree {
-        let mut links = vec![TreeLink {
-            name: ROOT_LINK.into(),
-            node: None,
-            class: None,
-            parent: None,
-            joint: JointSpec::FIXED,
-            value: 0.0,
-            parent_from_link: Affine3A::IDENTITY,
-            geometry: None,
-        }];
+        let mut links = vec![TreeLink::root()];
         for (k, part) in model.parts.iter().enumerate() {
-            links.push(TreeLink {
-                name: format!("{}_{}", model.id, part.name),
-                node: Some(model.id.clone()),
-                class: Some(model.class.clone()),
-                parent: Some(part.parent.map_or(0, |p| p + 1)),
-                joint: part.joint,
-                value: 0.0,
-                parent_from_link: if k == 0 {
-                    Affine3A::IDENTITY
-                } else {
-                    part.parent_from_part
-                },
-                geometry: Some(Arc::new(LinkGeometry::new(
-                    part.mesh.clone(),
-                    part.color,
-                    &model.class,
-                ))),
-            });
+            let parent_from_link = if k == 0 {
+                Affine3A::IDENTITY
+            } else {
+                part.parent_from_part
+            };
+            let mut link = TreeLink::body(
+                &format!("{}_{}", model.id, part.name),
+                &model.class,
+                part.parent.map_or(0, |p| p + 1),
+                part.joint,
+                parent_from_link,
+                part.mesh.clone(),
+            );
+            link.node = Some(model.id.clone());
+            links.push(link);
         }
         KinematicTree { links }
     }
@@ -281,46 +266,29 @@ mod tests {
 
     #[test]
     fn a_door_swinging_into_a_wall_is_reported_with_the_wall() {
-        let board = |size: Vec3| {
-            Some(Arc::new(LinkGeometry::new(
-                TriMesh::cuboid(Vec3::ZERO, size),
-                [0.5; 3],
+        let link = |name: &str, joint, at: Vec3, size: Vec3| {
+            let mesh = TriMesh::cuboid(Vec3::ZERO, size);
+            TreeLink::body(
+                name,
                 "cabinet",
-            )))
-        };
-        let link = |name: &str, parent, joint, at: Vec3, size: Vec3| TreeLink {
-            name: String::from(name),
-            node: Some(name.into()),
-            class: Some("cabinet".into()),
-            parent: Some(parent),
-            joint,
-            value: 0.0,
-            parent_from_link: Affine3A::from_translation(at),
-            geometry: board(size),
+                0,
+                joint,
+                Affine3A::from_translation(at),
+                mesh,
+            )
         };
         let mut tree = KinematicTree {
-            links: vec![TreeLink {
-                name: ROOT_LINK.into(),
-                node: None,
-                class: None,
-                parent: None,
-                joint: JointSpec::FIXED,
-                value: 0.0,
-                parent_from_link: Affine3A::IDENTITY,
-                geometry: None,
-            }],
+            links: vec![TreeLink::root()],
         };
         // A 0.5 m door along +x, hinged at the origin, opening towards -y; a wall 0.3 m in front.
         tree.links.push(link(
             "door",
-            0,
             JointSpec::revolute(Vec3::Z, -1.6, 0.0),
             Vec3::ZERO,
             Vec3::new(0.5, 0.02, 1.0),
         ));
         tree.links.push(link(
             "wall",
-            0,
             JointSpec::FIXED,
             Vec3::new(-1.0, -0.4, 0.0),
             Vec3::new(2.0, 0.1, 1.0),

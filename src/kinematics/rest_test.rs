@@ -10,7 +10,7 @@
 use glam::Affine3A;
 use serde::Serialize;
 
-use crate::classes::{ClassTable, EntityKind};
+use crate::classes::ClassTable;
 use crate::kinematics::joint_sweep::{LinkSolids, link_penetration};
 use crate::kinematics::tree::KinematicTree;
 
@@ -35,12 +35,6 @@ pub struct RestBody {
     pub dynamic: bool,
 }
 
-fn is_layout(class: Option<&str>) -> bool {
-    class
-        .and_then(|c| ClassTable::builtin().get(c))
-        .is_none_or(|info| info.kind == EntityKind::Layout)
-}
-
 /// The bodies of the rest test: body 0 is static (the root, the layout, wall-hung objects and
 /// everything locked to them), then one dynamic body per other object.
 pub fn rest_bodies(tree: &KinematicTree) -> Vec<RestBody> {
@@ -56,7 +50,10 @@ pub fn rest_bodies(tree: &KinematicTree) -> Vec<RestBody> {
         let hangs_on_wall = link
             .parent
             .is_some_and(|p| tree.links[p].class.as_deref() == Some("wall"));
-        let body = if own_link && !is_layout(link.class.as_deref()) && !hangs_on_wall {
+        let body = if own_link
+            && !ClassTable::builtin().is_layout(link.class.as_deref())
+            && !hangs_on_wall
+        {
             bodies.push(RestBody {
                 name: link.name.clone(),
                 links: Vec::new(),

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use glam::Affine3A;
 
+use crate::geometry::TriMesh;
 use crate::kinematics::link::LinkGeometry;
 use crate::kinematics::{JointKind, JointSpec};
 
@@ -31,6 +32,42 @@ pub struct TreeLink {
 }
 
 impl TreeLink {
+    /// The `world` root link.
+    pub fn root() -> Self {
+        Self {
+            name: ROOT_LINK.into(),
+            node: None,
+            class: None,
+            parent: None,
+            joint: JointSpec::FIXED,
+            value: 0.0,
+            parent_from_link: Affine3A::IDENTITY,
+            geometry: None,
+        }
+    }
+
+    /// A node's own link made of `mesh` (its frame), grey, with the class's density and
+    /// friction; the link is named by the node.
+    pub fn body(
+        name: &str,
+        class: &str,
+        parent: usize,
+        joint: JointSpec,
+        parent_from_link: Affine3A,
+        mesh: TriMesh,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            node: Some(name.into()),
+            class: Some(class.into()),
+            parent: Some(parent),
+            joint,
+            value: 0.0,
+            parent_from_link,
+            geometry: Some(Arc::new(LinkGeometry::new(mesh, [0.5; 3], class))),
+        }
+    }
+
     /// The link's frame in its parent's at the current joint value.
     pub fn parent_from_link_now(&self) -> Affine3A {
         self.parent_from_link * self.joint.motion(self.value)
@@ -113,38 +150,30 @@ pub fn drive_limits(kind: JointKind) -> (f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::TriMesh;
     use glam::Vec3;
 
-    fn link(name: &str, parent: Option<usize>, joint: JointSpec, at: Vec3) -> TreeLink {
-        TreeLink {
-            name: name.into(),
-            node: parent.map(|_| name.into()),
-            class: None,
+    fn link(name: &str, parent: usize, joint: JointSpec, at: Vec3) -> TreeLink {
+        let mesh = TriMesh::cuboid(Vec3::ZERO, Vec3::ONE);
+        TreeLink::body(
+            name,
+            "box",
             parent,
             joint,
-            value: 0.0,
-            parent_from_link: Affine3A::from_translation(at),
-            geometry: parent.map(|_| {
-                Arc::new(LinkGeometry::new(
-                    TriMesh::cuboid(Vec3::ZERO, Vec3::ONE),
-                    [0.5; 3],
-                    "box",
-                ))
-            }),
-        }
+            Affine3A::from_translation(at),
+            mesh,
+        )
     }
 
     #[test]
     fn bodies_follow_fixed_joints_and_poses_follow_joint_values() {
         let mut tree = KinematicTree {
             links: vec![
-                link(ROOT_LINK, None, JointSpec::FIXED, Vec3::ZERO),
-                link("table_1", Some(0), JointSpec::FIXED, Vec3::X),
-                link("cup_1", Some(1), JointSpec::FLOATING, Vec3::Z),
+                TreeLink::root(),
+                link("table_1", 0, JointSpec::FIXED, Vec3::X),
+                link("cup_1", 1, JointSpec::FLOATING, Vec3::Z),
                 link(
                     "fridge_1_door",
-                    Some(1),
+                    1,
                     JointSpec::revolute(Vec3::Z, 0.0, 2.0),
                     Vec3::Y,
                 ),

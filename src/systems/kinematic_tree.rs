@@ -14,11 +14,11 @@ use rayon::prelude::*;
 use crate::components::{Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
-use crate::kinematics::tree::{KinematicTree, ROOT_LINK, TreeLink};
+use crate::kinematics::tree::{KinematicTree, TreeLink};
 use crate::systems::cad_replacement::CadLibrary;
 use crate::systems::contact_graph::SceneContactGraph;
 use crate::systems::ingest::StageError;
-use crate::systems::scene_graph::SceneRoot;
+use crate::systems::scene_graph::{SceneRoot, transform_of};
 
 /// The kinematic tree as the ECS held it at the end of the KinematicTree stage.
 #[derive(Resource, Clone, Debug)]
@@ -106,7 +106,6 @@ fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>
             continue;
         };
         let local = link.parent_from_link * link.joint.motion(link.value);
-        let (scale, rotation, translation) = local.to_scale_rotation_translation();
         let e = world
             .spawn((
                 Name::new(format!("{id}_{part}")),
@@ -119,11 +118,7 @@ fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>
                     spec: link.joint,
                     value: link.value,
                 },
-                Transform {
-                    translation,
-                    rotation: rotation.normalize(),
-                    scale,
-                },
+                transform_of(local),
                 ChildOf(part_entities[parent]),
             ))
             .id();
@@ -147,16 +142,7 @@ pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, String> {
             .push((name.as_str().to_string(), e));
     }
     let mut tree = KinematicTree {
-        links: vec![TreeLink {
-            name: ROOT_LINK.into(),
-            node: None,
-            class: None,
-            parent: None,
-            joint: JointSpec::FIXED,
-            value: 0.0,
-            parent_from_link: Affine3A::IDENTITY,
-            geometry: None,
-        }],
+        links: vec![TreeLink::root()],
     };
     let mut stack: Vec<(Entity, usize)> = vec![(root, 0)];
     while let Some((entity, index)) = stack.pop() {

@@ -31,14 +31,15 @@ pub struct PhysicsReport {
     pub rest_wall_s: f64,
 }
 
-/// Marks a simulated body with its index among the rest test's bodies.
-#[derive(Component)]
-struct RestBodyIndex(usize);
-
+/// A rapier pose is rigid: drop the rounding-level scale a composed affine carries.
 fn rigid(a: &Affine3A) -> Transform {
     let (_, rotation, translation) = a.to_scale_rotation_translation();
     Transform::from_translation(translation).with_rotation(rotation.normalize())
 }
+
+/// Marks a simulated body with its index among the rest test's bodies.
+#[derive(Component)]
+struct RestBodyIndex(usize);
 
 /// The collider of a dynamic body: a compound of the convex pieces of all its links, with the
 /// links' own mass properties summed in the body's frame.
@@ -270,50 +271,38 @@ impl Plugin for PhysicsValidationPlugin {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
     use super::*;
     use crate::geometry::TriMesh;
     use crate::kinematics::JointSpec;
-    use crate::kinematics::link::LinkGeometry;
-    use crate::kinematics::tree::{ROOT_LINK, TreeLink};
+    use crate::kinematics::tree::TreeLink;
 
     fn link(
         name: &str,
         class: &str,
-        parent: Option<usize>,
+        parent: usize,
         joint: JointSpec,
         mesh: TriMesh,
         at: Vec3,
     ) -> TreeLink {
-        TreeLink {
-            name: name.into(),
-            node: parent.map(|_| name.into()),
-            class: parent.map(|_| class.into()),
+        TreeLink::body(
+            name,
+            class,
             parent,
             joint,
-            value: 0.0,
-            parent_from_link: Affine3A::from_translation(at),
-            geometry: parent.map(|_| Arc::new(LinkGeometry::new(mesh, [0.5; 3], class))),
-        }
+            Affine3A::from_translation(at),
+            mesh,
+        )
     }
 
     /// A floor, a box standing on it and a box `gap` above it.
     fn scene(gap: f32) -> KinematicTree {
         KinematicTree {
             links: vec![
-                link(
-                    ROOT_LINK,
-                    "",
-                    None,
-                    JointSpec::FIXED,
-                    TriMesh::default(),
-                    Vec3::ZERO,
-                ),
+                TreeLink::root(),
                 link(
                     "floor",
                     "floor",
-                    Some(0),
+                    0,
                     JointSpec::FIXED,
                     TriMesh::cuboid(Vec3::new(-2.0, -2.0, -0.05), Vec3::new(2.0, 2.0, 0.0)),
                     Vec3::ZERO,
@@ -321,7 +310,7 @@ mod tests {
                 link(
                     "box_1",
                     "box",
-                    Some(1),
+                    1,
                     JointSpec::FLOATING,
                     TriMesh::cuboid(Vec3::new(-0.2, -0.2, 0.0), Vec3::new(0.2, 0.2, 0.3)),
                     Vec3::new(0.5, 0.0, 0.0),
@@ -329,7 +318,7 @@ mod tests {
                 link(
                     "box_2",
                     "box",
-                    Some(1),
+                    1,
                     JointSpec::FLOATING,
                     TriMesh::cuboid(Vec3::new(-0.2, -0.2, 0.0), Vec3::new(0.2, 0.2, 0.3)),
                     Vec3::new(-0.5, 0.0, gap),

@@ -32,7 +32,8 @@ fn world_from_entity(graph_box: &GravityBox, cad: Option<&crate::graph::CadPlace
     }
 }
 
-fn transform_of(a: Affine3A) -> Transform {
+/// The `Transform` of an affine pose (rotation normalised).
+pub fn transform_of(a: Affine3A) -> Transform {
     let (scale, rotation, translation) = a.to_scale_rotation_translation();
     Transform {
         translation,
