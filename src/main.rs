@@ -69,6 +69,13 @@ struct ReconstructArgs {
     voxel: f32,
     #[arg(long, value_enum, default_value_t = Segmentation::Oracle)]
     segmentation: Segmentation,
+    /// Segment every K-th frame (the others are fused with geometric segments only).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    segment_every: u64,
+    /// Folder of the onnx backend's models (yolox_nano.onnx, deeplab_v3_1_default_1.opset13.onnx,
+    /// coco.names); default ../shared/data/models.
+    #[arg(long)]
+    models: Option<PathBuf>,
     /// Map like this baseline instead of the joint fusion (for the ablation).
     #[arg(long, value_enum)]
     baseline: Option<Baseline>,
@@ -227,6 +234,8 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     frames: None,
                     voxel: 0.02,
                     segmentation: Segmentation::Oracle,
+                    segment_every: 1,
+                    models: None,
                     baseline: None,
                     estimate_gravity: false,
                 },
@@ -250,6 +259,8 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 frames: args.frames,
                 voxel: args.voxel,
                 segmentation,
+                segment_every: args.segment_every as usize,
+                models: args.models,
                 fusion: match args.baseline {
                     None => InstanceFusion::Joint,
                     Some(Baseline::VoxbloxPlusPlus) => InstanceFusion::Voxblox,

@@ -38,6 +38,10 @@ pub struct ReconstructOptions {
     pub frames: Option<(usize, Option<usize>, usize)>,
     pub voxel: f32,
     pub segmentation: SegmentationChoice,
+    /// Segment every this many frames; the others are fused with geometric segments only.
+    pub segment_every: usize,
+    /// The onnx backend's model folder; `None` for ../shared/data/models.
+    pub models: Option<PathBuf>,
     /// Joint fusion, or the Voxblox++ baseline.
     pub fusion: InstanceFusion,
     /// Ignore the sequence's gravity file and estimate gravity from the map.
@@ -198,8 +202,12 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     app.add_plugins(crate::ReconstructionPlugins);
     app.insert_resource(InputSequence(sequence));
     app.insert_resource(MappingConfig {
-        params: MapperParams::new(options.voxel, options.fusion),
+        params: MapperParams {
+            segment_every: options.segment_every.max(1),
+            ..MapperParams::new(options.voxel, options.fusion)
+        },
         segmentation: options.segmentation,
+        models: options.models.clone(),
         progress: options.progress,
     });
     app.insert_resource(GravityConfig {

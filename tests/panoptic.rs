@@ -16,6 +16,8 @@ fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usiz
         frames: Some((0, None, frames.1)).filter(|_| frames.1 > 1),
         voxel: 0.02,
         segmentation: SegmentationChoice::Oracle,
+        segment_every: 1,
+        models: None,
         fusion,
         estimate_gravity: false,
         progress: false,

@@ -21,6 +21,8 @@ pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<Tri
         frames: Some((0, None, 3)),
         voxel: 0.02,
         segmentation: SegmentationChoice::Oracle,
+        segment_every: 1,
+        models: None,
         fusion: InstanceFusion::Joint,
         estimate_gravity: false,
         progress: false,

@@ -27,6 +27,27 @@ impl TriMesh {
         );
     }
 
+    /// The triangles `keep` accepts, with only the vertices they use (in first-use order).
+    pub fn filtered(&self, keep: impl Fn([Vec3; 3]) -> bool) -> TriMesh {
+        let mut new_index = vec![u32::MAX; self.positions.len()];
+        let mut out = TriMesh::default();
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if !keep(self.triangle(t)) {
+                continue;
+            }
+            let mut new = [0u32; 3];
+            for (slot, &v) in new.iter_mut().zip(tri) {
+                if new_index[v as usize] == u32::MAX {
+                    new_index[v as usize] = out.positions.len() as u32;
+                    out.positions.push(self.positions[v as usize]);
+                }
+                *slot = new_index[v as usize];
+            }
+            out.triangles.push(new);
+        }
+        out
+    }
+
     /// The mesh with every vertex mapped by `to_from_mesh`.
     pub fn transformed(&self, to_from_mesh: &Affine3A) -> TriMesh {
         TriMesh {

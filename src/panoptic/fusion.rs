@@ -168,6 +168,39 @@ pub fn fuse_masks(
     fused
 }
 
+/// Masks that are exact (the floor and walls of a plane survey, not a network's blurred outline)
+/// bound the segments that took them: a segment's pixels outside its exact mask become one
+/// segment of their own, without a mask, so a floor segment that runs on up a cabinet front
+/// (depth noise hides the crease) does not carry the floor's label up the cabinet.
+pub fn cut_to_exact_masks(fused: &mut FusedFrame, masks: &PanopticFrame, exact: &[u16]) {
+    if exact.is_empty() {
+        return;
+    }
+    let mut outside_of: HashMap<u32, u32, FixedState> = HashMap::default();
+    for (s, &m) in fused.segment_of_pixel.iter_mut().zip(&masks.segment_of_pixel) {
+        if *s == 0 {
+            continue;
+        }
+        let Some(mask) = fused.segments[*s as usize - 1].mask else {
+            continue;
+        };
+        if mask == m || !exact.contains(&mask) {
+            continue;
+        }
+        let next = (fused.segments.len() + 1) as u32;
+        let outside = *outside_of.entry(*s).or_insert_with(|| {
+            fused.segments.push(FrameSegment {
+                pixels: 0,
+                mask: None,
+            });
+            next
+        });
+        fused.segments[*s as usize - 1].pixels -= 1;
+        fused.segments[outside as usize - 1].pixels += 1;
+        *s = outside;
+    }
+}
+
 /// Step 4: segments of one mask that do not touch in 3D form clusters; all but the largest
 /// cluster (by pixels) lose the mask.
 fn keep_largest_cluster_per_mask(

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::geometry::Pinhole;
 use crate::map::{SegmentLabel, TsdfFrame, TsdfMap};
-use crate::panoptic::fusion::{FusedFrame, FusionParams, fuse_masks};
+use crate::panoptic::fusion::{FusedFrame, FusionParams, cut_to_exact_masks, fuse_masks};
 use crate::panoptic::geometric::{GeometricParams, segment_depth};
 use crate::panoptic::instances::{ClassId, InstanceCounts, InstanceFusion, MaskObservation};
 use crate::segmentation::PanopticFrame;
@@ -35,6 +35,9 @@ pub struct MapperParams {
     pub min_apart_frames: u32,
     /// Regularise every this many frames (and once at the end).
     pub regularise_every: usize,
+    /// Frames are segmented every this many (the first included); the others are fused with their
+    /// geometric segments only, which continue the labels the map already has.
+    pub segment_every: usize,
 }
 
 impl MapperParams {
@@ -54,6 +57,7 @@ impl MapperParams {
             instance_merge_ratio: 0.5,
             min_apart_frames: 2,
             regularise_every: 25,
+            segment_every: 1,
         }
     }
 }
@@ -78,6 +82,7 @@ pub fn segment_frame(
     frame: &MapperFrame,
     masks: Option<&PanopticFrame>,
     class_id: &impl Fn(&str) -> Option<ClassId>,
+    exact_classes: &[&str],
     params: &MapperParams,
 ) -> SegmentedFrame {
     let geometry = segment_depth(frame.depth, frame.camera, &params.geometric);
@@ -100,6 +105,13 @@ pub fn segment_frame(
         .filter_map(|s| class_id(&s.class).map(|c| (s.id, c)))
         .collect::<BTreeMap<_, _>>();
     let mut fused = fuse_masks(&geometry, masks, &params.masks);
+    let exact: Vec<u16> = masks
+        .segments
+        .iter()
+        .filter(|s| exact_classes.contains(&s.class.as_str()))
+        .map(|s| s.id)
+        .collect();
+    cut_to_exact_masks(&mut fused, masks, &exact);
     // Masks of classes the table does not know are background.
     for s in &mut fused.segments {
         if s.mask.is_some_and(|m| !mask_class.contains_key(&m)) {

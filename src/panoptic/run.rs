@@ -18,6 +18,7 @@ pub fn map_sequence(
     let classes = ClassIds::builtin();
     let class_id = |name: &str| classes.id(name);
     let mut mapper = PanopticMapper::new(params.clone());
+    let exact_classes = service.map_or(&[][..], |s| s.exact_classes());
     let n = sequence.frames.len();
     // Enough frames in flight to keep every core busy with the per-frame work.
     let batch = 2 * rayon::current_num_threads().max(1);
@@ -26,7 +27,10 @@ pub fn map_sequence(
             .into_par_iter()
             .map(|i| -> Result<_, IsceneError> {
                 let frame = sequence.load_frame(i)?;
-                let masks = service.map(|s| s.segment(&frame)).transpose()?;
+                let masks = service
+                    .filter(|_| i % params.segment_every.max(1) == 0)
+                    .map(|s| s.segment(&frame))
+                    .transpose()?;
                 let segmented = segment_frame(
                     &MapperFrame {
                         depth: &frame.depth,
@@ -36,6 +40,7 @@ pub fn map_sequence(
                     },
                     masks.as_ref(),
                     &class_id,
+                    exact_classes,
                     params,
                 );
                 Ok((frame, segmented))

@@ -2,6 +2,7 @@
 //! implements, and the oracle backend (ground truth through a realistic noise model).
 
 pub mod noise;
+pub mod onnx;
 pub mod oracle;
 
 use serde::{Deserialize, Serialize};
@@ -35,6 +36,20 @@ pub trait SegmentationService: Send + Sync {
     fn name(&self) -> &str;
     fn segment(&self, frame: &crate::io::Frame)
     -> Result<PanopticFrame, crate::error::IsceneError>;
+
+    /// Classes whose masks follow the true boundary (layout found from planes, not a network's
+    /// blurred outline): the fusion cuts geometric segments to them instead of extending them
+    /// over whole segments.
+    fn exact_classes(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// Where the service knows the room's layout exactly, the part of a layout entity's mesh
+    /// that lies on it: labels creep in the map, from the floor up a cabinet front that depth
+    /// noise joined to it in some frames. `None` keeps the mesh as mapped.
+    fn layout_part(&self, _class: &str, _mesh: &crate::geometry::TriMesh) -> Option<crate::geometry::TriMesh> {
+        None
+    }
 }
 
 /// Which segmentation service labels the frames.

@@ -10,6 +10,7 @@ use crate::panoptic::{
     ClassIds, ExtractionParams, MapperParams, PanopticEntity, PanopticMapper, extract_entities,
     map_sequence,
 };
+use crate::segmentation::onnx::{OnnxModels, OnnxParams, OnnxSegmentation};
 use crate::segmentation::oracle::OracleSegmentation;
 use crate::segmentation::{SegmentationChoice, SegmentationService};
 use crate::systems::ingest::{InputSequence, StageError};
@@ -19,6 +20,8 @@ use crate::systems::ingest::{InputSequence, StageError};
 pub struct MappingConfig {
     pub params: MapperParams,
     pub segmentation: SegmentationChoice,
+    /// The onnx backend's model folder; `None` for the shared data's.
+    pub models: Option<std::path::PathBuf>,
     pub progress: bool,
 }
 
@@ -28,6 +31,7 @@ impl Default for MappingConfig {
         Self {
             params: MapperParams::new(0.02, crate::panoptic::InstanceFusion::Joint),
             segmentation: SegmentationChoice::Oracle,
+            models: None,
             progress: false,
         }
     }
@@ -63,10 +67,18 @@ fn choose_segmenter(
             SegmentationChoice::Oracle => OracleSegmentation::for_sequence(&sequence.0)
                 .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>)),
             SegmentationChoice::None => Ok(None),
-            SegmentationChoice::Onnx => Err(InputError::invalid(
-                "--segmentation onnx",
-                "the onnx backend is not built yet; use oracle (rendered input) or none",
-            )),
+            SegmentationChoice::Onnx => {
+                let dir = config
+                    .models
+                    .clone()
+                    .unwrap_or_else(|| OnnxModels::DEFAULT_DIR.into());
+                OnnxSegmentation::for_sequence(
+                    &sequence.0,
+                    &OnnxModels::in_dir(&dir),
+                    OnnxParams::default(),
+                )
+                .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>))
+            }
         };
     match service {
         Ok(s) => commands.insert_resource(Segmenter(s)),
@@ -92,16 +104,27 @@ fn integrate_frames(
     bar.finish_and_clear();
 }
 
-fn spawn_entities(mut commands: Commands, map: Option<Res<PanopticMap>>) {
+fn spawn_entities(
+    mut commands: Commands,
+    map: Option<Res<PanopticMap>>,
+    segmenter: Option<Res<Segmenter>>,
+) {
     let Some(map) = map else {
         return;
     };
-    let scene = extract_entities(
+    let mut scene = extract_entities(
         &map.0.tsdf,
         &map.0.instances,
         &ClassIds::builtin(),
         &ExtractionParams::default(),
     );
+    if let Some(service) = segmenter.as_ref().and_then(|s| s.0.as_deref()) {
+        for e in &mut scene.entities {
+            if let Some(part) = service.layout_part(&e.class, &e.mesh) {
+                e.mesh = part;
+            }
+        }
+    }
     for e in &scene.entities {
         commands.spawn((
             SceneEntity(e.id.clone()),

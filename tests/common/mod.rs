@@ -109,6 +109,8 @@ pub fn render_and_map_every_second_frame(
         frames: Some((0, None, 2)),
         voxel: 0.02,
         segmentation: iscene::pipeline::SegmentationChoice::Oracle,
+        segment_every: 1,
+        models: None,
         fusion: iscene::panoptic::InstanceFusion::Joint,
         estimate_gravity: false,
         progress: false,

@@ -1,0 +1,480 @@
+//! The room's layout for a segmenter that knows no floor or wall class (COCO and PASCAL-VOC have
+//! neither): a survey of a sample of the sequence's depth frames finds the up direction, the
+//! floor's height and the walls (large vertical planes with nothing measured behind them), and
+//! every frame's pixels on them are labelled floor or wall.
+
+use glam::{Affine3A, Vec3};
+use rayon::prelude::*;
+
+use crate::error::InputError;
+use crate::geometry::{Pinhole, Plane, TriMesh};
+use crate::graph::gravity::{camera_up_hint, estimate_up};
+use crate::io::Sequence;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LayoutParams {
+    /// Frames surveyed: about this many, evenly spread over the sequence.
+    pub survey_frames: usize,
+    /// Pixels sampled every this many in each direction.
+    pub stride: usize,
+    /// A surface within this angle (degrees) of horizontal or vertical counts as such.
+    pub orientation_tolerance_deg: f32,
+    /// Height-histogram bin and plane-binning step (metres).
+    pub bin: f32,
+    /// Pixels this close (metres) to the floor or a wall are labelled with it.
+    pub label_distance: f32,
+    /// A wall has at least this share of the surveyed vertical area...
+    pub min_wall_share: f32,
+    /// ...spans at least this much along it and this much in height (metres)...
+    pub min_wall_length: f32,
+    pub min_wall_height: f32,
+    /// ...and at most this share of the surveyed points lie more than `behind` metres behind it.
+    pub max_behind_share: f32,
+    pub behind: f32,
+}
+
+impl Default for LayoutParams {
+    fn default() -> Self {
+        Self {
+            survey_frames: 60,
+            stride: 4,
+            orientation_tolerance_deg: 10.0,
+            bin: 0.04,
+            label_distance: 0.05,
+            min_wall_share: 0.02,
+            min_wall_length: 1.0,
+            min_wall_height: 0.5,
+            max_behind_share: 0.005,
+            behind: 0.15,
+        }
+    }
+}
+
+/// A wall: its plane (normal into the room) and its surveyed extent, along the wall (horizontal
+/// coordinate on `along`) and in height above the floor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wall {
+    pub plane: Plane,
+    pub along: Vec3,
+    pub span: [f32; 2],
+    pub heights: [f32; 2],
+}
+
+/// What the survey found, in the sequence's world frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoomLayout {
+    pub up: Vec3,
+    /// Height of the floor along `up`; `None` when no floor was seen.
+    pub floor_height: Option<f32>,
+    pub walls: Vec<Wall>,
+    pub params: LayoutParams,
+}
+
+/// What a pixel of the layout is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayoutLabel {
+    Floor,
+    Wall(usize),
+}
+
+impl RoomLayout {
+    /// Surveys `sequence`: the up direction is its gravity file's when it has one, else estimated
+    /// from the horizontal surfaces seen.
+    pub fn survey(sequence: &Sequence, params: LayoutParams) -> Result<Self, InputError> {
+        let n = sequence.frames.len();
+        let step = n.div_ceil(params.survey_frames.max(1)).max(1);
+        let meshes: Vec<TriMesh> = (0..n)
+            .step_by(step)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|i| {
+                let frame = sequence.load_frame(i)?;
+                Ok(depth_grid_mesh(
+                    &frame.depth,
+                    &frame.camera,
+                    &frame.world_from_camera,
+                    params.stride,
+                ))
+            })
+            .collect::<Result<_, InputError>>()?;
+        let mut mesh = TriMesh::default();
+        for m in &meshes {
+            mesh.append(m);
+        }
+        let cameras: Vec<Affine3A> = sequence
+            .frames
+            .iter()
+            .map(|f| f.world_from_camera)
+            .collect();
+        let up = match sequence.gravity.and_then(|g| (-g).try_normalize()) {
+            Some(up) => up,
+            None => camera_up_hint(cameras.iter().copied())
+                .and_then(|hint| estimate_up(&mesh, hint))
+                .unwrap_or(Vec3::Z),
+        };
+        let camera_centre = cameras
+            .iter()
+            .map(|c| Vec3::from(c.translation))
+            .sum::<Vec3>()
+            / cameras.len().max(1) as f32;
+        Ok(Self::from_mesh(&mesh, up, camera_centre, params))
+    }
+
+    /// The floor and walls of a surveyed surface mesh with a known up direction, seen from around
+    /// `camera_centre`.
+    pub fn from_mesh(mesh: &TriMesh, up: Vec3, camera_centre: Vec3, params: LayoutParams) -> Self {
+        let sin_tol = params.orientation_tolerance_deg.to_radians().sin();
+        let cos_tol = params.orientation_tolerance_deg.to_radians().cos();
+        let faces: Vec<(Vec3, Vec3, f32)> = (0..mesh.triangles.len())
+            .filter_map(|t| {
+                let [a, b, c] = mesh.triangle(t);
+                let cross = (b - a).cross(c - a);
+                let n = cross.try_normalize()?;
+                Some(((a + b + c) / 3.0, n, 0.5 * cross.length()))
+            })
+            .collect();
+        let horizontal: Vec<(f32, f32)> = faces
+            .iter()
+            .filter(|(_, n, _)| n.dot(up).abs() >= cos_tol)
+            .map(|(c, _, a)| (c.dot(up), *a))
+            .collect();
+        let floor_height = lowest_surface(&horizontal, params.bin);
+        let vertical: Vec<(Vec3, Vec3, f32)> = faces
+            .iter()
+            .filter(|(_, n, _)| n.dot(up).abs() <= sin_tol)
+            .map(|&(c, n, a)| (c, (n - up * n.dot(up)).normalize(), a))
+            .collect();
+        let walls = find_walls(
+            &vertical,
+            &mesh.positions,
+            up,
+            floor_height.unwrap_or(0.0),
+            camera_centre,
+            &params,
+        );
+        Self {
+            up,
+            floor_height,
+            walls,
+            params,
+        }
+    }
+
+    /// What `point` (world frame) is part of, if it is on the floor or a wall.
+    pub fn label(&self, point: Vec3) -> Option<LayoutLabel> {
+        let d = self.params.label_distance;
+        let floor = self.floor_height?;
+        let height = point.dot(self.up) - floor;
+        if height.abs() <= d {
+            return Some(LayoutLabel::Floor);
+        }
+        self.walls
+            .iter()
+            .position(|w| {
+                let along = point.dot(w.along);
+                w.plane.signed_distance(point).abs() <= d
+                    && along >= w.span[0] - d
+                    && along <= w.span[1] + d
+                    && height >= w.heights[0] - d
+                    && height <= w.heights[1] + d
+            })
+            .map(LayoutLabel::Wall)
+    }
+}
+
+/// A triangle mesh over a depth image's pixel grid (every `stride` pixels), in the world frame,
+/// with no triangle across a depth jump.
+pub fn depth_grid_mesh(
+    depth: &[f32],
+    camera: &Pinhole,
+    world_from_camera: &Affine3A,
+    stride: usize,
+) -> TriMesh {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let (gw, gh) = (w.div_ceil(stride), h.div_ceil(stride));
+    let mut index = vec![u32::MAX; gw * gh];
+    let mut mesh = TriMesh::default();
+    let mut z = vec![0.0; gw * gh];
+    for gy in 0..gh {
+        for gx in 0..gw {
+            let (u, v) = (gx * stride, gy * stride);
+            let d = depth[v * w + u];
+            if d > 0.0 && d.is_finite() {
+                index[gy * gw + gx] = mesh.positions.len() as u32;
+                z[gy * gw + gx] = d;
+                mesh.positions.push(
+                    world_from_camera.transform_point3(camera.unproject(u as f32, v as f32, d)),
+                );
+            }
+        }
+    }
+    // Neighbours at most this far apart in depth are one surface (structured-light noise grows
+    // with the square of the distance).
+    let joined = |a: usize, b: usize| {
+        let (za, zb) = (z[a], z[b]);
+        (za - zb).abs() <= 0.03 + 0.02 * za.min(zb) * za.min(zb)
+    };
+    for gy in 0..gh.saturating_sub(1) {
+        for gx in 0..gw.saturating_sub(1) {
+            let [a, b, c, d] = [
+                gy * gw + gx,
+                gy * gw + gx + 1,
+                (gy + 1) * gw + gx,
+                (gy + 1) * gw + gx + 1,
+            ];
+            for [p, q, r] in [[a, c, b], [b, c, d]] {
+                if [p, q, r].iter().all(|&i| index[i] != u32::MAX)
+                    && joined(p, q)
+                    && joined(q, r)
+                    && joined(p, r)
+                {
+                    mesh.triangles.push([index[p], index[q], index[r]]);
+                }
+            }
+        }
+    }
+    mesh
+}
+
+/// The height of the lowest horizontal surface with a substantial share of the horizontal area:
+/// the floor (reflections and noise below it are small; table tops above it are higher). Bins
+/// of `bin` metres, each summed with its neighbours so a surface split over two bins counts once.
+fn lowest_surface(heights_areas: &[(f32, f32)], bin: f32) -> Option<f32> {
+    let lo = heights_areas
+        .iter()
+        .map(|h| h.0)
+        .fold(f32::INFINITY, f32::min);
+    if !lo.is_finite() {
+        return None;
+    }
+    let mut bins: Vec<f32> = Vec::new();
+    for &(h, a) in heights_areas {
+        let i = ((h - lo) / bin) as usize;
+        if bins.len() <= i {
+            bins.resize(i + 1, 0.0);
+        }
+        bins[i] += a;
+    }
+    let smoothed: Vec<f32> = (0..bins.len())
+        .map(|i| {
+            bins[i.saturating_sub(1)..(i + 2).min(bins.len())]
+                .iter()
+                .sum()
+        })
+        .collect();
+    let largest = smoothed.iter().copied().fold(0.0, f32::max);
+    let first = smoothed.iter().position(|&a| a >= 0.2 * largest)?;
+    // The surface's height: the area-weighted mean of the faces within a bin of that peak.
+    let centre = lo + (first as f32 + 0.5) * bin;
+    let (sum, weight) = heights_areas
+        .iter()
+        .filter(|(h, _)| (h - centre).abs() <= 1.5 * bin)
+        .fold((0.0, 0.0), |(s, w), (h, a)| (s + h * a, w + a));
+    (weight > 0.0).then(|| sum / weight)
+}
+
+/// Walls among the vertical faces (centre, horizontal unit normal, area): repeatedly the plane
+/// carrying the most area (binned by direction and offset, then refitted), kept when it is long,
+/// tall and has almost nothing of `points` behind it (a cabinet front has the wall behind it).
+fn find_walls(
+    vertical: &[(Vec3, Vec3, f32)],
+    points: &[Vec3],
+    up: Vec3,
+    floor_height: f32,
+    camera_centre: Vec3,
+    params: &LayoutParams,
+) -> Vec<Wall> {
+    let total: f32 = vertical.iter().map(|f| f.2).sum();
+    let (east, north) = up.any_orthonormal_pair();
+    let angle_bins = 72; // 5 degrees over a half turn: a plane and its flip share a bin.
+    let key = |c: Vec3, n: Vec3| {
+        // Normals turned into one half-plane so the two sides of a wall bin together.
+        let mut a = n.dot(north).atan2(n.dot(east));
+        let mut n = n;
+        if a < 0.0 {
+            a += std::f32::consts::PI;
+            n = -n;
+        }
+        let ai = ((a / std::f32::consts::PI * angle_bins as f32) as i32).min(angle_bins - 1);
+        (ai, (n.dot(c) / params.bin).floor() as i32)
+    };
+    let mut remaining: Vec<bool> = vec![true; vertical.len()];
+    let mut walls = Vec::new();
+    for _ in 0..12 {
+        let mut bins: std::collections::BTreeMap<(i32, i32), f32> = Default::default();
+        for (f, _) in vertical.iter().zip(&remaining).filter(|(_, r)| **r) {
+            *bins.entry(key(f.0, f.1)).or_default() += f.2;
+        }
+        // The heaviest bin with its neighbours in offset (a wall's noise spreads over two).
+        let Some((&(ai, di), _)) = bins
+            .iter()
+            .map(|(k, _)| {
+                let around: f32 = (-1..=1).filter_map(|o| bins.get(&(k.0, k.1 + o))).sum();
+                (k, around)
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(a.0)))
+        else {
+            break;
+        };
+        let angle = (ai as f32 + 0.5) / angle_bins as f32 * std::f32::consts::PI;
+        let n0 = east * angle.cos() + north * angle.sin();
+        let d0 = (di as f32 + 0.5) * params.bin;
+        let cos_tol = params.orientation_tolerance_deg.to_radians().cos();
+        let members: Vec<usize> = (0..vertical.len())
+            .filter(|&i| {
+                let (c, n, _) = vertical[i];
+                remaining[i]
+                    && n.dot(n0).abs() >= cos_tol
+                    && (n0.dot(c) - d0).abs() <= 1.5 * params.bin
+            })
+            .collect();
+        let area: f32 = members.iter().map(|&i| vertical[i].2).sum();
+        if area < params.min_wall_share * total || members.is_empty() {
+            break;
+        }
+        for &i in &members {
+            remaining[i] = false;
+        }
+        // Refit: the area-weighted offset along the bin's normal.
+        let d = members
+            .iter()
+            .map(|&i| n0.dot(vertical[i].0) * vertical[i].2)
+            .sum::<f32>()
+            / area;
+        let mut plane = Plane {
+            normal: n0,
+            offset: -d,
+        };
+        if plane.signed_distance(camera_centre) < 0.0 {
+            plane = Plane {
+                normal: -n0,
+                offset: d,
+            };
+        }
+        let along = up.cross(plane.normal).normalize();
+        let (mut span, mut heights) = ([f32::MAX, f32::MIN], [f32::MAX, f32::MIN]);
+        for &i in &members {
+            let c = vertical[i].0;
+            let (s, h) = (c.dot(along), c.dot(up) - floor_height);
+            span = [span[0].min(s), span[1].max(s)];
+            heights = [heights[0].min(h), heights[1].max(h)];
+        }
+        if span[1] - span[0] < params.min_wall_length
+            || heights[1] - heights[0] < params.min_wall_height
+        {
+            continue;
+        }
+        let (behind, beside) = points
+            .iter()
+            .filter(|p| (span[0]..=span[1]).contains(&p.dot(along)))
+            .fold((0usize, 0usize), |(b, n), p| {
+                (
+                    b + usize::from(plane.signed_distance(*p) < -params.behind),
+                    n + 1,
+                )
+            });
+        if (behind as f32) <= params.max_behind_share * beside as f32 {
+            walls.push(Wall {
+                plane,
+                along,
+                span,
+                heights,
+            });
+        }
+    }
+    walls
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A box room 4 x 3 m, 2.5 m high, tilted, with a cabinet (a box against the +y wall) and a
+    /// table top, seen from the middle.
+    fn room() -> (TriMesh, Vec3, glam::Quat) {
+        let tilt = glam::Quat::from_rotation_x(0.3) * glam::Quat::from_rotation_y(0.2);
+        let mut mesh = TriMesh::default();
+        // Floor, walls and ceiling as thin slabs (a camera sees only their inner faces; the slabs'
+        // outer faces are what a survey would see through a window, which the test keeps away
+        // by making them thin).
+        for (lo, hi) in [
+            (Vec3::new(0.0, 0.0, -0.01), Vec3::new(4.0, 3.0, 0.0)),
+            (Vec3::new(-0.01, 0.0, 0.0), Vec3::new(0.0, 3.0, 2.5)),
+            (Vec3::new(4.0, 0.0, 0.0), Vec3::new(4.01, 3.0, 2.5)),
+            (Vec3::new(0.0, -0.01, 0.0), Vec3::new(4.0, 0.0, 2.5)),
+            (Vec3::new(0.0, 3.0, 0.0), Vec3::new(4.0, 3.01, 2.5)),
+            (Vec3::new(0.5, 2.4, 0.0), Vec3::new(2.5, 3.0, 0.9)),
+            (Vec3::new(1.0, 0.5, 0.72), Vec3::new(2.2, 1.3, 0.75)),
+        ] {
+            mesh.append(&subdivided(&TriMesh::cuboid(lo, hi), 0.15));
+        }
+        (
+            mesh.transformed(&Affine3A::from_quat(tilt)),
+            tilt * Vec3::Z,
+            tilt,
+        )
+    }
+
+    /// Splits every triangle into four at its edge midpoints until no edge is longer than
+    /// `max_edge`, so a box has vertices all over its faces.
+    fn subdivided(mesh: &TriMesh, max_edge: f32) -> TriMesh {
+        let mut out = TriMesh::default();
+        let mut stack: Vec<[Vec3; 3]> = (0..mesh.triangles.len())
+            .map(|t| mesh.triangle(t))
+            .collect();
+        while let Some([a, b, c]) = stack.pop() {
+            if a.distance(b).max(b.distance(c)).max(c.distance(a)) <= max_edge {
+                let base = out.positions.len() as u32;
+                out.positions.extend([a, b, c]);
+                out.triangles.push([base, base + 1, base + 2]);
+                continue;
+            }
+            let (ab, bc, ca) = ((a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0);
+            stack.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        out
+    }
+
+    #[test]
+    fn the_floor_and_four_walls_are_found_and_the_cabinet_front_is_not_a_wall() {
+        let (mesh, up, tilt) = room();
+        let centre = tilt * Vec3::new(2.0, 1.5, 1.2);
+        let layout = RoomLayout::from_mesh(&mesh, up, centre, LayoutParams::default());
+        let floor = layout.floor_height.expect("a floor");
+        assert!(floor.abs() < 0.01, "floor at {floor}");
+        assert_eq!(layout.walls.len(), 4, "{:?}", layout.walls);
+        for w in &layout.walls {
+            assert!(
+                w.plane.signed_distance(centre) > 1.0,
+                "normals face the room"
+            );
+        }
+        let at = |p: Vec3| layout.label(tilt * p);
+        assert_eq!(at(Vec3::new(3.0, 2.0, 0.01)), Some(LayoutLabel::Floor));
+        assert!(matches!(
+            at(Vec3::new(0.0, 1.0, 1.5)),
+            Some(LayoutLabel::Wall(_))
+        ));
+        // The cabinet's front (y = 2.4) and the table top are neither.
+        assert_eq!(at(Vec3::new(1.5, 2.4, 0.5)), None);
+        assert_eq!(at(Vec3::new(1.5, 0.9, 0.75)), None);
+    }
+
+    #[test]
+    fn a_depth_grid_mesh_does_not_bridge_a_depth_jump() {
+        let camera = Pinhole {
+            width: 8,
+            height: 4,
+            fx: 10.0,
+            fy: 10.0,
+            cx: 4.0,
+            cy: 2.0,
+        };
+        // Left half at 1 m, right half at 2 m.
+        let depth: Vec<f32> = (0..32).map(|i| if i % 8 < 4 { 1.0 } else { 2.0 }).collect();
+        let mesh = depth_grid_mesh(&depth, &camera, &Affine3A::IDENTITY, 1);
+        assert_eq!(mesh.positions.len(), 32);
+        // 3 x 3 quads on each side, none across the jump.
+        assert_eq!(mesh.triangles.len(), 2 * 2 * 9);
+    }
+}

@@ -1,0 +1,96 @@
+//! Loading ONNX Runtime at run time (ort's `load-dynamic`) with an error that says what was tried,
+//! and opening model sessions. ort allows one environment per process: it lives in a `OnceLock`
+//! that every session and every parallel test shares.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use ort::environment::Environment;
+use ort::session::Session;
+
+use crate::error::InputError;
+
+/// The file name scripts/setup-ort.sh installs.
+const LIBRARY_NAME: &str = "libonnxruntime.so.1.31.1";
+
+static ENVIRONMENT: OnceLock<Result<Environment, String>> = OnceLock::new();
+
+/// The libraries to try: only `ORT_DYLIB_PATH` when it is set (a library asked for by name is
+/// never silently replaced by another), else the checkout's `.ort/` baked in at build time
+/// (`.cargo/config.toml`), the executable's folder, then the system's search path.
+fn candidates() -> Vec<PathBuf> {
+    if let Some(p) = std::env::var_os("ORT_DYLIB_PATH") {
+        return vec![PathBuf::from(p)];
+    }
+    let mut paths = Vec::new();
+    if let Some(p) = option_env!("ISCENE_DEFAULT_ORT_DYLIB") {
+        paths.push(PathBuf::from(p));
+    }
+    if let Some(dir) = std::env::current_exe()
+        .ok()
+        .and_then(|e| e.parent().map(Path::to_path_buf))
+    {
+        paths.push(dir.join(LIBRARY_NAME));
+    }
+    paths.push(PathBuf::from(LIBRARY_NAME));
+    paths
+}
+
+fn load() -> Result<Environment, String> {
+    let mut tried = Vec::new();
+    for path in candidates() {
+        // A bare name goes to the dynamic loader's search; a path must exist, which keeps
+        // dlopen's less helpful message for the case it is about.
+        if path.components().count() > 1 && !path.is_file() {
+            tried.push(format!("  {}: no such file", path.display()));
+            continue;
+        }
+        match ort::init_from(&path) {
+            Ok(builder) => {
+                return builder
+                    .with_name("iscene")
+                    .build()
+                    .map_err(|e| format!("{}: loaded but unusable: {e}", path.display()));
+            }
+            Err(e) => {
+                let reason = std::error::Error::source(&e)
+                    .map(|s| s.to_string())
+                    .unwrap_or_else(|| e.to_string());
+                tried.push(format!("  {}: {reason}", path.display()));
+            }
+        }
+    }
+    Err(format!(
+        "ONNX Runtime could not be loaded; tried:\n{}\nrun scripts/setup-ort.sh, or set ORT_DYLIB_PATH to a libonnxruntime.so of version 1.31 or newer",
+        tried.join("\n")
+    ))
+}
+
+/// The process's ONNX Runtime environment, loaded on first use.
+pub fn environment() -> Result<&'static Environment, InputError> {
+    ENVIRONMENT
+        .get_or_init(load)
+        .as_ref()
+        .map_err(|reason| InputError::missing(LIBRARY_NAME, reason.clone()))
+}
+
+/// A session for the model at `path` on one intra-op thread: frames run in parallel instead,
+/// one session per worker.
+pub fn open_session(path: &Path) -> Result<Session, InputError> {
+    if !path.is_file() {
+        return Err(InputError::missing(
+            path,
+            "ONNX model not found (the default models are in ../shared/data/models; choose others with --models DIR)",
+        ));
+    }
+    let env = environment()?;
+    let fail = |e: &dyn std::fmt::Display| {
+        InputError::invalid(path, format!("not a usable ONNX model: {e}"))
+    };
+    Session::builder(env)
+        .map_err(|e| fail(&e))?
+        .with_intra_threads(1)
+        .map_err(|e| fail(&e))?
+        .commit_from_file(path)
+        .map_err(|e| fail(&e))
+}
