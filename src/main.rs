@@ -100,6 +100,17 @@ enum Segmentation {
 
 #[derive(Subcommand)]
 enum BenchCommand {
+    /// The onnx segmentation backend's time per frame on one core, and on a rendered sequence its
+    /// chair and table masks' overlap (IoU) with the ground truth.
+    Segmentation {
+        sequence: PathBuf,
+        /// Frames to use as A:B[:STEP].
+        #[arg(long, value_parser = parse_frames, default_value = "0::10")]
+        frames: (usize, Option<usize>, usize),
+        /// Folder of the models; default ../shared/data/models.
+        #[arg(long, default_value = iscene::segmentation::onnx::OnnxModels::DEFAULT_DIR)]
+        models: PathBuf,
+    },
     /// TSDF integration speed, map memory and depth agreement on held-out frames of a sequence.
     Tsdf {
         sequence: PathBuf,
@@ -219,6 +230,23 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 mesh,
                 runs: runs as usize,
             })?;
+            print_json(&report)?;
+        }
+        Some(Command::Bench {
+            command:
+                BenchCommand::Segmentation {
+                    sequence,
+                    frames,
+                    models,
+                },
+        }) => {
+            let report = iscene::segmentation::onnx::bench::bench_segmentation(
+                &iscene::segmentation::onnx::bench::SegmentationBenchOptions {
+                    sequence,
+                    frames,
+                    models,
+                },
+            )?;
             print_json(&report)?;
         }
         Some(Command::Eval { dir, gt }) => {

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::geometry::Pinhole;
 use crate::map::{SegmentLabel, TsdfFrame, TsdfMap};
 use crate::panoptic::fusion::{FusedFrame, FusionParams, cut_to_exact_masks, fuse_masks};
-use crate::panoptic::geometric::{GeometricParams, segment_depth};
+use crate::panoptic::geometric::{GeometricParams, GeometricSegmentation};
 use crate::panoptic::instances::{ClassId, InstanceCounts, InstanceFusion, MaskObservation};
 use crate::segmentation::PanopticFrame;
 
@@ -80,12 +80,12 @@ pub struct SegmentedFrame {
 /// go through it in parallel.
 pub fn segment_frame(
     frame: &MapperFrame,
+    geometry: &GeometricSegmentation,
     masks: Option<&PanopticFrame>,
     class_id: &impl Fn(&str) -> Option<ClassId>,
     exact_classes: &[&str],
     params: &MapperParams,
 ) -> SegmentedFrame {
-    let geometry = segment_depth(frame.depth, frame.camera, &params.geometric);
     let empty;
     let masks = match masks {
         Some(m) => m,
@@ -104,7 +104,7 @@ pub fn segment_frame(
         .iter()
         .filter_map(|s| class_id(&s.class).map(|c| (s.id, c)))
         .collect::<BTreeMap<_, _>>();
-    let mut fused = fuse_masks(&geometry, masks, &params.masks);
+    let mut fused = fuse_masks(geometry, masks, &params.masks);
     let exact: Vec<u16> = masks
         .segments
         .iter()

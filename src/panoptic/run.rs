@@ -6,6 +6,7 @@ use rayon::prelude::*;
 use crate::error::IsceneError;
 use crate::io::Sequence;
 use crate::panoptic::entities::ClassIds;
+use crate::panoptic::geometric::segment_depth;
 use crate::panoptic::mapper::{MapperFrame, MapperParams, PanopticMapper, segment_frame};
 use crate::segmentation::SegmentationService;
 
@@ -27,9 +28,10 @@ pub fn map_sequence(
             .into_par_iter()
             .map(|i| -> Result<_, IsceneError> {
                 let frame = sequence.load_frame(i)?;
+                let geometry = segment_depth(&frame.depth, &frame.camera, &params.geometric);
                 let masks = service
                     .filter(|_| i % params.segment_every.max(1) == 0)
-                    .map(|s| s.segment(&frame))
+                    .map(|s| s.segment(&frame, &geometry))
                     .transpose()?;
                 let segmented = segment_frame(
                     &MapperFrame {
@@ -38,6 +40,7 @@ pub fn map_sequence(
                         camera: &frame.camera,
                         world_from_camera: &frame.world_from_camera,
                     },
+                    &geometry,
                     masks.as_ref(),
                     &class_id,
                     exact_classes,

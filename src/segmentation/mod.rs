@@ -31,11 +31,15 @@ impl PanopticFrame {
     }
 }
 
-/// A source of per-frame panoptic masks.
+/// A source of per-frame panoptic masks. The frame's geometric segmentation, which the mapper
+/// computes anyway, comes with it for services that cut masks along depth.
 pub trait SegmentationService: Send + Sync {
     fn name(&self) -> &str;
-    fn segment(&self, frame: &crate::io::Frame)
-    -> Result<PanopticFrame, crate::error::IsceneError>;
+    fn segment(
+        &self,
+        frame: &crate::io::Frame,
+        geometry: &crate::panoptic::geometric::GeometricSegmentation,
+    ) -> Result<PanopticFrame, crate::error::IsceneError>;
 
     /// Classes whose masks follow the true boundary (layout found from planes, not a network's
     /// blurred outline): the fusion cuts geometric segments to them instead of extending them

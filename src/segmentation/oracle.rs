@@ -69,7 +69,11 @@ impl SegmentationService for OracleSegmentation {
         "oracle"
     }
 
-    fn segment(&self, frame: &Frame) -> Result<PanopticFrame, IsceneError> {
+    fn segment(
+        &self,
+        frame: &Frame,
+        _geometry: &crate::panoptic::geometric::GeometricSegmentation,
+    ) -> Result<PanopticFrame, IsceneError> {
         let Some(labels) = &frame.labels else {
             return Err(IsceneError::Internal(format!(
                 "frame {} has no label image",

@@ -29,7 +29,10 @@ pub struct MaskParams {
     pub depth_band: [f32; 2],
     /// The central share of the box (per side) whose median depth is the object's distance.
     pub centre_share: f32,
-    /// A depth-banded mask leaves out pixels the semantic network gives to other objects when
+    /// A geometric segment with at least this share of its pixels in the box and depth band is
+    /// the object's.
+    pub min_inside_share: f32,
+    /// Without such a segment, a depth-banded mask leaves out pixels the semantic network gives to other objects when
     /// at least this share of it remains.
     pub min_own_share: f32,
     /// Masks left with fewer pixels are dropped.
@@ -43,6 +46,7 @@ impl Default for MaskParams {
             depth_band_factor: 0.75,
             depth_band: [0.06, 0.6],
             centre_share: 0.4,
+            min_inside_share: 0.6,
             min_own_share: 0.3,
             min_pixels: 40,
         }
@@ -61,6 +65,9 @@ pub struct MaskInputs<'a> {
     pub semantic: &'a [u8],
     /// The layout label of every pixel.
     pub layout: &'a [Option<LayoutLabel>],
+    /// The geometric segment of every pixel (0 = none) and each segment's size (index = id).
+    pub geometric: &'a [u32],
+    pub geometric_sizes: &'a [u32],
 }
 
 pub fn panoptic_masks(
@@ -198,6 +205,26 @@ fn object_pixels(
         .into_iter()
         .filter(|&i| (inputs.depth[i] - distance).abs() <= band)
         .collect();
+    // The geometric segments that lie (mostly) inside the box are the object; the table it
+    // stands on runs on outside the box.
+    let mut inside: std::collections::BTreeMap<u32, u32> = Default::default();
+    for &i in &near {
+        *inside.entry(inputs.geometric[i]).or_default() += 1;
+    }
+    let own_segments: Vec<u32> = inside
+        .into_iter()
+        .filter(|&(g, n)| {
+            g != 0 && n as f32 >= params.min_inside_share * inputs.geometric_sizes[g as usize] as f32
+        })
+        .map(|(g, _)| g)
+        .collect();
+    if !own_segments.is_empty() {
+        return Some(
+            near.into_iter()
+                .filter(|&i| own_segments.contains(&inputs.geometric[i]))
+                .collect(),
+        );
+    }
     // A magazine lies on the table at the table's depth: the semantic network's other objects
     // (the table) leave it, unless that would leave little (the network took the object itself
     // for the table).
@@ -226,6 +253,8 @@ mod tests {
         depth: Vec<f32>,
         semantic: Vec<u8>,
         layout: Vec<Option<LayoutLabel>>,
+        geometric: Vec<u32>,
+        geometric_sizes: Vec<u32>,
     }
 
     fn scene() -> Scene {
@@ -234,6 +263,8 @@ mod tests {
             depth: vec![3.0; w * h],
             semantic: vec![0; w * h],
             layout: vec![None; w * h],
+            geometric: vec![0; w * h],
+            geometric_sizes: vec![0],
         };
         for y in 0..h {
             for x in 0..w {
@@ -261,6 +292,8 @@ mod tests {
             fx: 40.0,
             semantic: &s.semantic,
             layout: &s.layout,
+            geometric: &s.geometric,
+            geometric_sizes: &s.geometric_sizes,
         }
     }
 
@@ -305,6 +338,33 @@ mod tests {
             0,
             "the far wall is not the cup"
         );
+    }
+
+    #[test]
+    fn geometric_segments_inside_the_box_are_the_object_where_the_semantic_network_saw_nothing() {
+        let mut s = scene();
+        s.semantic.fill(0);
+        s.geometric_sizes = vec![0, 20, 300];
+        for (i, d) in s.depth.iter().enumerate() {
+            s.geometric[i] = match *d {
+                1.4 => 1,
+                1.5 => 2,
+                _ => 0,
+            };
+        }
+        let cup = ObjectDetection {
+            class: "cup".into(),
+            score: 0.7,
+            bbox: [9.0, 4.0, 15.0, 11.0],
+            semantic_labels: vec![],
+        };
+        let with_geometry = panoptic_masks(&inputs(&s), std::slice::from_ref(&cup), &params());
+        let count = |f: &PanopticFrame| f.segment_of_pixel.iter().filter(|&&p| p == 2).count();
+        assert_eq!(count(&with_geometry), 20);
+        // Without segments the depth band keeps the table top behind the cup too.
+        s.geometric.fill(0);
+        let without = panoptic_masks(&inputs(&s), &[cup], &params());
+        assert_eq!(count(&without), 26);
     }
 
     #[test]

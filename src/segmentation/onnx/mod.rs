@@ -2,6 +2,7 @@
 //! (DeepLabV3) through ONNX Runtime, combined into per-frame panoptic masks (`masks`), with floor
 //! and walls from a survey of the room's planes (`layout`).
 
+pub mod bench;
 pub mod deeplab;
 pub mod layout;
 pub mod masks;
@@ -20,6 +21,7 @@ use crate::classes::ClassTable;
 use crate::error::{InputError, IsceneError};
 use crate::geometry::TriMesh;
 use crate::io::{Frame, Sequence};
+use crate::panoptic::geometric::GeometricSegmentation;
 use crate::segmentation::onnx::layout::{LayoutLabel, LayoutParams, RoomLayout};
 use crate::segmentation::onnx::masks::{MaskInputs, MaskParams, ObjectDetection, panoptic_masks};
 use crate::segmentation::onnx::yolox::Detection;
@@ -303,7 +305,11 @@ impl SegmentationService for OnnxSegmentation {
             .then(|| mesh.filtered(|[a, b, c]| on_it(self.layout.label((a + b + c) / 3.0))))
     }
 
-    fn segment(&self, frame: &Frame) -> Result<PanopticFrame, IsceneError> {
+    fn segment(
+        &self,
+        frame: &Frame,
+        geometry: &GeometricSegmentation,
+    ) -> Result<PanopticFrame, IsceneError> {
         let camera = &frame.camera;
         let image = RgbImage::from_raw(camera.width, camera.height, frame.color.clone())
             .ok_or_else(|| {
@@ -333,8 +339,14 @@ impl SegmentationService for OnnxSegmentation {
                 })?
             })
             .collect();
+        let mut geometric_sizes = vec![0u32; geometry.count as usize + 1];
+        for &g in &geometry.segment_of_pixel {
+            geometric_sizes[g as usize] += 1;
+        }
         Ok(panoptic_masks(
             &MaskInputs {
+                geometric: &geometry.segment_of_pixel,
+                geometric_sizes: &geometric_sizes,
                 width: camera.width,
                 height: camera.height,
                 depth: &frame.depth,
