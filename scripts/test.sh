@@ -13,6 +13,9 @@ echo "== format and lints"
 cargo fmt --all -- --check
 cargo clippy --locked --all-targets -- -D warnings
 
+echo "== ONNX Runtime for the onnx segmentation backend (from the PyPI wheel)"
+./scripts/setup-ort.sh
+
 echo "== validators (check_urdf, MuJoCo, PyBullet, Khronos glTF validator)"
 ./scripts/setup-validators.sh
 

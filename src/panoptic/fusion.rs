@@ -177,7 +177,11 @@ pub fn cut_to_exact_masks(fused: &mut FusedFrame, masks: &PanopticFrame, exact: 
         return;
     }
     let mut outside_of: HashMap<u32, u32, FixedState> = HashMap::default();
-    for (s, &m) in fused.segment_of_pixel.iter_mut().zip(&masks.segment_of_pixel) {
+    for (s, &m) in fused
+        .segment_of_pixel
+        .iter_mut()
+        .zip(&masks.segment_of_pixel)
+    {
         if *s == 0 {
             continue;
         }
@@ -320,6 +324,28 @@ mod tests {
             refine: false,
             ..params()
         }
+    }
+
+    #[test]
+    fn an_exact_mask_bounds_the_segment_that_took_it() {
+        // Mask 1 covers the left segment's top 6 rows: the segment takes it, and with mask 1 exact
+        // its bottom 4 rows become a segment of their own without a mask.
+        let (g, m) = frame(|u, v| u16::from(u < 10 && v < 6));
+        let mut fused = fuse_masks(&g, &m, &params());
+        let before = fused.clone();
+        cut_to_exact_masks(&mut fused, &m, &[]);
+        assert_eq!(
+            fused.segment_of_pixel, before.segment_of_pixel,
+            "no exact mask, no change"
+        );
+        cut_to_exact_masks(&mut fused, &m, &[1]);
+        assert_eq!(fused.segments[0].mask, Some(1));
+        assert_eq!(fused.segments[0].pixels, 60);
+        let outside = fused.segment_of_pixel[8 * 20 + 3];
+        assert_eq!(fused.segments[outside as usize - 1].mask, None);
+        assert_eq!(fused.segments[outside as usize - 1].pixels, 40);
+        // The right segment had no mask and is untouched.
+        assert_eq!(fused.segment_of_pixel[5 * 20 + 15], 2);
     }
 
     #[test]

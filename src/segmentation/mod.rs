@@ -51,7 +51,11 @@ pub trait SegmentationService: Send + Sync {
     /// Where the service knows the room's layout exactly, the part of a layout entity's mesh
     /// that lies on it: labels creep in the map, from the floor up a cabinet front that depth
     /// noise joined to it in some frames. `None` keeps the mesh as mapped.
-    fn layout_part(&self, _class: &str, _mesh: &crate::geometry::TriMesh) -> Option<crate::geometry::TriMesh> {
+    fn layout_part(
+        &self,
+        _class: &str,
+        _mesh: &crate::geometry::TriMesh,
+    ) -> Option<crate::geometry::TriMesh> {
         None
     }
 }

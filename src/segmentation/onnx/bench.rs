@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use crate::error::{IsceneError, InputError};
+use crate::error::{InputError, IsceneError};
 use crate::io::Sequence;
 use crate::panoptic::geometric::{GeometricParams, segment_depth};
 use crate::segmentation::SegmentationService;

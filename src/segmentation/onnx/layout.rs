@@ -7,6 +7,7 @@ use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 
 use crate::error::InputError;
+use crate::geometry::plane::fit_plane;
 use crate::geometry::{Pinhole, Plane, TriMesh};
 use crate::graph::gravity::{camera_up_hint, estimate_up};
 use crate::io::Sequence;
@@ -110,7 +111,7 @@ impl RoomLayout {
             Some(up) => up,
             None => camera_up_hint(cameras.iter().copied())
                 .and_then(|hint| estimate_up(&mesh, hint))
-                .unwrap_or(Vec3::Z),
+                .map_or(Vec3::Z, |rough| refine_up(&mesh, rough, &params)),
         };
         let camera_centre = cameras
             .iter()
@@ -182,6 +183,51 @@ impl RoomLayout {
     }
 }
 
+/// The up direction from least-squares planes through the large horizontal surfaces near
+/// `rough` (floor, table tops, counters). Depth quantisation makes a depth image's small
+/// triangles stair-stepped towards the camera, which biases their mean normal by degrees; a plane
+/// through thousands of points of a surface averages the steps out.
+fn refine_up(mesh: &TriMesh, rough: Vec3, params: &LayoutParams) -> Vec3 {
+    let cos_tol = params.orientation_tolerance_deg.to_radians().cos();
+    let faces: Vec<(Vec3, f32)> = (0..mesh.triangles.len())
+        .filter_map(|t| {
+            let [a, b, c] = mesh.triangle(t);
+            let cross = (b - a).cross(c - a);
+            let n = cross.try_normalize()?;
+            (n.dot(rough).abs() >= cos_tol).then(|| ((a + b + c) / 3.0, 0.5 * cross.length()))
+        })
+        .collect();
+    let mut up = rough;
+    // Each round's planes tilt the heights less, so a surface fits its window better.
+    for _ in 0..3 {
+        let heights: Vec<(f32, f32)> = faces.iter().map(|(c, a)| (c.dot(up), *a)).collect();
+        let peaks = surface_heights(&heights, params.bin, 0.2);
+        let mut sum = Vec3::ZERO;
+        for h in peaks {
+            let (points, area): (Vec<Vec3>, f32) = faces
+                .iter()
+                .filter(|(c, _)| (c.dot(up) - h).abs() <= 1.5 * params.bin)
+                .fold((Vec::new(), 0.0), |(mut p, a), (c, w)| {
+                    p.push(*c);
+                    (p, a + w)
+                });
+            if let Some(plane) = fit_plane(&points) {
+                let n = if plane.normal.dot(up) < 0.0 {
+                    -plane.normal
+                } else {
+                    plane.normal
+                };
+                sum += n * area;
+            }
+        }
+        match sum.try_normalize() {
+            Some(n) => up = n,
+            None => break,
+        }
+    }
+    up
+}
+
 /// A triangle mesh over a depth image's pixel grid (every `stride` pixels), in the world frame,
 /// with no triangle across a depth jump.
 pub fn depth_grid_mesh(
@@ -236,10 +282,9 @@ pub fn depth_grid_mesh(
     mesh
 }
 
-/// The height of the lowest horizontal surface with a substantial share of the horizontal area:
-/// the floor (reflections and noise below it are small; table tops above it are higher). Bins
-/// of `bin` metres, each summed with its neighbours so a surface split over two bins counts once.
-fn lowest_surface(heights_areas: &[(f32, f32)], bin: f32) -> Option<f32> {
+/// Smoothed area per height bin of `bin` metres over (height, area) pairs, from the lowest
+/// height: each bin summed with its neighbours, so a surface split over two bins counts once.
+fn height_histogram(heights_areas: &[(f32, f32)], bin: f32) -> Option<(f32, Vec<f32>)> {
     let lo = heights_areas
         .iter()
         .map(|h| h.0)
@@ -255,22 +300,50 @@ fn lowest_surface(heights_areas: &[(f32, f32)], bin: f32) -> Option<f32> {
         }
         bins[i] += a;
     }
-    let smoothed: Vec<f32> = (0..bins.len())
+    let smoothed = (0..bins.len())
         .map(|i| {
             bins[i.saturating_sub(1)..(i + 2).min(bins.len())]
                 .iter()
                 .sum()
         })
         .collect();
-    let largest = smoothed.iter().copied().fold(0.0, f32::max);
-    let first = smoothed.iter().position(|&a| a >= 0.2 * largest)?;
-    // The surface's height: the area-weighted mean of the faces within a bin of that peak.
-    let centre = lo + (first as f32 + 0.5) * bin;
+    Some((lo, smoothed))
+}
+
+/// The area-weighted mean height of the faces within a bin and a half of `centre`.
+fn mean_height_near(heights_areas: &[(f32, f32)], centre: f32, bin: f32) -> Option<f32> {
     let (sum, weight) = heights_areas
         .iter()
         .filter(|(h, _)| (h - centre).abs() <= 1.5 * bin)
         .fold((0.0, 0.0), |(s, w), (h, a)| (s + h * a, w + a));
     (weight > 0.0).then(|| sum / weight)
+}
+
+/// The heights of the horizontal surfaces with at least `share` of the largest one's area: the
+/// local maxima of the height histogram.
+fn surface_heights(heights_areas: &[(f32, f32)], bin: f32, share: f32) -> Vec<f32> {
+    let Some((lo, smoothed)) = height_histogram(heights_areas, bin) else {
+        return Vec::new();
+    };
+    let largest = smoothed.iter().copied().fold(0.0, f32::max);
+    (0..smoothed.len())
+        .filter(|&i| {
+            let a = smoothed[i];
+            a >= share * largest
+                && (i == 0 || smoothed[i - 1] < a)
+                && (i + 1 == smoothed.len() || smoothed[i + 1] <= a)
+        })
+        .filter_map(|i| mean_height_near(heights_areas, lo + (i as f32 + 0.5) * bin, bin))
+        .collect()
+}
+
+/// The height of the lowest horizontal surface with a substantial share of the horizontal area:
+/// the floor (reflections and noise below it are small; table tops above it are higher).
+fn lowest_surface(heights_areas: &[(f32, f32)], bin: f32) -> Option<f32> {
+    let (lo, smoothed) = height_histogram(heights_areas, bin)?;
+    let largest = smoothed.iter().copied().fold(0.0, f32::max);
+    let first = smoothed.iter().position(|&a| a >= 0.2 * largest)?;
+    mean_height_near(heights_areas, lo + (first as f32 + 0.5) * bin, bin)
 }
 
 /// Walls among the vertical faces (centre, horizontal unit normal, area): repeatedly the plane
@@ -307,8 +380,8 @@ fn find_walls(
         }
         // The heaviest bin with its neighbours in offset (a wall's noise spreads over two).
         let Some((&(ai, di), _)) = bins
-            .iter()
-            .map(|(k, _)| {
+            .keys()
+            .map(|k| {
                 let around: f32 = (-1..=1).filter_map(|o| bins.get(&(k.0, k.1 + o))).sum();
                 (k, around)
             })

@@ -214,7 +214,8 @@ fn object_pixels(
     let own_segments: Vec<u32> = inside
         .into_iter()
         .filter(|&(g, n)| {
-            g != 0 && n as f32 >= params.min_inside_share * inputs.geometric_sizes[g as usize] as f32
+            g != 0
+                && n as f32 >= params.min_inside_share * inputs.geometric_sizes[g as usize] as f32
         })
         .map(|(g, _)| g)
         .collect();
@@ -236,11 +237,13 @@ fn object_pixels(
             label == 0 || d.semantic_labels.contains(&label)
         })
         .collect();
-    Some(if own.len() as f32 >= params.min_own_share * near.len() as f32 {
-        own
-    } else {
-        near
-    })
+    Some(
+        if own.len() as f32 >= params.min_own_share * near.len() as f32 {
+            own
+        } else {
+            near
+        },
+    )
 }
 
 #[cfg(test)]

@@ -296,10 +296,11 @@ impl SegmentationService for OnnxSegmentation {
     }
 
     fn layout_part(&self, class: &str, mesh: &TriMesh) -> Option<TriMesh> {
-        let on_it = |label: Option<LayoutLabel>| match (class, label) {
-            ("floor", Some(LayoutLabel::Floor)) => true,
-            ("wall", Some(LayoutLabel::Wall(_))) => true,
-            _ => false,
+        let on_it = |label: Option<LayoutLabel>| {
+            matches!(
+                (class, label),
+                ("floor", Some(LayoutLabel::Floor)) | ("wall", Some(LayoutLabel::Wall(_)))
+            )
         };
         matches!(class, "floor" | "wall")
             .then(|| mesh.filtered(|[a, b, c]| on_it(self.layout.label((a + b + c) / 3.0))))

@@ -80,7 +80,8 @@ pub fn decode(
                             |best, (i, s)| if s > best.1 { (i, s) } else { best },
                         );
                 let score = r[4] * class_score;
-                if !(score >= min_score) {
+                // NaN scores fail the comparison and are skipped too.
+                if score.partial_cmp(&min_score).is_none_or(|o| o.is_lt()) {
                     continue;
                 }
                 let s = stride as f32;
