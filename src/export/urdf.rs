@@ -63,8 +63,42 @@ fn joint_type(kind: JointKind) -> urdf_rs::JointType {
     }
 }
 
+/// The URDF parent of link `i` and the joint origin in it. A floating link hangs from its tree
+/// parent unless something on the way up to the root moves (a chair the book lies on, a drawer
+/// the cup stands in): then from the nearest ancestor welded to the root, at the link's current
+/// world pose. MuJoCo turns a URDF `floating` joint into a free joint only when every joint above
+/// it is fixed, and refuses the file otherwise (../shared/VALIDATORS.md); the support relation
+/// itself stays in contact_graph.json.
+fn urdf_parent(
+    tree: &KinematicTree,
+    i: usize,
+    world_from: &[Affine3A],
+) -> Option<(usize, Affine3A)> {
+    let link = &tree.links[i];
+    let parent = link.parent?;
+    if link.joint.kind != JointKind::Floating {
+        return Some((parent, link.parent_from_link));
+    }
+    let welded_to_root = |mut at: usize| loop {
+        match tree.links[at].parent {
+            None => return true,
+            Some(up) if tree.links[at].joint.kind == JointKind::Fixed => at = up,
+            Some(_) => return false,
+        }
+    };
+    let mut anchor = parent;
+    while !welded_to_root(anchor) {
+        anchor = tree.links[anchor].parent?;
+    }
+    if anchor == parent {
+        return Some((parent, link.parent_from_link));
+    }
+    Some((anchor, world_from[anchor].inverse() * world_from[i]))
+}
+
 /// The URDF robot of `tree`.
 pub fn urdf_robot(tree: &KinematicTree, name: &str) -> urdf_rs::Robot {
+    let world_from = tree.world_from_links();
     let mut links = Vec::with_capacity(tree.links.len());
     let mut joints = Vec::new();
     for (i, link) in tree.links.iter().enumerate() {
@@ -113,7 +147,7 @@ pub fn urdf_robot(tree: &KinematicTree, name: &str) -> urdf_rs::Robot {
             }
         }
         links.push(urdf_link);
-        let Some(parent) = link.parent else {
+        let Some((parent, origin)) = urdf_parent(tree, i, &world_from) else {
             continue;
         };
         let (effort, velocity) = drive_limits(link.joint.kind);
@@ -121,7 +155,7 @@ pub fn urdf_robot(tree: &KinematicTree, name: &str) -> urdf_rs::Robot {
         joints.push(urdf_rs::Joint {
             name: tree.joint_name(i),
             joint_type: joint_type(link.joint.kind),
-            origin: urdf_pose(&link.parent_from_link),
+            origin: urdf_pose(&origin),
             parent: urdf_rs::LinkName {
                 link: tree.links[parent].name.clone(),
             },
@@ -224,6 +258,47 @@ mod tests {
                 door,
             ],
         }
+    }
+
+    #[test]
+    fn a_floating_link_on_a_floating_one_hangs_from_the_nearest_welded_ancestor() {
+        let mut tree = tree();
+        let chair_pose = Affine3A::from_rotation_translation(
+            glam::Quat::from_rotation_z(0.4),
+            Vec3::new(2.0, 0.5, 0.0),
+        );
+        let book_on_chair = Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.45));
+        let box_mesh = TriMesh::cuboid(Vec3::ZERO, Vec3::splat(0.2));
+        tree.links.push(TreeLink::body(
+            "chair_1",
+            "chair",
+            0,
+            JointSpec::FLOATING,
+            chair_pose,
+            box_mesh.clone(),
+        ));
+        tree.links.push(TreeLink::body(
+            "book_1",
+            "book",
+            3,
+            JointSpec::FLOATING,
+            book_on_chair,
+            box_mesh,
+        ));
+        let robot = urdf_robot(&tree, "room");
+        let joint = |child: &str| {
+            robot
+                .joints
+                .iter()
+                .find(|j| j.child.link == child)
+                .expect("joint")
+        };
+        assert_eq!(joint("chair_1").parent.link, "world");
+        assert_eq!(joint("book_1").parent.link, "world");
+        let back = affine_of_urdf_pose(&joint("book_1").origin);
+        assert!(back.abs_diff_eq(chair_pose * book_on_chair, 1e-5));
+        // Fixed and revolute joints keep their tree parent.
+        assert_eq!(joint("cabinet_1_door").parent.link, "cabinet_1");
     }
 
     #[test]
