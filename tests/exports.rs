@@ -15,46 +15,11 @@
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 mod common;
 
 use iscene::cad::ParametricLibrary;
 use iscene::graph::ContactGraph;
-
-fn validator(relative: &str) -> PathBuf {
-    let path = common::root().join(relative);
-    assert!(
-        path.exists(),
-        "{} is missing: run scripts/setup-validators.sh (the README's test command does)",
-        path.display()
-    );
-    path
-}
-
-/// Runs a command; returns (exit code, stdout, stderr).
-fn run(program: &Path, args: &[&Path]) -> (i32, String, String) {
-    // MuJoCo writes MUJOCO_LOG.TXT into its working folder: keep it out of the checkout.
-    let out = Command::new(program)
-        .args(args)
-        .current_dir(std::env::temp_dir())
-        .output()
-        .unwrap_or_else(|e| panic!("running {}: {e}", program.display()));
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn json_line(stdout: &str) -> serde_json::Value {
-    let line = stdout
-        .lines()
-        .rev()
-        .find(|l| l.starts_with('{'))
-        .unwrap_or_else(|| panic!("no JSON in {stdout:?}"));
-    serde_json::from_str(line).expect("JSON")
-}
 
 /// Links the URDF must have: the root, one per contact-graph node, one per further part of each
 /// node's CAD model.
@@ -84,11 +49,11 @@ fn belongs_to(name: &str, objects: &BTreeSet<String>) -> bool {
 
 #[test]
 fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
-    let python = validator(".venv-validators/bin/python");
-    let mujoco_rest = validator("tests/external/mujoco_rest.py");
-    let pybullet_load = validator("tests/external/pybullet_load.py");
-    let gltf_validate = validator("tests/external/gltf_validate.js");
-    validator(".validators/node_modules/gltf-validator/package.json");
+    let python = common::validator(".venv-validators/bin/python");
+    let mujoco_rest = common::validator("tests/external/mujoco_rest.py");
+    let pybullet_load = common::validator("tests/external/pybullet_load.py");
+    let gltf_validate = common::validator("tests/external/gltf_validate.js");
+    common::validator(".validators/node_modules/gltf-validator/package.json");
     let check_urdf = PathBuf::from("check_urdf");
     let mut failures = Vec::new();
     for name in ["kitchen", "office", "living_room", "bedroom"] {
@@ -103,7 +68,7 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
         let links = expected_links(&graph);
 
         // check_urdf: exit 0, silent stderr, every link in the printed tree.
-        let (code, stdout, stderr) = run(&check_urdf, &[&urdf]);
+        let (code, stdout, stderr) = common::run_tool(&check_urdf, &[&urdf]);
         let printed = 1 + stdout.matches("child(").count() - stdout.matches("child(ren)").count();
         if code != 0 || !stderr.trim().is_empty() || printed != links {
             failures.push(format!(
@@ -176,12 +141,12 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
 
         // MuJoCo: both files load, free bodies rest, nothing new overlaps at a joint limit.
         for file in [urdf.clone(), out.join("scene.xml")] {
-            let (code, stdout, stderr) = run(&python, &[&mujoco_rest, &file]);
+            let (code, stdout, stderr) = common::run_tool(&python, &[&mujoco_rest, &file]);
             if code != 0 {
                 failures.push(format!("{name}: MuJoCo: {stderr}"));
                 continue;
             }
-            let result = json_line(&stdout);
+            let result = common::json_line(&stdout);
             for (joint, moved) in result["free_moved"].as_object().expect("free_moved") {
                 let object = joint.trim_end_matches("_joint");
                 let moved = moved.as_f64().expect("metres");
@@ -214,21 +179,21 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
         }
 
         // PyBullet (in a subprocess: it segfaults on some files).
-        let (code, stdout, stderr) = run(&python, &[&pybullet_load, &urdf]);
+        let (code, stdout, stderr) = common::run_tool(&python, &[&pybullet_load, &urdf]);
         if code != 0 {
             failures.push(format!("{name}: PyBullet: {stderr}"));
-        } else if json_line(&stdout)["links"].as_u64() != Some(links as u64) {
+        } else if common::json_line(&stdout)["links"].as_u64() != Some(links as u64) {
             failures.push(format!("{name}: PyBullet links {stdout}"));
         }
 
         // The Khronos validator: no errors, every contact-graph id a node name.
         let (code, stdout, stderr) =
-            run(Path::new("node"), &[&gltf_validate, &out.join("scene.glb")]);
+            common::run_tool(Path::new("node"), &[&gltf_validate, &out.join("scene.glb")]);
         if code != 0 {
             failures.push(format!("{name}: glTF validator: {stderr}"));
             continue;
         }
-        let result = json_line(&stdout);
+        let result = common::json_line(&stdout);
         if result["errors"].as_u64() != Some(0) {
             failures.push(format!("{name}: glTF errors {}", result["messages"]));
         }

@@ -118,3 +118,39 @@ pub fn render_and_map_every_second_frame(
     .expect("reconstruct");
     (seq, out)
 }
+
+/// A validator installed by scripts/setup-validators.sh, or a panic that says to run it.
+pub fn validator(relative: &str) -> PathBuf {
+    let path = root().join(relative);
+    assert!(
+        path.exists(),
+        "{} is missing: run scripts/setup-validators.sh (the README's test command does)",
+        path.display()
+    );
+    path
+}
+
+/// Runs a third-party tool in the temporary folder; returns (exit code, stdout, stderr).
+pub fn run_tool(program: &Path, args: &[&Path]) -> (i32, String, String) {
+    // MuJoCo writes MUJOCO_LOG.TXT into its working folder: keep it out of the checkout.
+    let out = Command::new(program)
+        .args(args)
+        .current_dir(std::env::temp_dir())
+        .output()
+        .unwrap_or_else(|e| panic!("running {}: {e}", program.display()));
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The last line of `stdout` that is a JSON object (the external scripts print one).
+pub fn json_line(stdout: &str) -> serde_json::Value {
+    let line = stdout
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or_else(|| panic!("no JSON in {stdout:?}"));
+    serde_json::from_str(line).expect("JSON")
+}
