@@ -160,6 +160,7 @@ fn integrate_frames(
                 depth: &f.depth,
                 color: &f.color,
                 labels: l.as_deref(),
+                label_gains: None,
                 camera: &f.camera,
                 world_from_camera: &f.world_from_camera,
             });

@@ -20,6 +20,7 @@ fn redkitchen_gravity_is_estimated_within_two_degrees() {
             depth: &f.depth,
             color: &[],
             labels: None,
+            label_gains: None,
             camera: &f.camera,
             world_from_camera: &f.world_from_camera,
         });

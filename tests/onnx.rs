@@ -110,8 +110,8 @@ fn the_survey_estimates_gravity_within_2_degrees_and_finds_the_floor() {
 }
 
 #[test]
-fn the_kitchen_reconstructs_with_the_table_on_the_floor_chairs_and_a_cup_on_the_table_and_exports_load()
- {
+fn the_kitchen_reconstructs_with_the_table_on_the_floor_chairs_and_two_cups_on_it_and_exports_load()
+{
     let out = tempfile::tempdir().expect("tempdir");
     let input = common::shared_data("rgbd/7scenes-redkitchen");
     let (code, _, stderr) = common::iscene(
@@ -167,9 +167,9 @@ fn the_kitchen_reconstructs_with_the_table_on_the_floor_chairs_and_a_cup_on_the_
         .into_iter()
         .filter(|c| parent(c["id"].as_str().unwrap_or("")).as_deref() == Some(table))
         .count();
-    // The table has two mugs; the one the detector sees in a quarter of the frames loses the map's
-    // label vote to the table (see the README), so one is what holds.
-    assert!(cups_on_table >= 1, "no cup on the table");
+    // The table has two mugs; the second is seen by the detector in under half the frames and
+    // only stays apart from the table because cut-out segments vote twice (MapperParams).
+    assert!(cups_on_table >= 2, "{cups_on_table} cups on the table");
     for export in ["scene.urdf", "scene.xml", "scene.glb", "occupancy.pgm"] {
         assert!(out.path().join(export).is_file(), "{export} written");
     }

@@ -110,6 +110,9 @@ pub struct TsdfFrame<'a> {
     pub depth: &'a [f32],
     pub color: &'a [u8],
     pub labels: Option<&'a [SegmentLabel]>,
+    /// Per pixel, how many times its weight the label's vote counts (`None`: once). The mapper
+    /// raises it where semantics overrules geometry.
+    pub label_gains: Option<&'a [u8]>,
     pub camera: &'a Pinhole,
     pub world_from_camera: &'a Affine3A,
 }
@@ -225,6 +228,7 @@ impl TsdfMap {
             depth: frame.depth,
             color: frame.color,
             labels: frame.labels,
+            label_gains: frame.label_gains,
             voxel_size: self.voxel_size,
             truncation: self.truncation,
             max_ray_length: self.max_ray_length,
@@ -356,6 +360,7 @@ struct Integrator<'a> {
     depth: &'a [f32],
     color: &'a [u8],
     labels: Option<&'a [SegmentLabel]>,
+    label_gains: Option<&'a [u8]>,
     voxel_size: f32,
     truncation: f32,
     max_ray_length: f32,
@@ -427,12 +432,13 @@ impl Integrator<'_> {
                         [c[0], c[1], c[2]]
                     });
                     let label = self.labels.map_or(0, |labels| labels[pixel]);
+                    let gain = self.label_gains.map_or(1, |gains| gains[pixel]);
                     self.fuse(
                         &mut block.voxels[slots + x],
                         sdf[x],
                         weight[x] as u16,
                         color,
-                        label,
+                        (label, gain),
                     );
                 }
             }
@@ -468,15 +474,15 @@ impl Integrator<'_> {
         (index.to_array().map(|i| i as usize), voxel_z)
     }
 
-    /// Fuses one measurement of `weight` steps (1 to `WEIGHT_STEPS`) into `voxel`; `label` 0
-    /// means the pixel has none.
+    /// Fuses one measurement of `weight` steps (1 to `WEIGHT_STEPS`) into `voxel`; its label
+    /// (0: none) votes with `gain` times the weight.
     fn fuse(
         &self,
         voxel: &mut Voxel,
         sdf: f32,
         weight: u16,
         color: Option<[u8; 3]>,
-        label: SegmentLabel,
+        (label, gain): (SegmentLabel, u8),
     ) {
         // In u32 the sum cannot overflow; the cap brings it back into a u16.
         let total = u32::from(voxel.weight) + u32::from(weight);
@@ -498,14 +504,15 @@ impl Integrator<'_> {
         // sees: deeper in the band lies whatever is behind it (the wall a few centimetres behind
         // a sofa would take the sofa's label from every view that sees the sofa in front of it).
         if label != 0 && sdf.abs() < LABEL_BAND_VOXELS * self.voxel_size {
+            let vote = (u32::from(weight) * u32::from(gain)).min(u32::from(self.max_weight)) as u16;
             if voxel.label == label {
-                voxel.label_weight = (u32::from(voxel.label_weight) + u32::from(weight))
+                voxel.label_weight = (u32::from(voxel.label_weight) + u32::from(vote))
                     .min(u32::from(self.max_weight)) as u16;
-            } else if voxel.label_weight <= weight {
+            } else if voxel.label_weight <= vote {
                 voxel.label = label;
-                voxel.label_weight = weight;
+                voxel.label_weight = vote;
             } else {
-                voxel.label_weight -= weight;
+                voxel.label_weight -= vote;
             }
         }
     }
@@ -535,6 +542,7 @@ mod tests {
                 depth: &f.depth,
                 color: &f.color,
                 labels: None,
+                label_gains: None,
                 camera: &camera,
                 world_from_camera: pose,
             });
@@ -602,6 +610,7 @@ mod tests {
                 depth: &depth,
                 color: &[],
                 labels: Some(&labels),
+                label_gains: None,
                 camera: &camera,
                 world_from_camera: &pose,
             });
@@ -611,5 +620,38 @@ mod tests {
         map.relabel(&[0, 1, 2, 3, 4, 9]);
         let surface = map.voxel_at(Vec3::new(0.0, 0.0, 1.01)).expect("observed");
         assert_eq!(surface.label, 9);
+    }
+
+    #[test]
+    fn a_cut_out_label_voting_twice_overturns_a_label_seen_in_more_frames() {
+        let camera = Pinhole {
+            width: 8,
+            height: 8,
+            fx: 8.0,
+            fy: 8.0,
+            cx: 3.5,
+            cy: 3.5,
+        };
+        let depth = vec![1.0f32; 64];
+        let pose = Affine3A::IDENTITY;
+        let label_after = |votes: &[(SegmentLabel, u8)]| {
+            let mut map = TsdfMap::new(0.05);
+            for &(label, gain) in votes {
+                map.integrate(&TsdfFrame {
+                    depth: &depth,
+                    color: &[],
+                    labels: Some(&[label; 64]),
+                    label_gains: Some(&[gain; 64]),
+                    camera: &camera,
+                    world_from_camera: &pose,
+                });
+            }
+            map.voxel_at(Vec3::new(0.0, 0.0, 1.01))
+                .expect("observed")
+                .label
+        };
+        // The table's label three times, the mug's (cut out, gain 2) twice: 4 against 3.
+        assert_eq!(label_after(&[(3, 1), (3, 1), (7, 2), (3, 1), (7, 2)]), 7);
+        assert_eq!(label_after(&[(3, 1), (3, 1), (7, 1), (3, 1), (7, 1)]), 3);
     }
 }

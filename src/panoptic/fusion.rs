@@ -56,6 +56,9 @@ pub struct FrameSegment {
     pub pixels: u32,
     /// The frame-local mask id it belongs to, if any.
     pub mask: Option<u16>,
+    /// Cut out of a larger geometric segment by its mask (step 2): geometry did not part it
+    /// from its neighbour, semantics did.
+    pub cut_out: bool,
 }
 
 /// One frame's fused segments: per-pixel index into `segments` plus one (0 = none).
@@ -117,6 +120,7 @@ pub fn fuse_masks(
         segments.push(FrameSegment {
             pixels: kept,
             mask: best,
+            cut_out: false,
         });
     }
     let mut cuts: Vec<((u32, u16), u32)> = cut_of.iter().map(|(k, v)| (*k, *v)).collect();
@@ -125,6 +129,7 @@ pub fn fuse_masks(
         segments.push(FrameSegment {
             pixels: overlap[*g as usize][m],
             mask: Some(*m),
+            cut_out: true,
         });
     }
     // Step 3: a mask's remainder pixels, when enough, are a segment of that mask.
@@ -135,6 +140,7 @@ pub fn fuse_masks(
                 segments.push(FrameSegment {
                     pixels,
                     mask: Some(m),
+                    cut_out: false,
                 });
                 remainder_of.insert(m, segments.len() as u32);
             }
@@ -196,6 +202,7 @@ pub fn cut_to_exact_masks(fused: &mut FusedFrame, masks: &PanopticFrame, exact: 
             fused.segments.push(FrameSegment {
                 pixels: 0,
                 mask: None,
+                cut_out: false,
             });
             next
         });
@@ -363,6 +370,7 @@ mod tests {
         assert_eq!(fused.segments[1].mask, None);
         assert_eq!(fused.segments[2].mask, Some(2));
         assert_eq!(fused.segments[2].pixels, 9);
+        assert!(fused.segments[2].cut_out && !fused.segments[0].cut_out);
         assert_eq!(fused.segment_of_pixel[3 * 20 + 3], 3);
         let unrefined = fuse_masks(&g, &m, &unrefined_params());
         assert_eq!(unrefined.segments.len(), 2);

@@ -35,6 +35,11 @@ pub struct MapperParams {
     pub min_apart_frames: u32,
     /// Regularise every this many frames (and once at the end).
     pub regularise_every: usize,
+    /// A cut-out segment's label votes this many times its weight: where a mask had to part an
+    /// object from the segment geometry joined it to (a mug on a table, seen from where the
+    /// crease at its foot blurs), the frames that do not see the object at all would otherwise
+    /// write the table's label over it.
+    pub cut_out_label_gain: u8,
     /// Frames are segmented every this many (the first included); the others are fused with their
     /// geometric segments only, which continue the labels the map already has.
     pub segment_every: usize,
@@ -57,6 +62,7 @@ impl MapperParams {
             instance_merge_ratio: 0.5,
             min_apart_frames: 2,
             regularise_every: 25,
+            cut_out_label_gain: 2,
             segment_every: 1,
         }
     }
@@ -185,10 +191,27 @@ impl PanopticMapper {
                 }
             })
             .collect();
+        let segments = &segmented.fused.segments;
+        let label_gains: Option<Vec<u8>> = segments.iter().any(|s| s.cut_out).then(|| {
+            segmented
+                .fused
+                .segment_of_pixel
+                .par_iter()
+                .map(|&s| {
+                    let cut_out = s != 0 && segments[s as usize - 1].cut_out;
+                    if cut_out {
+                        self.params.cut_out_label_gain
+                    } else {
+                        1
+                    }
+                })
+                .collect()
+        });
         self.tsdf.integrate(&TsdfFrame {
             depth: frame.depth,
             color: frame.color,
             labels: Some(&label_image),
+            label_gains: label_gains.as_deref(),
             camera: frame.camera,
             world_from_camera: frame.world_from_camera,
         });
