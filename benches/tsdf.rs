@@ -27,6 +27,7 @@ fn integrate(c: &mut Criterion) {
                         depth: &f.depth,
                         color: &f.color,
                         labels: None,
+                        label_gains: None,
                         camera: &f.camera,
                         world_from_camera: &f.world_from_camera,
                     });
