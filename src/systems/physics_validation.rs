@@ -5,7 +5,7 @@
 
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier3d::rapier::prelude::MassProperties as ParryMassProperties;
+use bevy_rapier3d::rapier::prelude::{IntegrationParameters, MassProperties as ParryMassProperties};
 use glam::Affine3A;
 use serde::Serialize;
 
@@ -147,6 +147,24 @@ fn spawn_bodies(
     starts
 }
 
+/// The rapier world of the rest test: z up, and contacts recomputed every step. Rapier's
+/// default recycles a pair's contact points until the bodies have drifted 5 cm apart, which
+/// is a whole bottle's width: small objects on furniture then rested on stale points, drifted
+/// about a centimetre and tipped up to 19 degrees (MuJoCo rests the same files to 0.1 mm);
+/// recomputed, the rendered scenes' small objects stay within 3 mm and 0.3 degrees.
+fn rest_test_context() -> RapierContextInitialization {
+    RapierContextInitialization::InitializeDefaultRapierContext {
+        integration_parameters: IntegrationParameters {
+            contact_recycling: false,
+            ..default()
+        },
+        rapier_configuration: RapierConfiguration {
+            gravity: Vec3::new(0.0, 0.0, -9.81),
+            ..RapierConfiguration::new(1.0)
+        },
+    }
+}
+
 /// Simulates `tree` at rest and judges every object; sweeps its joints.
 pub fn validate_physics(tree: &KinematicTree) -> PhysicsReport {
     let bodies = rest_bodies(tree);
@@ -155,7 +173,8 @@ pub fn validate_physics(tree: &KinematicTree) -> PhysicsReport {
     app.add_plugins((
         bevy::time::TimePlugin,
         bevy::transform::TransformPlugin,
-        RapierPhysicsPlugin::<NoUserData>::default(),
+        RapierPhysicsPlugin::<NoUserData>::default()
+            .with_custom_initialization(rest_test_context()),
     ));
     app.insert_resource(TimestepMode::Fixed {
         dt: REST_STEP_S,
@@ -164,14 +183,6 @@ pub fn validate_physics(tree: &KinematicTree) -> PhysicsReport {
     app.finish();
     app.cleanup();
     app.update();
-    // Bevy's convention is y up; the scene is z up.
-    for mut config in app
-        .world_mut()
-        .query::<&mut RapierConfiguration>()
-        .iter_mut(app.world_mut())
-    {
-        config.gravity = Vec3::new(0.0, 0.0, -9.81);
-    }
     let frozen: Vec<bool> = penetrations
         .iter()
         .map(|(depth, _)| *depth > MAX_START_PENETRATION_M)
