@@ -5,7 +5,9 @@
 
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier3d::rapier::prelude::{IntegrationParameters, MassProperties as ParryMassProperties};
+use bevy_rapier3d::rapier::prelude::{
+    IntegrationParameters, MassProperties as ParryMassProperties,
+};
 use glam::Affine3A;
 use serde::Serialize;
 
