@@ -22,6 +22,8 @@ pub mod progress;
 pub mod render;
 pub mod scene;
 pub mod segmentation;
+pub mod sim;
+pub mod simulation;
 pub mod systems;
 
 use bevy::app::PluginGroupBuilder;

@@ -43,6 +43,16 @@ enum Command {
         #[arg(long)]
         gt: PathBuf,
     },
+    /// Run a task (actions, or goals to plan for) in a reconstructed scene folder (or a rendered
+    /// sequence's gt/); writes the trace, the task's PDDL and the exports after the last step.
+    Simulate {
+        /// A folder with contact_graph.json.
+        dir: PathBuf,
+        #[arg(long)]
+        task: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Benchmarks that print their figures as one JSON object on stdout.
     Bench {
         #[command(subcommand)]
@@ -199,6 +209,38 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 s.seconds,
                 s.frames as f64 / s.seconds.max(1e-9)
             );
+        }
+        Some(Command::Simulate { dir, task, out }) => {
+            let summary = iscene::simulation::simulate(&iscene::simulation::SimulateOptions {
+                dir,
+                task,
+                out,
+            })?;
+            if let Some(plan) = &summary.plan {
+                println!("plan ({} steps): {}", plan.len(), plan.join(" "));
+            }
+            for s in &summary.steps {
+                let physics = s.physics.as_ref().map_or(String::new(), |p| {
+                    format!(", stable {:.2}", p.stable_fraction)
+                });
+                match &s.failed_precondition {
+                    None => println!(
+                        "{:>2} {:<36} ok{physics} ({:.0} ms)",
+                        s.step,
+                        s.action.label(),
+                        s.wall_ms
+                    ),
+                    Some(why) => println!("{:>2} {:<36} FAILED: {why}", s.step, s.action.label()),
+                }
+            }
+            println!(
+                "{} -> {}",
+                if summary.success { "success" } else { "failed" },
+                summary.output.display()
+            );
+            if !summary.success {
+                std::process::exit(1);
+            }
         }
         Some(Command::Cad {
             command: CadCommand::Generate { into },

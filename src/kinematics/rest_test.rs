@@ -35,8 +35,8 @@ pub struct RestBody {
     pub dynamic: bool,
 }
 
-/// The bodies of the rest test: body 0 is static (the root, the layout, wall-hung objects and
-/// everything locked to them), then one dynamic body per other object.
+/// The bodies of the rest test: body 0 is static (the root, the layout, wall-hung objects, the
+/// robot and what it holds, and everything locked to them), then one dynamic body per other object.
 pub fn rest_bodies(tree: &KinematicTree) -> Vec<RestBody> {
     let mut bodies = vec![RestBody {
         name: crate::kinematics::tree::ROOT_LINK.into(),
@@ -50,9 +50,14 @@ pub fn rest_bodies(tree: &KinematicTree) -> Vec<RestBody> {
         let hangs_on_wall = link
             .parent
             .is_some_and(|p| tree.links[p].class.as_deref() == Some("wall"));
+        // What the robot's gripper holds is held still with the robot (a link that is no node).
+        let held = link
+            .parent
+            .is_some_and(|p| p != 0 && tree.links[p].node.is_none());
         let body = if own_link
             && !ClassTable::builtin().is_layout(link.class.as_deref())
             && !hangs_on_wall
+            && !held
         {
             bodies.push(RestBody {
                 name: link.name.clone(),

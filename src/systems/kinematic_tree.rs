@@ -11,7 +11,9 @@ use bevy::prelude::*;
 use glam::Affine3A;
 use rayon::prelude::*;
 
+use crate::cad::database::CadDatabase;
 use crate::components::{Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
+use crate::graph::ContactGraph;
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::tree::{KinematicTree, TreeLink};
@@ -53,6 +55,22 @@ fn kinematic_tree_stage(world: &mut World) {
         return;
     };
     let db = world.get_resource::<CadLibrary>().map(|l| l.0.clone());
+    spawn_node_links(world, &graph, db.as_deref());
+    match read_kinematic_tree(world) {
+        Ok(tree) => {
+            world.insert_resource(SceneKinematicTree(tree));
+        }
+        Err(problem) => {
+            world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(
+                format!("kinematic tree: {problem}"),
+            ));
+        }
+    }
+}
+
+/// Gives every scene entity the links of its contact-graph node in `graph` (its own link's body
+/// and the moving parts of its CAD model from `db`, spawned below it).
+pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&CadDatabase>) {
     let mut entities: Vec<(Entity, String)> = world
         .query::<(Entity, &SceneEntity)>()
         .iter(world)
@@ -74,7 +92,7 @@ fn kinematic_tree_stage(world: &mut World) {
             let model = node
                 .cad
                 .as_ref()
-                .zip(db.as_ref())
+                .zip(db)
                 .and_then(|(c, db)| db.get(&c.model))
                 .map(|m| &m.model);
             node_links(node, model, *pose, floor)
@@ -82,16 +100,6 @@ fn kinematic_tree_stage(world: &mut World) {
         .collect();
     for ((entity, id), links) in entities.iter().zip(links) {
         spawn_links(world, *entity, id, links);
-    }
-    match read_kinematic_tree(world) {
-        Ok(tree) => {
-            world.insert_resource(SceneKinematicTree(tree));
-        }
-        Err(problem) => {
-            world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(
-                format!("kinematic tree: {problem}"),
-            ));
-        }
     }
 }
 

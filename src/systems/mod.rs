@@ -8,6 +8,7 @@ pub mod kinematic_tree;
 pub mod panoptic_mapping;
 pub mod physics_validation;
 pub mod scene_graph;
+pub mod simulation;
 pub mod stages;
 
 pub use cad_replacement::CadReplacementPlugin;

@@ -1,0 +1,563 @@
+//! Robot actions on the kinematic tree: each checks its preconditions against the scene as it
+//! stands and either refuses with the reason or returns the changes to the tree it makes
+//! (the base moves, a joint turns, a link hangs from a new parent). Nothing here changes the
+//! tree; the simulation system applies the changes to the ECS.
+
+use glam::{Affine3A, Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, link_penetration};
+use crate::kinematics::tree::KinematicTree;
+use crate::sim::navigation::{NavGoal, NavGrid};
+use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
+use crate::sim::scene_view::{SceneView, TOUCH_M, closed_value, open_value};
+
+/// A door turns at most this far (radians), a drawer slides this far (metres), between the
+/// poses where its path is checked.
+const SWEEP_STEP: f32 = 0.05;
+/// A door opened as far as it goes must be at least this fraction open.
+const MIN_OPEN_FRACTION: f32 = 0.6;
+/// The longest drive (metres) a pick or place makes on its own to get within reach.
+const APPROACH_M: f32 = 1.5;
+
+/// One robot action, as task scripts write it (`{"action": "open", "object": "fridge_1"}`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "action", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Action {
+    /// Drive the base to where it reaches the node `to` (in front of it when it has doors).
+    Navigate { to: String },
+    /// Turn or slide a door or drawer (`part`, default the main one) to `value` (default: as
+    /// far open as it goes without hitting anything).
+    Open {
+        object: String,
+        #[serde(default)]
+        part: Option<String>,
+        #[serde(default)]
+        value: Option<f32>,
+    },
+    /// Close a door or drawer (`part`, default the main one).
+    Close {
+        object: String,
+        #[serde(default)]
+        part: Option<String>,
+    },
+    /// Take a movable object into the gripper.
+    Pick { object: String },
+    /// Set the held object down on top of `surface`.
+    PlaceOn { object: String, surface: String },
+    /// Set the held object down inside the open container.
+    PlaceIn { object: String, container: String },
+    /// Slide an object over its support by `distance` metres along `direction` (x, y).
+    Push {
+        object: String,
+        direction: [f32; 2],
+        distance: f32,
+    },
+}
+
+impl Action {
+    /// A short text for traces: `open fridge_1`.
+    pub fn label(&self) -> String {
+        match self {
+            Action::Navigate { to } => format!("navigate {to}"),
+            Action::Open { object, .. } => format!("open {object}"),
+            Action::Close { object, .. } => format!("close {object}"),
+            Action::Pick { object } => format!("pick {object}"),
+            Action::PlaceOn { object, surface } => format!("place {object} on {surface}"),
+            Action::PlaceIn { object, container } => format!("place {object} in {container}"),
+            Action::Push {
+                object, distance, ..
+            } => format!("push {object} {distance} m"),
+        }
+    }
+}
+
+/// One change an action makes to the kinematic tree.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "change", rename_all = "snake_case")]
+pub enum Change {
+    /// The base drove along `path` (its length, metres) to `to`.
+    MoveBase {
+        from: BasePose,
+        to: BasePose,
+        path_length_m: f32,
+        #[serde(skip)]
+        path: Vec<Vec2>,
+    },
+    /// A joint moved.
+    SetJoint { link: String, from: f32, to: f32 },
+    /// A link now hangs from `to` (the same parent for a push), at `parent_from_link`.
+    Attach {
+        link: String,
+        from: String,
+        to: String,
+        #[serde(skip)]
+        parent_from_link: Affine3A,
+    },
+}
+
+/// The robot as the tree holds it: its base pose and what hangs from its gripper.
+#[derive(Clone, Debug)]
+pub struct RobotInTree {
+    pub base: BasePose,
+    pub holding: Option<String>,
+}
+
+/// Reads the robot's pose and load off the tree (`None` when it has no robot).
+pub fn robot_in_tree(tree: &KinematicTree) -> Option<RobotInTree> {
+    let view = SceneView::new(tree);
+    let base = view.link(ROBOT_LINK)?;
+    let gripper = view.link(GRIPPER_LINK)?;
+    let pose = view.poses[base];
+    let holding = tree
+        .links
+        .iter()
+        .find(|l| l.parent == Some(gripper))
+        .map(|l| l.name.clone());
+    Some(RobotInTree {
+        base: BasePose {
+            position: pose.translation.truncate(),
+            yaw: crate::sim::scene_view::yaw_of(&pose),
+        },
+        holding,
+    })
+}
+
+/// Checks `action` against `tree` and returns what it changes, or the precondition that fails.
+pub fn attempt(tree: &KinematicTree, robot: &RobotSpec, action: &Action) -> Result<Vec<Change>, String> {
+    let view = SceneView::new(tree);
+    let Some(state) = robot_in_tree(tree) else {
+        return Err("the scene has no robot".into());
+    };
+    match action {
+        Action::Navigate { to } => navigate(&view, robot, &state, to),
+        Action::Open {
+            object,
+            part,
+            value,
+        } => {
+            let joint = joint_of(&view, object, part.as_deref())?;
+            within_reach(&view, robot, &state, object)?;
+            let target = match value {
+                Some(v) => tree.links[joint].joint.clamp(*v),
+                None => open_value(tree, joint),
+            };
+            let reached = sweep(&view, joint, target);
+            let to = match (reached, value) {
+                (Ok(()), _) => target,
+                (Err((hit, at)), Some(_)) => {
+                    return Err(format!(
+                        "{} would hit {hit} at {at:.2}",
+                        tree.links[joint].name
+                    ));
+                }
+                (Err((hit, at)), None) => {
+                    // As far as it goes, if that is open enough to reach in.
+                    let last = at - SWEEP_STEP * (target - tree.links[joint].value).signum();
+                    if last / target < MIN_OPEN_FRACTION {
+                        return Err(format!(
+                            "{} hits {hit} at {at:.2} before it is open",
+                            tree.links[joint].name
+                        ));
+                    }
+                    last
+                }
+            };
+            Ok(vec![Change::SetJoint {
+                link: tree.links[joint].name.clone(),
+                from: tree.links[joint].value,
+                to,
+            }])
+        }
+        Action::Close { object, part } => {
+            let joint = joint_of(&view, object, part.as_deref())?;
+            within_reach(&view, robot, &state, object)?;
+            let target = closed_value(tree, joint);
+            sweep(&view, joint, target).map_err(|(hit, at)| {
+                format!("{} would hit {hit} at {at:.2}", tree.links[joint].name)
+            })?;
+            Ok(vec![Change::SetJoint {
+                link: tree.links[joint].name.clone(),
+                from: tree.links[joint].value,
+                to: target,
+            }])
+        }
+        Action::Pick { object } => {
+            let (mut changes, state) = approach(&view, robot, &state, object)?;
+            changes.extend(pick(&view, robot, &state, object)?);
+            Ok(changes)
+        }
+        Action::PlaceOn { object, surface } => {
+            let link = held(&view, &state, object)?;
+            let (mut changes, state) = approach(&view, robot, &state, surface)?;
+            if !view.nodes().contains(&surface.as_str()) || view.descends_from(
+                view.node_link(surface).unwrap_or(0),
+                view.link(ROBOT_LINK).unwrap_or(0),
+            ) {
+                return Err(format!("{surface} is not in the scene"));
+            }
+            let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
+            let spot = view
+                .spot_on(link, surface, state.base.position, &[gripper])
+                .filter(|p| p.translation.truncate().distance(state.base.position) <= robot.reach)
+                .ok_or_else(|| format!("no free spot on {surface} within reach"))?;
+            changes.extend(attach(&view, link, surface, spot)?);
+            Ok(changes)
+        }
+        Action::PlaceIn { object, container } => {
+            let link = held(&view, &state, object)?;
+            if !view.is_container(container) {
+                return Err(format!("{container} is not a container"));
+            }
+            if !view.is_open(container) {
+                return Err(format!("{container} is closed"));
+            }
+            let (mut changes, _) = approach(&view, robot, &state, container)?;
+            let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
+            let spot = view
+                .spot_in(link, container, &[gripper])
+                .ok_or_else(|| format!("{object} does not fit in {container}"))?;
+            changes.extend(attach(&view, link, container, spot)?);
+            Ok(changes)
+        }
+        Action::Push {
+            object,
+            direction,
+            distance,
+        } => push(&view, robot, &state, object, Vec2::from(*direction), *distance),
+    }
+}
+
+fn navigate(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, to: &str) -> Result<Vec<Change>, String> {
+    let Some(own) = view.node_link(to) else {
+        return Err(format!("{to} is not in the scene"));
+    };
+    let goal = nav_goal(view, robot, to, own);
+    let grid = nav_grid(view)?;
+    let path = grid
+        .plan(state.base.position, &goal, robot.radius)
+        .ok_or_else(|| format!("no path for the base to {to}"))?;
+    let end = *path.waypoints.last().unwrap_or(&state.base.position);
+    Ok(vec![Change::MoveBase {
+        from: state.base,
+        to: BasePose::facing(end, goal.target),
+        path_length_m: path.length_m,
+        path: path.waypoints,
+    }])
+}
+
+/// The last stretch before picking or placing: when node `id` is out of reach but a short drive
+/// (at most `APPROACH_M`) brings it within reach (into an open fridge, along a table), the
+/// base drives there first. Returns that drive (if any) and the robot after it.
+fn approach(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    id: &str,
+) -> Result<(Vec<Change>, RobotInTree), String> {
+    let Err(out_of_reach) = within_reach(view, robot, state, id) else {
+        return Ok((Vec::new(), state.clone()));
+    };
+    let (lo, hi) = view
+        .node_bounds(id)
+        .ok_or_else(|| format!("{id} is not in the scene"))?;
+    let goal = NavGoal {
+        target: ((lo + hi) / 2.0).truncate(),
+        reach: robot.reach - 0.1,
+        facing: None,
+        keep_out: Vec::new(),
+    };
+    let path = nav_grid(view)?
+        .plan(state.base.position, &goal, robot.radius)
+        .filter(|p| p.length_m <= APPROACH_M)
+        .ok_or(out_of_reach)?;
+    let end = *path.waypoints.last().unwrap_or(&state.base.position);
+    let moved = RobotInTree {
+        base: BasePose::facing(end, goal.target),
+        holding: state.holding.clone(),
+    };
+    within_reach(view, robot, &moved, id)?;
+    Ok((
+        vec![Change::MoveBase {
+            from: state.base,
+            to: moved.base,
+            path_length_m: path.length_m,
+            path: path.waypoints,
+        }],
+        moved,
+    ))
+}
+
+/// The grid of the scene as it stands, without the robot and what it holds.
+fn nav_grid(view: &SceneView) -> Result<NavGrid, String> {
+    let robot = view.link(ROBOT_LINK);
+    let floor = view
+        .nodes()
+        .into_iter()
+        .find(|n| view.class_of(n) == Some("floor"))
+        .and_then(|n| view.node_link(n))
+        .ok_or("the scene has no floor to drive on")?;
+    let obstacles: Vec<_> = (1..view.tree.links.len())
+        .filter(|&l| {
+            l != floor
+                && robot.is_none_or(|r| !view.descends_from(l, r))
+                && !matches!(view.tree.links[l].class.as_deref(), Some("ceiling"))
+        })
+        .map(|l| view.world_mesh(l))
+        .collect();
+    NavGrid::new(&view.world_mesh(floor), &obstacles).ok_or_else(|| "the floor is empty".into())
+}
+
+/// Where the base must go to work on node `id`: in front of its doors, out of their swing,
+/// when it has any; anywhere within reach of its centre otherwise.
+fn nav_goal(view: &SceneView, robot: &RobotSpec, id: &str, own: usize) -> NavGoal {
+    let world_from_node = view.poses[own];
+    let bounds = view.body_mesh_in_node(id).bounds();
+    let Some((lo, hi)) = bounds else {
+        return NavGoal {
+            target: world_from_node.translation.truncate(),
+            reach: robot.reach,
+            facing: None,
+            keep_out: Vec::new(),
+        };
+    };
+    if !view.is_container(id) {
+        // Reach its nearest side: the centre, from up to half its smaller side farther out.
+        let centre = world_from_node.transform_point3((lo + hi) / 2.0).truncate();
+        let half = ((hi - lo).truncate() / 2.0).min_element();
+        return NavGoal {
+            target: centre,
+            reach: robot.reach + half,
+            facing: None,
+            keep_out: Vec::new(),
+        };
+    }
+    let front = world_from_node
+        .transform_point3(Vec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0))
+        .truncate();
+    let facing = world_from_node.transform_vector3(-Vec3::Y).truncate().normalize_or_zero();
+    // Doors on vertical hinges sweep a disc about the hinge as wide as the door.
+    let keep_out = view
+        .moving_parts(id)
+        .into_iter()
+        .filter(|&j| {
+            let l = &view.tree.links[j];
+            l.joint.kind == crate::kinematics::JointKind::Revolute
+                && view.poses[j].transform_vector3(l.joint.axis).z.abs() > 0.9
+        })
+        .filter_map(|j| {
+            let (dlo, dhi) = view.local_bounds(j)?;
+            let hinge = view.poses[j].translation.truncate();
+            let radius = [dlo.x, dhi.x]
+                .iter()
+                .flat_map(|x| [dlo.y, dhi.y].map(|y| Vec2::new(*x, y).length()))
+                .fold(0.0f32, f32::max);
+            Some((hinge, radius + robot.radius))
+        })
+        .collect();
+    NavGoal {
+        target: front,
+        reach: robot.reach,
+        facing: Some(facing),
+        keep_out,
+    }
+}
+
+/// The moving part `part` of `object` (its main one when `None`).
+fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize, String> {
+    if view.node_link(object).is_none() {
+        return Err(format!("{object} is not in the scene"));
+    }
+    let parts = view.moving_parts(object);
+    match part {
+        None => parts
+            .first()
+            .copied()
+            .ok_or_else(|| format!("{object} has no door or drawer")),
+        Some(p) => parts
+            .into_iter()
+            .find(|&j| view.tree.links[j].name == format!("{object}_{p}"))
+            .ok_or_else(|| format!("{object} has no part {p}")),
+    }
+}
+
+/// Whether the base reaches node `id`: its nearest point within the robot's reach and its
+/// lowest point below the highest the gripper reaches.
+fn within_reach(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, id: &str) -> Result<(), String> {
+    let (lo, hi) = view
+        .node_bounds(id)
+        .ok_or_else(|| format!("{id} is not in the scene"))?;
+    let p = state.base.position;
+    let nearest = p.clamp(lo.truncate(), hi.truncate());
+    let d = nearest.distance(p);
+    if d > robot.reach {
+        return Err(format!(
+            "{id} is {d:.2} m from the robot, beyond its reach of {:.2} m",
+            robot.reach
+        ));
+    }
+    if lo.z > robot.max_reach_height {
+        return Err(format!("{id} is above the robot's reach"));
+    }
+    Ok(())
+}
+
+/// Sweeps joint `joint` from its value to `target`; the first thing the moving part (and what
+/// it carries) hits, with the value, or `Ok`.
+fn sweep(view: &SceneView, joint: usize, target: f32) -> Result<(), (String, f32)> {
+    let tree = view.tree;
+    let from = tree.links[joint].value;
+    let steps = ((target - from).abs() / SWEEP_STEP).ceil().max(1.0) as usize;
+    let moving: Vec<usize> = (0..tree.links.len())
+        .filter(|&i| view.descends_from(i, joint))
+        .collect();
+    let solids: Vec<LinkSolids> = (0..tree.links.len())
+        .map(|i| LinkSolids::of(tree, i))
+        .collect();
+    let still: Vec<usize> = (0..tree.links.len())
+        .filter(|i| !moving.contains(i) && !solids[*i].is_empty())
+        .collect();
+    // What already touches at the start (a door against its own frame) is contact.
+    let mut at_start: Vec<f32> = Vec::with_capacity(moving.len() * still.len());
+    for &m in &moving {
+        for &s in &still {
+            at_start.push(link_penetration(
+                &solids[m],
+                &view.poses[m],
+                &solids[s],
+                &view.poses[s],
+            ));
+        }
+    }
+    let mut posed = tree.clone();
+    for k in 1..=steps {
+        let value = from + (target - from) * k as f32 / steps as f32;
+        posed.links[joint].value = value;
+        let poses = posed.world_from_links();
+        for (mi, &m) in moving.iter().enumerate() {
+            for (si, &s) in still.iter().enumerate() {
+                let depth = link_penetration(&solids[m], &poses[m], &solids[s], &poses[s]);
+                let before = at_start[mi * still.len() + si];
+                if depth > SWEEP_TOLERANCE_M.max(before + TOUCH_M) {
+                    return Err((tree.links[s].name.clone(), value));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The link of `object` if the robot holds it.
+fn held(view: &SceneView, state: &RobotInTree, object: &str) -> Result<usize, String> {
+    if state.holding.as_deref() != Some(object) {
+        return Err(match &state.holding {
+            Some(h) => format!("the robot holds {h}, not {object}"),
+            None => format!("the robot does not hold {object}"),
+        });
+    }
+    view.node_link(object)
+        .ok_or_else(|| format!("{object} is not in the scene"))
+}
+
+fn attach(view: &SceneView, link: usize, to: &str, world_from_link: Affine3A) -> Result<Vec<Change>, String> {
+    let parent = view
+        .node_link(to)
+        .ok_or_else(|| format!("{to} is not in the scene"))?;
+    let from = view.tree.links[link]
+        .parent
+        .map_or(String::new(), |p| view.tree.links[p].name.clone());
+    Ok(vec![Change::Attach {
+        link: view.tree.links[link].name.clone(),
+        from,
+        to: view.tree.links[parent].name.clone(),
+        parent_from_link: view.poses[parent].inverse() * world_from_link,
+    }])
+}
+
+fn pick(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, object: &str) -> Result<Vec<Change>, String> {
+    if let Some(h) = &state.holding {
+        return Err(format!("the robot already holds {h}"));
+    }
+    let Some(link) = view.node_link(object) else {
+        return Err(format!("{object} is not in the scene"));
+    };
+    if !view.is_movable(object) {
+        return Err(format!("{object} is not movable"));
+    }
+    if let Some(on_top) = view.nodes().into_iter().find(|n| view.support_of(n) == Some(object)) {
+        return Err(format!("{on_top} stands on {object}"));
+    }
+    if let Some(container) = view.support_of(object)
+        && view.is_inside(object, container)
+        && !view.is_open(container)
+    {
+        return Err(format!("{object} is inside {container}, which is closed"));
+    }
+    within_reach(view, robot, state, object)?;
+    let (lo, hi) = view
+        .local_bounds(link)
+        .ok_or_else(|| format!("{object} has no geometry"))?;
+    // Hung by its top centre, far enough out that it clears the base.
+    let out = ((hi.x - lo.x) / 2.0 - 0.08).max(0.0);
+    let top_centre = Vec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, hi.z);
+    let gripper_from_link = Affine3A::from_translation(Vec3::new(out, 0.0, 0.0) - top_centre);
+    let from = view
+        .support_of(object)
+        .map_or(String::new(), String::from);
+    Ok(vec![Change::Attach {
+        link: object.to_string(),
+        from,
+        to: GRIPPER_LINK.into(),
+        parent_from_link: gripper_from_link,
+    }])
+}
+
+fn push(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    object: &str,
+    direction: Vec2,
+    distance: f32,
+) -> Result<Vec<Change>, String> {
+    let Some(link) = view.node_link(object) else {
+        return Err(format!("{object} is not in the scene"));
+    };
+    if !view.is_movable(object) {
+        return Err(format!("{object} is not movable"));
+    }
+    if state.holding.as_deref() == Some(object) {
+        return Err(format!("the robot holds {object}"));
+    }
+    let support = view
+        .support_of(object)
+        .ok_or_else(|| format!("{object} stands on nothing"))?
+        .to_string();
+    within_reach(view, robot, state, object)?;
+    let d = direction.normalize_or_zero();
+    if d == Vec2::ZERO || !distance.is_finite() || distance <= 0.0 {
+        return Err("a push needs a direction and a positive distance".into());
+    }
+    let ignore = view.body_links(&support);
+    let steps = (distance / 0.02).ceil().max(1.0) as usize;
+    let mut pose = view.poses[link];
+    for k in 1..=steps {
+        let shift = (d * distance * k as f32 / steps as f32).extend(0.0);
+        pose = Affine3A::from_translation(shift) * view.poses[link];
+        if view.overlap_at(link, pose, &ignore) > TOUCH_M {
+            return Err(format!("{object} would run into something after {:.2} m", distance * (k - 1) as f32 / steps as f32));
+        }
+    }
+    // It must still stand on its support.
+    let own = view.node_link(&support).unwrap_or(0);
+    let (lo, hi) = view.local_bounds(link).unwrap_or_default();
+    let bottom = pose.transform_point3(Vec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, lo.z));
+    let in_support = view.poses[own].inverse().transform_point3(bottom);
+    let top = crate::sim::scene_view::vertical_hits(&view.body_mesh_in_node(&support), in_support.truncate())
+        .into_iter()
+        .fold(f32::MIN, f32::max);
+    if (top - in_support.z).abs() > 0.02 {
+        return Err(format!("{object} would slide off {support}"));
+    }
+    attach(view, link, &support, pose)
+}

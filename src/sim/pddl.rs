@@ -1,0 +1,75 @@
+//! The task domain and a problem as PDDL (STRIPS with static predicates), the same operators the
+//! planner grounds, so an outside planner (pyperplan in the tests) can check our plans.
+
+use crate::sim::symbolic::{Fact, START_PLACE, SymbolicScene};
+
+/// The domain: navigate, open, close, pick-on, pick-in, place-on, place-in.
+pub fn domain() -> String {
+    r#"(define (domain iscene)
+  (:requirements :strips)
+  (:predicates
+    (robot-at ?p) (holding ?o) (hand-empty) (on ?o ?s) (inside ?o ?c)
+    (is-open ?c) (is-closed ?c) (clear ?o)
+    (place ?p) (surface ?s) (container ?c) (movable ?o) (picked-from ?o ?s ?p))
+  (:action navigate
+    :parameters (?from ?to)
+    :precondition (and (robot-at ?from) (place ?to))
+    :effect (and (robot-at ?to) (not (robot-at ?from))))
+  (:action open
+    :parameters (?c)
+    :precondition (and (container ?c) (robot-at ?c) (is-closed ?c))
+    :effect (and (is-open ?c) (not (is-closed ?c))))
+  (:action close
+    :parameters (?c)
+    :precondition (and (container ?c) (robot-at ?c) (is-open ?c))
+    :effect (and (is-closed ?c) (not (is-open ?c))))
+  (:action pick-on
+    :parameters (?o ?s ?p)
+    :precondition (and (picked-from ?o ?s ?p) (robot-at ?p) (on ?o ?s) (hand-empty) (clear ?o))
+    :effect (and (holding ?o) (clear ?s) (not (on ?o ?s)) (not (hand-empty))))
+  (:action pick-in
+    :parameters (?o ?c)
+    :precondition (and (movable ?o) (container ?c) (robot-at ?c) (inside ?o ?c) (is-open ?c)
+                       (hand-empty) (clear ?o))
+    :effect (and (holding ?o) (not (inside ?o ?c)) (not (hand-empty))))
+  (:action place-on
+    :parameters (?o ?s)
+    :precondition (and (movable ?o) (surface ?s) (robot-at ?s) (holding ?o))
+    :effect (and (on ?o ?s) (hand-empty) (not (holding ?o))))
+  (:action place-in
+    :parameters (?o ?c)
+    :precondition (and (movable ?o) (container ?c) (robot-at ?c) (holding ?o) (is-open ?c))
+    :effect (and (inside ?o ?c) (hand-empty) (not (holding ?o)))))
+"#
+    .to_string()
+}
+
+/// The problem of reaching `goal` from the scene's facts.
+pub fn problem(name: &str, scene: &SymbolicScene, goal: &[Fact]) -> String {
+    let mut objects: std::collections::BTreeSet<&str> = [START_PLACE].into_iter().collect();
+    objects.extend(scene.movables.iter().map(String::as_str));
+    objects.extend(scene.surfaces.iter().map(String::as_str));
+    objects.extend(scene.places.iter().map(String::as_str));
+    for (o, s) in scene.pick_places.keys() {
+        objects.insert(o);
+        objects.insert(s);
+    }
+    let mut init: Vec<String> = scene.facts.iter().map(Fact::pddl).collect();
+    init.extend(scene.places.iter().map(|p| format!("(place {p})")));
+    init.extend(scene.surfaces.iter().map(|s| format!("(surface {s})")));
+    init.extend(scene.containers.iter().map(|c| format!("(container {c})")));
+    init.extend(scene.movables.iter().map(|o| format!("(movable {o})")));
+    init.extend(
+        scene
+            .pick_places
+            .iter()
+            .map(|((o, s), p)| format!("(picked-from {o} {s} {p})")),
+    );
+    let goal: Vec<String> = goal.iter().map(Fact::pddl).collect();
+    format!(
+        "(define (problem {name})\n  (:domain iscene)\n  (:objects {})\n  (:init\n    {})\n  (:goal (and {})))\n",
+        objects.into_iter().collect::<Vec<_>>().join(" "),
+        init.join("\n    "),
+        goal.join(" ")
+    )
+}

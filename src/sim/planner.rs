@@ -1,0 +1,361 @@
+//! The task planner: STRIPS operators for the robot's actions, grounded on the symbolic scene,
+//! and A* with the admissible h_max heuristic, so the plan it returns is a shortest one (the
+//! search is complete: it answers `None` only when no plan exists).
+//!
+//! The operators are exactly those `pddl` writes, so a PDDL planner finds plans of the same
+//! length on the exported domain and problem.
+
+use std::collections::{BinaryHeap, HashMap};
+
+use crate::sim::actions::Action;
+use crate::sim::symbolic::{Fact, START_PLACE, SymbolicScene};
+
+/// One ground operator.
+#[derive(Clone, Debug)]
+pub struct GroundOperator {
+    /// The PDDL name with its arguments: `(pick-in box_1 fridge_1)`.
+    pub name: String,
+    /// The robot action it stands for.
+    pub action: Action,
+    pub pre: Vec<usize>,
+    pub add: Vec<usize>,
+    pub del: Vec<usize>,
+}
+
+/// The ground problem: the fact table, the operators, the start and the goal.
+pub struct GroundProblem {
+    pub facts: Vec<Fact>,
+    pub operators: Vec<GroundOperator>,
+    pub init: Vec<usize>,
+    pub goal: Vec<usize>,
+}
+
+/// A plan: the operators' names and the actions they stand for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub steps: Vec<(String, Action)>,
+    /// States the search expanded.
+    pub expanded: usize,
+}
+
+struct FactTable {
+    facts: Vec<Fact>,
+    index: HashMap<Fact, usize>,
+}
+
+impl FactTable {
+    fn id(&mut self, f: Fact) -> usize {
+        if let Some(&i) = self.index.get(&f) {
+            return i;
+        }
+        self.facts.push(f.clone());
+        self.index.insert(f, self.facts.len() - 1);
+        self.facts.len() - 1
+    }
+}
+
+/// Grounds the operators of `scene` (the domain `pddl::domain` writes) for `goal`.
+pub fn ground(scene: &SymbolicScene, goal: &[Fact]) -> GroundProblem {
+    let mut t = FactTable {
+        facts: Vec::new(),
+        index: HashMap::new(),
+    };
+    let mut ops = Vec::new();
+    let mut op = |t: &mut FactTable, name: String, action: Action, pre: Vec<Fact>, add: Vec<Fact>, del: Vec<Fact>| {
+        ops.push(GroundOperator {
+            name,
+            action,
+            pre: pre.into_iter().map(|f| t.id(f)).collect(),
+            add: add.into_iter().map(|f| t.id(f)).collect(),
+            del: del.into_iter().map(|f| t.id(f)).collect(),
+        });
+    };
+    let at = |p: &str| Fact::RobotAt(p.to_string());
+    let mut origins: Vec<&str> = vec![START_PLACE];
+    origins.extend(scene.places.iter().map(String::as_str));
+    for from in &origins {
+        for to in &scene.places {
+            if from == to {
+                continue;
+            }
+            op(
+                &mut t,
+                format!("(navigate {from} {to})"),
+                Action::Navigate { to: to.clone() },
+                vec![at(from)],
+                vec![at(to)],
+                vec![at(from)],
+            );
+        }
+    }
+    for c in &scene.containers {
+        let (open, closed) = (Fact::IsOpen(c.clone()), Fact::IsClosed(c.clone()));
+        op(
+            &mut t,
+            format!("(open {c})"),
+            Action::Open {
+                object: c.clone(),
+                part: None,
+                value: None,
+            },
+            vec![at(c), closed.clone()],
+            vec![open.clone()],
+            vec![closed.clone()],
+        );
+        op(
+            &mut t,
+            format!("(close {c})"),
+            Action::Close {
+                object: c.clone(),
+                part: None,
+            },
+            vec![at(c), open.clone()],
+            vec![closed],
+            vec![open],
+        );
+    }
+    for ((o, s), p) in &scene.pick_places {
+        let (on, clear_o, clear_s) = (
+            Fact::On(o.clone(), s.clone()),
+            Fact::Clear(o.clone()),
+            Fact::Clear(s.clone()),
+        );
+        op(
+            &mut t,
+            format!("(pick-on {o} {s} {p})"),
+            Action::Pick { object: o.clone() },
+            vec![at(p), on.clone(), Fact::HandEmpty, clear_o],
+            vec![Fact::Holding(o.clone()), clear_s],
+            vec![on, Fact::HandEmpty],
+        );
+    }
+    for o in &scene.movables {
+        for s in &scene.surfaces {
+            let on = Fact::On(o.clone(), s.clone());
+            op(
+                &mut t,
+                format!("(place-on {o} {s})"),
+                Action::PlaceOn {
+                    object: o.clone(),
+                    surface: s.clone(),
+                },
+                vec![at(s), Fact::Holding(o.clone())],
+                vec![on, Fact::HandEmpty],
+                vec![Fact::Holding(o.clone())],
+            );
+        }
+        for c in &scene.containers {
+            let inside = Fact::Inside(o.clone(), c.clone());
+            let open = Fact::IsOpen(c.clone());
+            op(
+                &mut t,
+                format!("(pick-in {o} {c})"),
+                Action::Pick { object: o.clone() },
+                vec![
+                    at(c),
+                    inside.clone(),
+                    open.clone(),
+                    Fact::HandEmpty,
+                    Fact::Clear(o.clone()),
+                ],
+                vec![Fact::Holding(o.clone())],
+                vec![inside.clone(), Fact::HandEmpty],
+            );
+            op(
+                &mut t,
+                format!("(place-in {o} {c})"),
+                Action::PlaceIn {
+                    object: o.clone(),
+                    container: c.clone(),
+                },
+                vec![at(c), Fact::Holding(o.clone()), open],
+                vec![inside, Fact::HandEmpty],
+                vec![Fact::Holding(o.clone())],
+            );
+        }
+    }
+    let init: Vec<usize> = scene.facts.iter().map(|f| t.id(f.clone())).collect();
+    let goal: Vec<usize> = goal.iter().map(|f| t.id(f.clone())).collect();
+    GroundProblem {
+        facts: t.facts,
+        operators: ops,
+        init,
+        goal,
+    }
+}
+
+/// A state: one bit per fact.
+type State = Vec<u64>;
+
+fn has(s: &State, f: usize) -> bool {
+    s[f / 64] >> (f % 64) & 1 == 1
+}
+
+fn set(s: &mut State, f: usize, on: bool) {
+    if on {
+        s[f / 64] |= 1 << (f % 64);
+    } else {
+        s[f / 64] &= !(1 << (f % 64));
+    }
+}
+
+/// h_max: the costliest goal fact, each fact costing the cheapest way to make it with every
+/// precondition at its own cost (admissible).
+fn h_max(p: &GroundProblem, s: &State) -> Option<u32> {
+    let mut cost: Vec<u32> = (0..p.facts.len())
+        .map(|f| if has(s, f) { 0 } else { u32::MAX })
+        .collect();
+    loop {
+        let mut changed = false;
+        for op in &p.operators {
+            let c = op.pre.iter().map(|&f| cost[f]).max().unwrap_or(0);
+            if c == u32::MAX {
+                continue;
+            }
+            for &f in &op.add {
+                if c + 1 < cost[f] {
+                    cost[f] = c + 1;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    let h = p.goal.iter().map(|&f| cost[f]).max().unwrap_or(0);
+    (h != u32::MAX).then_some(h)
+}
+
+/// A shortest plan for `problem`, or `None` when the goal cannot be reached; `max_expanded`
+/// bounds the search (`None` past it too).
+pub fn plan(problem: &GroundProblem, max_expanded: usize) -> Option<Plan> {
+    let words = problem.facts.len().div_ceil(64).max(1);
+    let mut start = vec![0u64; words];
+    for &f in &problem.init {
+        set(&mut start, f, true);
+    }
+    let is_goal = |s: &State| problem.goal.iter().all(|&f| has(s, f));
+    // Open entries (f, g, state id), smallest f first; each state keeps its parent and the
+    // operator that made it, for the plan.
+    let mut states: Vec<(State, Option<(usize, usize)>)> = vec![(start.clone(), None)];
+    let mut best_g: HashMap<State, u32> = HashMap::from([(start.clone(), 0)]);
+    let mut open = BinaryHeap::new();
+    let h0 = h_max(problem, &start)?;
+    open.push(std::cmp::Reverse((h0, 0u32, 0usize)));
+    let mut expanded = 0;
+    while let Some(std::cmp::Reverse((_, g, id))) = open.pop() {
+        let state = states[id].0.clone();
+        // A stale entry: the state was reached more cheaply since.
+        if best_g.get(&state).is_some_and(|&b| b < g) {
+            continue;
+        }
+        if is_goal(&state) {
+            let mut steps = Vec::new();
+            let mut at = id;
+            while let Some((parent, op)) = states[at].1 {
+                let o = &problem.operators[op];
+                steps.push((o.name.clone(), o.action.clone()));
+                at = parent;
+            }
+            steps.reverse();
+            return Some(Plan { steps, expanded });
+        }
+        expanded += 1;
+        if expanded > max_expanded {
+            return None;
+        }
+        for (k, op) in problem.operators.iter().enumerate() {
+            if !op.pre.iter().all(|&f| has(&state, f)) {
+                continue;
+            }
+            let mut next = state.clone();
+            for &f in &op.del {
+                set(&mut next, f, false);
+            }
+            for &f in &op.add {
+                set(&mut next, f, true);
+            }
+            let g2 = g + 1;
+            if best_g.get(&next).is_some_and(|&b| b <= g2) {
+                continue;
+            }
+            let Some(h) = h_max(problem, &next) else {
+                continue;
+            };
+            best_g.insert(next.clone(), g2);
+            states.push((next, Some((id, k))));
+            open.push(std::cmp::Reverse((g2 + h, g2, states.len() - 1)));
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fridge with a box inside and a microwave, both closed; a table with a cup.
+    fn kitchen() -> SymbolicScene {
+        let s = |x: &str| x.to_string();
+        let mut scene = SymbolicScene {
+            movables: vec![s("box_1"), s("cup_1")],
+            surfaces: vec![s("fridge_1"), s("microwave_1"), s("table_1")],
+            containers: vec![s("fridge_1"), s("microwave_1")],
+            places: vec![s("fridge_1"), s("microwave_1"), s("table_1")],
+            ..Default::default()
+        };
+        for o in ["box_1", "cup_1"] {
+            for sup in ["fridge_1", "microwave_1", "table_1"] {
+                scene.pick_places.insert((s(o), s(sup)), s(sup));
+            }
+        }
+        scene.facts = [
+            Fact::RobotAt(s(START_PLACE)),
+            Fact::HandEmpty,
+            Fact::Inside(s("box_1"), s("fridge_1")),
+            Fact::On(s("cup_1"), s("table_1")),
+            Fact::IsClosed(s("fridge_1")),
+            Fact::IsClosed(s("microwave_1")),
+            Fact::Clear(s("box_1")),
+            Fact::Clear(s("cup_1")),
+        ]
+        .into_iter()
+        .collect();
+        scene
+    }
+
+    #[test]
+    fn the_fridge_to_microwave_task_takes_eight_steps() {
+        let scene = kitchen();
+        let goal = [
+            Fact::Inside("box_1".into(), "microwave_1".into()),
+            Fact::IsClosed("microwave_1".into()),
+            Fact::IsClosed("fridge_1".into()),
+        ];
+        let p = plan(&ground(&scene, &goal), 100_000).expect("plan");
+        let names: Vec<&str> = p.steps.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names.len(), 8, "{names:?}");
+        assert_eq!(names[0], "(navigate start fridge_1)");
+        assert!(names.contains(&"(pick-in box_1 fridge_1)"), "{names:?}");
+        assert!(names.contains(&"(place-in box_1 microwave_1)"), "{names:?}");
+    }
+
+    #[test]
+    fn a_goal_no_action_makes_has_no_plan() {
+        let scene = kitchen();
+        // Holding two things at once.
+        let goal = [
+            Fact::Holding("box_1".into()),
+            Fact::Holding("cup_1".into()),
+        ];
+        assert!(plan(&ground(&scene, &goal), 100_000).is_none());
+    }
+
+    #[test]
+    fn a_goal_that_already_holds_needs_no_step() {
+        let scene = kitchen();
+        let p = plan(&ground(&scene, &[Fact::HandEmpty]), 10).expect("plan");
+        assert!(p.steps.is_empty());
+    }
+}

@@ -1,0 +1,82 @@
+//! The simulated robot: a round mobile base with a gripper in front of it, described by the
+//! figures the actions check (footprint, reach, gripper height) and the meshes its links get.
+
+use glam::{Affine3A, Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::TriMesh;
+
+/// The robot's base link name in the kinematic tree and the exports.
+pub const ROBOT_LINK: &str = "robot";
+/// The gripper link (a child of the base); a held object hangs from it.
+pub const GRIPPER_LINK: &str = "robot_gripper";
+
+/// What the actions need to know about the robot; the defaults are a Fetch-sized base.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RobotSpec {
+    /// Radius of the round base's footprint, metres (navigation keeps this far from obstacles).
+    pub radius: f32,
+    /// Height of the base column, metres.
+    pub height: f32,
+    /// Horizontal distance from the base's centre the gripper reaches, metres.
+    pub reach: f32,
+    /// The highest point the gripper reaches, metres above the floor.
+    pub max_reach_height: f32,
+}
+
+impl Default for RobotSpec {
+    fn default() -> Self {
+        Self {
+            radius: 0.25,
+            height: 1.1,
+            reach: 1.0,
+            max_reach_height: 1.8,
+        }
+    }
+}
+
+/// Where the robot stands: the base centre on the floor and its heading about +z.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BasePose {
+    pub position: Vec2,
+    /// Radians from +x.
+    pub yaw: f32,
+}
+
+impl BasePose {
+    pub fn world_from_base(&self) -> Affine3A {
+        Affine3A::from_rotation_translation(
+            glam::Quat::from_rotation_z(self.yaw),
+            self.position.extend(0.0),
+        )
+    }
+
+    /// Facing `target` from `position`.
+    pub fn facing(position: Vec2, target: Vec2) -> Self {
+        let d = target - position;
+        Self {
+            position,
+            yaw: d.y.atan2(d.x),
+        }
+    }
+}
+
+impl RobotSpec {
+    /// The base's mesh in its frame: a column standing on the floor, a centimetre narrower
+    /// than the footprint so that touching clearance is not contact.
+    pub fn base_mesh(&self) -> TriMesh {
+        TriMesh::cylinder(Vec3::ZERO, self.radius - 0.01, self.height, 16)
+    }
+
+    /// The gripper's frame in the base's: at the front of the base, on top of the column. A
+    /// held object hangs below it.
+    pub fn base_from_gripper(&self) -> Affine3A {
+        Affine3A::from_translation(Vec3::new(self.radius + 0.1, 0.0, self.height + 0.1))
+    }
+
+    /// The gripper's mesh in its frame: a small block the held object hangs from.
+    pub fn gripper_mesh(&self) -> TriMesh {
+        TriMesh::cuboid(Vec3::new(-0.04, -0.04, 0.0), Vec3::new(0.04, 0.04, 0.04))
+    }
+}

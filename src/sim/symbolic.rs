@@ -1,0 +1,182 @@
+//! The symbolic state the task planner works on, read off the scene: where the robot is, what
+//! it holds, what stands on or inside what, which containers are open; and goals parsed from
+//! text such as `cup_1 in microwave_1` or `microwave_1 closed`.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use serde::Serialize;
+
+use crate::sim::scene_view::SceneView;
+
+/// The robot's place before its first navigation.
+pub const START_PLACE: &str = "start";
+
+/// One ground fact.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub enum Fact {
+    /// The robot stands at place `0` (a node it navigated to, or `start`).
+    RobotAt(String),
+    Holding(String),
+    HandEmpty,
+    /// Object `0` stands on `1`.
+    On(String, String),
+    /// Object `0` is inside container `1`.
+    Inside(String, String),
+    IsOpen(String),
+    IsClosed(String),
+    /// Nothing stands on `0`.
+    Clear(String),
+}
+
+impl Fact {
+    /// The fact as a PDDL atom: `(inside box_1 microwave_1)`.
+    pub fn pddl(&self) -> String {
+        match self {
+            Fact::RobotAt(p) => format!("(robot-at {p})"),
+            Fact::Holding(o) => format!("(holding {o})"),
+            Fact::HandEmpty => "(hand-empty)".into(),
+            Fact::On(o, s) => format!("(on {o} {s})"),
+            Fact::Inside(o, c) => format!("(inside {o} {c})"),
+            Fact::IsOpen(c) => format!("(is-open {c})"),
+            Fact::IsClosed(c) => format!("(is-closed {c})"),
+            Fact::Clear(o) => format!("(clear {o})"),
+        }
+    }
+}
+
+/// The scene's symbolic description: the objects by role, the static place each support's
+/// objects are picked from, and the facts that hold now.
+#[derive(Clone, Debug, Default)]
+pub struct SymbolicScene {
+    /// Movable objects (cups, boxes, chairs).
+    pub movables: Vec<String>,
+    /// Fixed non-layout nodes objects can be set down on.
+    pub surfaces: Vec<String>,
+    /// Nodes with doors or drawers.
+    pub containers: Vec<String>,
+    /// Places the robot navigates to (every node it works at).
+    pub places: Vec<String>,
+    /// `(object, support)` to the place the robot picks it there from.
+    pub pick_places: BTreeMap<(String, String), String>,
+    pub facts: BTreeSet<Fact>,
+}
+
+/// Reads the symbolic scene from `view`; `robot_at` is the robot's place (`start` before it
+/// moved).
+pub fn symbolic_scene(view: &SceneView, robot_at: &str, holding: Option<&str>) -> SymbolicScene {
+    let mut s = SymbolicScene::default();
+    let nodes = view.nodes();
+    for n in &nodes {
+        if view.is_layout(n) {
+            continue;
+        }
+        if view.is_movable(n) {
+            s.movables.push(n.to_string());
+        } else {
+            s.surfaces.push(n.to_string());
+            if view.is_container(n) {
+                s.containers.push(n.to_string());
+            }
+        }
+    }
+    // Where the robot stands to pick an object off its support: the support itself when it is
+    // fixed furniture, the object itself when it stands on the floor (a chair), and for an
+    // object on a movable one (a magazine on a chair) wherever that one is picked from.
+    let place_of = |object: &str, support: &str| -> String {
+        let mut o = object.to_string();
+        let mut sup = support.to_string();
+        loop {
+            if view.is_layout(&sup) {
+                return o;
+            }
+            if !view.is_movable(&sup) {
+                return sup;
+            }
+            let Some(next) = view.support_of(&sup) else {
+                return sup;
+            };
+            o = sup;
+            sup = next.to_string();
+        }
+    };
+    for o in &s.movables {
+        // Any surface it may be set on, and where it stands now.
+        let mut supports: Vec<String> = s.surfaces.clone();
+        if let Some(now) = view.support_of(o)
+            && !supports.iter().any(|x| x == now)
+        {
+            supports.push(now.to_string());
+        }
+        for sup in supports {
+            let place = place_of(o, &sup);
+            s.pick_places.insert((o.clone(), sup), place);
+        }
+    }
+    let mut places: BTreeSet<String> = s.surfaces.iter().cloned().collect();
+    places.extend(s.pick_places.values().cloned());
+    s.places = places.into_iter().collect();
+
+    s.facts.insert(Fact::RobotAt(robot_at.to_string()));
+    match holding {
+        Some(h) => {
+            s.facts.insert(Fact::Holding(h.to_string()));
+        }
+        None => {
+            s.facts.insert(Fact::HandEmpty);
+        }
+    }
+    for o in &s.movables {
+        if holding == Some(o.as_str()) {
+            continue;
+        }
+        if let Some(sup) = view.support_of(o) {
+            if view.is_inside(o, sup) {
+                s.facts.insert(Fact::Inside(o.clone(), sup.to_string()));
+            } else {
+                s.facts.insert(Fact::On(o.clone(), sup.to_string()));
+            }
+        }
+    }
+    for n in nodes.iter().filter(|n| !view.is_layout(n)) {
+        if !nodes.iter().any(|m| view.support_of(m) == Some(n)) {
+            s.facts.insert(Fact::Clear(n.to_string()));
+        }
+    }
+    for c in &s.containers {
+        s.facts.insert(if view.is_open(c) {
+            Fact::IsOpen(c.clone())
+        } else {
+            Fact::IsClosed(c.clone())
+        });
+    }
+    s
+}
+
+/// Parses one goal: `A on B`, `A in B`, `A open`, `A closed`, `holding A`, `robot at P`.
+pub fn parse_goal(text: &str, scene: &SymbolicScene) -> Result<Fact, String> {
+    let words: Vec<&str> = text.split_whitespace().collect();
+    let known = |id: &str, among: &[String], role: &str| {
+        if among.iter().any(|x| x == id) {
+            Ok(id.to_string())
+        } else {
+            Err(format!("goal {text:?}: {id} is not a {role} of the scene"))
+        }
+    };
+    match words.as_slice() {
+        [o, "on", s] => Ok(Fact::On(
+            known(o, &scene.movables, "movable object")?,
+            known(s, &scene.surfaces, "surface")?,
+        )),
+        [o, "in", c] => Ok(Fact::Inside(
+            known(o, &scene.movables, "movable object")?,
+            known(c, &scene.containers, "container")?,
+        )),
+        [c, "open"] => Ok(Fact::IsOpen(known(c, &scene.containers, "container")?)),
+        [c, "closed"] => Ok(Fact::IsClosed(known(c, &scene.containers, "container")?)),
+        ["holding", o] => Ok(Fact::Holding(known(o, &scene.movables, "movable object")?)),
+        ["robot", "at", p] => Ok(Fact::RobotAt(known(p, &scene.places, "place")?)),
+        _ => Err(format!(
+            "goal {text:?} is not one of: A on B, A in B, A open, A closed, holding A, robot at P"
+        )),
+    }
+}

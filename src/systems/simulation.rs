@@ -1,0 +1,271 @@
+//! The live simulation: a robot entity in the scene, robot actions as ECS messages, and one
+//! system that performs them. Each action is checked against the kinematic tree as it stands
+//! (`sim::actions`), its changes are applied to the transform hierarchy (pick re-parents to the
+//! gripper, place to the new support, open sets the joint value), and the rest test confirms
+//! the world still stands. A refused action changes nothing.
+
+use std::time::Instant;
+
+use bevy::prelude::*;
+use serde::Serialize;
+
+use crate::components::{Joint, LinkBody, Panoptic};
+use crate::kinematics::JointSpec;
+use crate::kinematics::link::LinkGeometry;
+use crate::kinematics::rest_test::{ObjectVerdict, Verdict};
+use crate::kinematics::tree::KinematicTree;
+use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
+use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
+use crate::systems::kinematic_tree::read_kinematic_tree;
+use crate::systems::physics_validation::rest_physics;
+use crate::systems::scene_graph::{SceneRoot, transform_of};
+
+/// The robot's base entity: its figures and the place it last navigated to (for the planner).
+#[derive(Component, Clone, Debug)]
+pub struct Robot {
+    pub spec: RobotSpec,
+    pub place: String,
+}
+
+/// The robot's gripper entity (a child of the base); a held object is its child.
+#[derive(Component, Clone, Copy, Debug)]
+pub struct Gripper;
+
+/// Asks the robot to perform an action.
+#[derive(Message, Clone, Debug)]
+pub struct ActionRequest(pub Action);
+
+/// The physics check after an action.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepPhysics {
+    pub stable_fraction: f32,
+    /// Objects judged unstable or penetrating, with the reason.
+    pub not_stable: Vec<ObjectVerdict>,
+}
+
+/// What one action did.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepRecord {
+    pub step: usize,
+    pub action: Action,
+    pub success: bool,
+    /// Why the action was refused (nothing changed).
+    pub failed_precondition: Option<String>,
+    /// The kinematic-tree changes it made.
+    pub changes: Vec<Change>,
+    /// The rest test after it (absent when refused).
+    pub physics: Option<StepPhysics>,
+    /// Wall-clock milliseconds for the action and its physics check.
+    pub wall_ms: f64,
+}
+
+/// Every action performed so far, in order.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct SimulationTrace(pub Vec<StepRecord>);
+
+/// Spawns the robot under the scene root at `pose`: a base link on a fixed joint (the mobile
+/// base is placed, not simulated) and a gripper link fixed on it.
+pub fn spawn_robot(world: &mut World, spec: RobotSpec, pose: BasePose) -> Result<Entity, String> {
+    let root = world
+        .query_filtered::<Entity, With<SceneRoot>>()
+        .iter(world)
+        .next()
+        .ok_or("no scene root to put the robot in")?;
+    let fixed = Joint {
+        spec: JointSpec::FIXED,
+        value: 0.0,
+    };
+    let base = world
+        .spawn((
+            Name::new(ROBOT_LINK),
+            Robot {
+                spec,
+                place: crate::sim::symbolic::START_PLACE.into(),
+            },
+            LinkBody(std::sync::Arc::new(LinkGeometry::new(
+                spec.base_mesh(),
+                [0.2, 0.3, 0.6],
+                ROBOT_LINK,
+            ))),
+            fixed,
+            transform_of(pose.world_from_base()),
+            ChildOf(root),
+        ))
+        .id();
+    world.spawn((
+        Name::new(GRIPPER_LINK),
+        Gripper,
+        LinkBody(std::sync::Arc::new(LinkGeometry::new(
+            spec.gripper_mesh(),
+            [0.1, 0.1, 0.1],
+            ROBOT_LINK,
+        ))),
+        fixed,
+        transform_of(spec.base_from_gripper()),
+        ChildOf(base),
+    ));
+    Ok(base)
+}
+
+/// Performs `action` on the world: checks it, applies its changes, checks the physics; records
+/// and returns what happened.
+pub fn perform(world: &mut World, action: &Action) -> StepRecord {
+    let started = Instant::now();
+    let step = world.get_resource::<SimulationTrace>().map_or(0, |t| t.0.len());
+    let outcome = read_kinematic_tree(world).and_then(|tree| {
+        let spec = robot_spec(world).ok_or("the scene has no robot")?;
+        let changes = attempt(&tree, &spec, action)?;
+        Ok(changes)
+    });
+    let record = match outcome {
+        Err(reason) => StepRecord {
+            step,
+            action: action.clone(),
+            success: false,
+            failed_precondition: Some(reason),
+            changes: Vec::new(),
+            physics: None,
+            wall_ms: started.elapsed().as_secs_f64() * 1e3,
+        },
+        Ok(changes) => {
+            for change in &changes {
+                apply(world, change);
+            }
+            if let Action::Navigate { to } = action {
+                for mut robot in world.query::<&mut Robot>().iter_mut(world) {
+                    robot.place = to.clone();
+                }
+            }
+            let physics = read_kinematic_tree(world).ok().map(|tree| check(&tree));
+            StepRecord {
+                step,
+                action: action.clone(),
+                success: true,
+                failed_precondition: None,
+                changes,
+                physics,
+                wall_ms: started.elapsed().as_secs_f64() * 1e3,
+            }
+        }
+    };
+    world
+        .get_resource_or_insert_with(SimulationTrace::default)
+        .0
+        .push(record.clone());
+    record
+}
+
+fn robot_spec(world: &mut World) -> Option<RobotSpec> {
+    world.query::<&Robot>().iter(world).next().map(|r| r.spec)
+}
+
+/// The robot's place and what it holds (for the planner's start state).
+pub fn robot_state(world: &mut World) -> Option<(String, Option<String>)> {
+    let place = world.query::<&Robot>().iter(world).next()?.place.clone();
+    let tree = read_kinematic_tree(world).ok()?;
+    Some((place, robot_in_tree(&tree)?.holding))
+}
+
+fn entity_named(world: &mut World, name: &str) -> Option<Entity> {
+    world
+        .query::<(Entity, &Name)>()
+        .iter(world)
+        .find(|(_, n)| n.as_str() == name)
+        .map(|(e, _)| e)
+}
+
+/// Applies one change to the transform hierarchy.
+fn apply(world: &mut World, change: &Change) {
+    match change {
+        Change::MoveBase { to, .. } => {
+            if let Some(base) = entity_named(world, ROBOT_LINK) {
+                world
+                    .entity_mut(base)
+                    .insert(transform_of(to.world_from_base()));
+            }
+        }
+        Change::SetJoint { link, to, .. } => {
+            let Some(e) = entity_named(world, link) else {
+                return;
+            };
+            let Some(mut joint) = world.get_mut::<Joint>(e) else {
+                return;
+            };
+            let (spec, from) = (joint.spec, joint.value);
+            joint.value = *to;
+            // The part's transform is its joint frame moved by the joint's value.
+            if let Some(mut t) = world.get_mut::<Transform>(e) {
+                let now = glam::Affine3A::from_scale_rotation_translation(
+                    t.scale,
+                    t.rotation,
+                    t.translation,
+                );
+                *t = transform_of(now * spec.motion(from).inverse() * spec.motion(*to));
+            }
+        }
+        Change::Attach {
+            link,
+            to,
+            parent_from_link,
+            ..
+        } => {
+            let (Some(child), Some(parent)) = (entity_named(world, link), entity_named(world, to))
+            else {
+                return;
+            };
+            let held = to == GRIPPER_LINK;
+            let joint = if held {
+                JointSpec::FIXED
+            } else {
+                let class = world
+                    .get::<Panoptic>(child)
+                    .map(|p| p.class.clone())
+                    .unwrap_or_default();
+                crate::systems::scene_graph::support_joint(&class)
+            };
+            world.entity_mut(child).insert((
+                ChildOf(parent),
+                transform_of(*parent_from_link),
+                Joint {
+                    spec: joint,
+                    value: 0.0,
+                },
+            ));
+        }
+    }
+}
+
+/// The rest test of the tree, reduced to what a step reports.
+fn check(tree: &KinematicTree) -> StepPhysics {
+    let report = rest_physics(tree);
+    StepPhysics {
+        stable_fraction: report.stable_fraction,
+        not_stable: report
+            .objects
+            .into_iter()
+            .filter(|o| o.verdict != Verdict::Stable)
+            .collect(),
+    }
+}
+
+/// Performs the actions asked for since the last update, in order.
+fn perform_requested_actions(world: &mut World) {
+    let requests: Vec<ActionRequest> = world
+        .resource_mut::<Messages<ActionRequest>>()
+        .drain()
+        .collect();
+    for ActionRequest(action) in requests {
+        perform(world, &action);
+    }
+}
+
+/// Adds the action messages, the trace and the system that performs actions.
+pub struct SimulationPlugin;
+
+impl Plugin for SimulationPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_message::<ActionRequest>()
+            .init_resource::<SimulationTrace>()
+            .add_systems(Update, perform_requested_actions);
+    }
+}
