@@ -18,7 +18,7 @@ const SWEEP_STEP: f32 = 0.05;
 /// A door opened as far as it goes must be at least this fraction open.
 const MIN_OPEN_FRACTION: f32 = 0.6;
 /// The longest drive (metres) a pick or place makes on its own to get within reach.
-const APPROACH_M: f32 = 1.5;
+const APPROACH_M: f32 = 4.0;
 
 /// One robot action, as task scripts write it (`{"action": "open", "object": "fridge_1"}`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -135,52 +135,9 @@ pub fn attempt(tree: &KinematicTree, robot: &RobotSpec, action: &Action) -> Resu
             object,
             part,
             value,
-        } => {
-            let joint = joint_of(&view, object, part.as_deref())?;
-            within_reach(&view, robot, &state, object)?;
-            let target = match value {
-                Some(v) => tree.links[joint].joint.clamp(*v),
-                None => open_value(tree, joint),
-            };
-            let reached = sweep(&view, joint, target);
-            let to = match (reached, value) {
-                (Ok(()), _) => target,
-                (Err((hit, at)), Some(_)) => {
-                    return Err(format!(
-                        "{} would hit {hit} at {at:.2}",
-                        tree.links[joint].name
-                    ));
-                }
-                (Err((hit, at)), None) => {
-                    // As far as it goes, if that is open enough to reach in.
-                    let last = at - SWEEP_STEP * (target - tree.links[joint].value).signum();
-                    if last / target < MIN_OPEN_FRACTION {
-                        return Err(format!(
-                            "{} hits {hit} at {at:.2} before it is open",
-                            tree.links[joint].name
-                        ));
-                    }
-                    last
-                }
-            };
-            Ok(vec![Change::SetJoint {
-                link: tree.links[joint].name.clone(),
-                from: tree.links[joint].value,
-                to,
-            }])
-        }
+        } => move_joint(tree, robot, &state, object, part.as_deref(), Some(*value)),
         Action::Close { object, part } => {
-            let joint = joint_of(&view, object, part.as_deref())?;
-            within_reach(&view, robot, &state, object)?;
-            let target = closed_value(tree, joint);
-            sweep(&view, joint, target).map_err(|(hit, at)| {
-                format!("{} would hit {hit} at {at:.2}", tree.links[joint].name)
-            })?;
-            Ok(vec![Change::SetJoint {
-                link: tree.links[joint].name.clone(),
-                from: tree.links[joint].value,
-                to: target,
-            }])
+            move_joint(tree, robot, &state, object, part.as_deref(), None)
         }
         Action::Pick { object } => {
             let (mut changes, state) = approach(&view, robot, &state, object)?;
@@ -189,18 +146,23 @@ pub fn attempt(tree: &KinematicTree, robot: &RobotSpec, action: &Action) -> Resu
         }
         Action::PlaceOn { object, surface } => {
             let link = held(&view, &state, object)?;
-            let (mut changes, state) = approach(&view, robot, &state, surface)?;
-            if !view.nodes().contains(&surface.as_str()) || view.descends_from(
-                view.node_link(surface).unwrap_or(0),
-                view.link(ROBOT_LINK).unwrap_or(0),
-            ) {
-                return Err(format!("{surface} is not in the scene"));
+            if !view.nodes().contains(&surface.as_str()) || view.is_layout(surface) {
+                return Err(format!("{surface} is not a surface of the scene"));
             }
             let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
+            let base = view.link(ROBOT_LINK).unwrap_or(0);
+            // The free spot nearest the robot (not under its own base), then a drive to it.
             let spot = view
-                .spot_on(link, surface, state.base.position, &[gripper])
-                .filter(|p| p.translation.truncate().distance(state.base.position) <= robot.reach)
-                .ok_or_else(|| format!("no free spot on {surface} within reach"))?;
+                .spot_on(link, surface, state.base.position, &[gripper, base])
+                .ok_or_else(|| format!("no free spot on {surface}"))?;
+            let (changes, _) = approach_point(
+                &view,
+                robot,
+                &state,
+                spot.translation.truncate(),
+                surface,
+            )?;
+            let mut changes = changes;
             changes.extend(attach(&view, link, surface, spot)?);
             Ok(changes)
         }
@@ -226,6 +188,83 @@ pub fn attempt(tree: &KinematicTree, robot: &RobotSpec, action: &Action) -> Resu
             distance,
         } => push(&view, robot, &state, object, Vec2::from(*direction), *distance),
     }
+}
+
+/// Opens (`open` is `Some(value)`; `Some(None)` as far as it goes) or closes (`None`) a door or
+/// drawer of `object`. The base first steps to where it stands for the doors (in front, out of
+/// their swing) when it is not there; the sweep is checked with the base where it ends.
+fn move_joint(
+    tree: &KinematicTree,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    object: &str,
+    part: Option<&str>,
+    open: Option<Option<f32>>,
+) -> Result<Vec<Change>, String> {
+    let view = SceneView::new(tree);
+    let joint = joint_of(&view, object, part)?;
+    let own = view.node_link(object).unwrap_or(0);
+    let goal = nav_goal(&view, robot, object, own);
+    let p = state.base.position;
+    let placed = (p - goal.target).length() <= goal.reach
+        && goal.facing.is_none_or(|f| (p - goal.target).dot(f) > 0.0)
+        && goal.keep_out.iter().all(|(c, r)| p.distance(*c) >= *r);
+    let mut changes = Vec::new();
+    let mut moved = tree.clone();
+    if !placed {
+        let path = nav_grid(&view)?
+            .plan(p, &goal, robot.radius)
+            .filter(|path| path.length_m <= APPROACH_M)
+            .ok_or_else(|| format!("no place near {object} to work its doors from"))?;
+        let end = *path.waypoints.last().unwrap_or(&p);
+        let to = BasePose::facing(end, goal.target);
+        if let Some(base) = view.link(ROBOT_LINK) {
+            moved.links[base].parent_from_link = to.world_from_base();
+        }
+        changes.push(Change::MoveBase {
+            from: state.base,
+            to,
+            path_length_m: path.length_m,
+            path: path.waypoints,
+        });
+    }
+    let view = SceneView::new(&moved);
+    let name = tree.links[joint].name.clone();
+    let from = tree.links[joint].value;
+    let to = match open {
+        None => {
+            let target = closed_value(tree, joint);
+            sweep(&view, joint, target)
+                .map_err(|(hit, at)| format!("{name} would hit {hit} at {at:.2}"))?;
+            target
+        }
+        Some(Some(v)) => {
+            let target = tree.links[joint].joint.clamp(v);
+            sweep(&view, joint, target)
+                .map_err(|(hit, at)| format!("{name} would hit {hit} at {at:.2}"))?;
+            target
+        }
+        Some(None) => {
+            let target = open_value(tree, joint);
+            match sweep(&view, joint, target) {
+                Ok(()) => target,
+                Err((hit, at)) => {
+                    // As far as it goes, if that is open enough to reach in.
+                    let last = at - SWEEP_STEP * (target - from).signum();
+                    if last / target < MIN_OPEN_FRACTION {
+                        return Err(format!("{name} hits {hit} at {at:.2} before it is open"));
+                    }
+                    last
+                }
+            }
+        }
+    };
+    changes.push(Change::SetJoint {
+        link: name,
+        from,
+        to,
+    });
+    Ok(changes)
 }
 
 fn navigate(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, to: &str) -> Result<Vec<Change>, String> {
@@ -277,6 +316,43 @@ fn approach(
         holding: state.holding.clone(),
     };
     within_reach(view, robot, &moved, id)?;
+    Ok((
+        vec![Change::MoveBase {
+            from: state.base,
+            to: moved.base,
+            path_length_m: path.length_m,
+            path: path.waypoints,
+        }],
+        moved,
+    ))
+}
+
+/// A drive (if needed, at most `APPROACH_M`) to within reach of the point `target` on `what`.
+fn approach_point(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    target: Vec2,
+    what: &str,
+) -> Result<(Vec<Change>, RobotInTree), String> {
+    if state.base.position.distance(target) <= robot.reach {
+        return Ok((Vec::new(), state.clone()));
+    }
+    let goal = NavGoal {
+        target,
+        reach: robot.reach - 0.1,
+        facing: None,
+        keep_out: Vec::new(),
+    };
+    let path = nav_grid(view)?
+        .plan(state.base.position, &goal, robot.radius)
+        .filter(|p| p.length_m <= APPROACH_M)
+        .ok_or_else(|| format!("no way to get within reach of the free spot on {what}"))?;
+    let end = *path.waypoints.last().unwrap_or(&state.base.position);
+    let moved = RobotInTree {
+        base: BasePose::facing(end, target),
+        holding: state.holding.clone(),
+    };
     Ok((
         vec![Change::MoveBase {
             from: state.base,
@@ -497,10 +573,9 @@ fn pick(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, object: &str) 
     let (lo, hi) = view
         .local_bounds(link)
         .ok_or_else(|| format!("{object} has no geometry"))?;
-    // Hung by its top centre, far enough out that it clears the base.
-    let out = ((hi.x - lo.x) / 2.0 - 0.08).max(0.0);
-    let top_centre = Vec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, hi.z);
-    let gripper_from_link = Affine3A::from_translation(Vec3::new(out, 0.0, 0.0) - top_centre);
+    // Carried on the gripper, the centre of its bottom on the gripper's origin.
+    let bottom_centre = Vec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, lo.z);
+    let gripper_from_link = Affine3A::from_translation(-bottom_centre);
     let from = view
         .support_of(object)
         .map_or(String::new(), String::from);

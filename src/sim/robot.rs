@@ -1,4 +1,4 @@
-//! The simulated robot: a round mobile base with a gripper in front of it, described by the
+//! The simulated robot: a round mobile base with a gripper on top of it, described by the
 //! figures the actions check (footprint, reach, gripper height) and the meshes its links get.
 
 use glam::{Affine3A, Vec2, Vec3};
@@ -8,7 +8,7 @@ use crate::geometry::TriMesh;
 
 /// The robot's base link name in the kinematic tree and the exports.
 pub const ROBOT_LINK: &str = "robot";
-/// The gripper link (a child of the base); a held object hangs from it.
+/// The gripper link (a child of the base); a held object rides on it.
 pub const GRIPPER_LINK: &str = "robot_gripper";
 
 /// What the actions need to know about the robot; the defaults are a Fetch-sized base.
@@ -69,14 +69,15 @@ impl RobotSpec {
         TriMesh::cylinder(Vec3::ZERO, self.radius - 0.01, self.height, 16)
     }
 
-    /// The gripper's frame in the base's: at the front of the base, on top of the column. A
-    /// held object hangs below it.
+    /// The gripper's frame in the base's: on top of the column. A held object rides on it,
+    /// inside the base's footprint, so it never sweeps into furniture the base clears.
     pub fn base_from_gripper(&self) -> Affine3A {
-        Affine3A::from_translation(Vec3::new(self.radius + 0.1, 0.0, self.height + 0.1))
+        Affine3A::from_translation(Vec3::new(0.0, 0.0, self.height + 0.02))
     }
 
-    /// The gripper's mesh in its frame: a small block the held object hangs from.
+    /// The gripper's mesh in its frame: a plate just below the held object.
     pub fn gripper_mesh(&self) -> TriMesh {
-        TriMesh::cuboid(Vec3::new(-0.04, -0.04, 0.0), Vec3::new(0.04, 0.04, 0.04))
+        let r = 0.5 * self.radius;
+        TriMesh::cuboid(Vec3::new(-r, -r, -0.02), Vec3::new(r, r, -0.001))
     }
 }
