@@ -12,9 +12,10 @@ if ! command -v check_urdf >/dev/null; then
     $SUDO apt-get install -y -qq --no-install-recommends liburdfdom-tools >/dev/null
 fi
 
-if [ ! -x .venv-validators/bin/python ] || ! .venv-validators/bin/python -c "import mujoco, pybullet" 2>/dev/null; then
+if [ ! -x .venv-validators/bin/python ] || ! .venv-validators/bin/python -c "import mujoco, pybullet, pyperplan" 2>/dev/null; then
     python3 -m venv .venv-validators
-    .venv-validators/bin/pip install -q mujoco==4.0.0 pybullet==3.2.7
+    # pyperplan checks the task planner's plan lengths on the exported PDDL.
+    .venv-validators/bin/pip install -q mujoco==4.0.0 pybullet==3.2.7 pyperplan==2.1
 fi
 
 if [ ! -f .validators/node_modules/gltf-validator/package.json ]; then

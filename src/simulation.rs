@@ -143,10 +143,7 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
     let end = symbolic_scene(&SceneView::new(&after), &place, holding.as_deref());
     let goals_hold = goals.iter().all(|g| end.facts.contains(g));
-    let all_ran = plan_names
-        .as_ref()
-        .map_or(task.steps.len(), Vec::len)
-        == steps.len();
+    let all_ran = plan_names.as_ref().map_or(task.steps.len(), Vec::len) == steps.len();
     let summary = SimulationSummary {
         task: options.task.display().to_string(),
         goals: task.goals.clone(),
@@ -155,7 +152,15 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
         steps,
         output: options.out.clone(),
     };
-    write_outputs(&options.out, &graph, &before, &after, &scene, &goals, &summary)?;
+    write_outputs(
+        &options.out,
+        &graph,
+        &before,
+        &after,
+        &scene,
+        &goals,
+        &summary,
+    )?;
     Ok(summary)
 }
 
@@ -176,7 +181,10 @@ fn write_outputs(
             .map_err(|e| IsceneError::Internal(format!("trace.json: {e}")))?,
     )?;
     write_text(&dir.join("domain.pddl"), &pddl::domain())?;
-    write_text(&dir.join("problem.pddl"), &pddl::problem("task", scene, goals))?;
+    write_text(
+        &dir.join("problem.pddl"),
+        &pddl::problem("task", scene, goals),
+    )?;
     write_text(
         &dir.join("contact_graph.json"),
         &graph_after(graph, before, after).to_json(),

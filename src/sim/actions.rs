@@ -124,7 +124,11 @@ pub fn robot_in_tree(tree: &KinematicTree) -> Option<RobotInTree> {
 }
 
 /// Checks `action` against `tree` and returns what it changes, or the precondition that fails.
-pub fn attempt(tree: &KinematicTree, robot: &RobotSpec, action: &Action) -> Result<Vec<Change>, String> {
+pub fn attempt(
+    tree: &KinematicTree,
+    robot: &RobotSpec,
+    action: &Action,
+) -> Result<Vec<Change>, String> {
     let view = SceneView::new(tree);
     let Some(state) = robot_in_tree(tree) else {
         return Err("the scene has no robot".into());
@@ -155,13 +159,8 @@ pub fn attempt(tree: &KinematicTree, robot: &RobotSpec, action: &Action) -> Resu
             let spot = view
                 .spot_on(link, surface, state.base.position, &[gripper, base])
                 .ok_or_else(|| format!("no free spot on {surface}"))?;
-            let (changes, _) = approach_point(
-                &view,
-                robot,
-                &state,
-                spot.translation.truncate(),
-                surface,
-            )?;
+            let (changes, _) =
+                approach_point(&view, robot, &state, spot.translation.truncate(), surface)?;
             let mut changes = changes;
             changes.extend(attach(&view, link, surface, spot)?);
             Ok(changes)
@@ -186,7 +185,14 @@ pub fn attempt(tree: &KinematicTree, robot: &RobotSpec, action: &Action) -> Resu
             object,
             direction,
             distance,
-        } => push(&view, robot, &state, object, Vec2::from(*direction), *distance),
+        } => push(
+            &view,
+            robot,
+            &state,
+            object,
+            Vec2::from(*direction),
+            *distance,
+        ),
     }
 }
 
@@ -267,7 +273,12 @@ fn move_joint(
     Ok(changes)
 }
 
-fn navigate(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, to: &str) -> Result<Vec<Change>, String> {
+fn navigate(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    to: &str,
+) -> Result<Vec<Change>, String> {
     let Some(own) = view.node_link(to) else {
         return Err(format!("{to} is not in the scene"));
     };
@@ -411,7 +422,10 @@ fn nav_goal(view: &SceneView, robot: &RobotSpec, id: &str, own: usize) -> NavGoa
     let front = world_from_node
         .transform_point3(Vec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0))
         .truncate();
-    let facing = world_from_node.transform_vector3(-Vec3::Y).truncate().normalize_or_zero();
+    let facing = world_from_node
+        .transform_vector3(-Vec3::Y)
+        .truncate()
+        .normalize_or_zero();
     // Doors on vertical hinges sweep a disc about the hinge as wide as the door.
     let keep_out = view
         .moving_parts(id)
@@ -459,7 +473,12 @@ fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize,
 
 /// Whether the base reaches node `id`: its nearest point within the robot's reach and its
 /// lowest point below the highest the gripper reaches.
-fn within_reach(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, id: &str) -> Result<(), String> {
+fn within_reach(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    id: &str,
+) -> Result<(), String> {
     let (lo, hi) = view
         .node_bounds(id)
         .ok_or_else(|| format!("{id} is not in the scene"))?;
@@ -535,7 +554,12 @@ fn held(view: &SceneView, state: &RobotInTree, object: &str) -> Result<usize, St
         .ok_or_else(|| format!("{object} is not in the scene"))
 }
 
-fn attach(view: &SceneView, link: usize, to: &str, world_from_link: Affine3A) -> Result<Vec<Change>, String> {
+fn attach(
+    view: &SceneView,
+    link: usize,
+    to: &str,
+    world_from_link: Affine3A,
+) -> Result<Vec<Change>, String> {
     let parent = view
         .node_link(to)
         .ok_or_else(|| format!("{to} is not in the scene"))?;
@@ -550,7 +574,12 @@ fn attach(view: &SceneView, link: usize, to: &str, world_from_link: Affine3A) ->
     }])
 }
 
-fn pick(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, object: &str) -> Result<Vec<Change>, String> {
+fn pick(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    object: &str,
+) -> Result<Vec<Change>, String> {
     if let Some(h) = &state.holding {
         return Err(format!("the robot already holds {h}"));
     }
@@ -560,7 +589,11 @@ fn pick(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, object: &str) 
     if !view.is_movable(object) {
         return Err(format!("{object} is not movable"));
     }
-    if let Some(on_top) = view.nodes().into_iter().find(|n| view.support_of(n) == Some(object)) {
+    if let Some(on_top) = view
+        .nodes()
+        .into_iter()
+        .find(|n| view.support_of(n) == Some(object))
+    {
         return Err(format!("{on_top} stands on {object}"));
     }
     if let Some(container) = view.support_of(object)
@@ -576,9 +609,7 @@ fn pick(view: &SceneView, robot: &RobotSpec, state: &RobotInTree, object: &str) 
     // Carried on the gripper, the centre of its bottom on the gripper's origin.
     let bottom_centre = Vec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, lo.z);
     let gripper_from_link = Affine3A::from_translation(-bottom_centre);
-    let from = view
-        .support_of(object)
-        .map_or(String::new(), String::from);
+    let from = view.support_of(object).map_or(String::new(), String::from);
     Ok(vec![Change::Attach {
         link: object.to_string(),
         from,
@@ -620,7 +651,10 @@ fn push(
         let shift = (d * distance * k as f32 / steps as f32).extend(0.0);
         pose = Affine3A::from_translation(shift) * view.poses[link];
         if view.overlap_at(link, pose, &ignore) > TOUCH_M {
-            return Err(format!("{object} would run into something after {:.2} m", distance * (k - 1) as f32 / steps as f32));
+            return Err(format!(
+                "{object} would run into something after {:.2} m",
+                distance * (k - 1) as f32 / steps as f32
+            ));
         }
     }
     // It must still stand on its support.
@@ -628,9 +662,12 @@ fn push(
     let (lo, hi) = view.local_bounds(link).unwrap_or_default();
     let bottom = pose.transform_point3(Vec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, lo.z));
     let in_support = view.poses[own].inverse().transform_point3(bottom);
-    let top = crate::sim::scene_view::vertical_hits(&view.body_mesh_in_node(&support), in_support.truncate())
-        .into_iter()
-        .fold(f32::MIN, f32::max);
+    let top = crate::sim::scene_view::vertical_hits(
+        &view.body_mesh_in_node(&support),
+        in_support.truncate(),
+    )
+    .into_iter()
+    .fold(f32::MIN, f32::max);
     if (top - in_support.z).abs() > 0.02 {
         return Err(format!("{object} would slide off {support}"));
     }

@@ -9,7 +9,11 @@ use crate::kinematics::tree::KinematicTree;
 use crate::sim::scene_view::{SceneView, yaw_of};
 
 /// `graph` (whose tree was `before`) updated to the tree `after`.
-pub fn graph_after(graph: &ContactGraph, before: &KinematicTree, after: &KinematicTree) -> ContactGraph {
+pub fn graph_after(
+    graph: &ContactGraph,
+    before: &KinematicTree,
+    after: &KinematicTree,
+) -> ContactGraph {
     let (old, now) = (SceneView::new(before), SceneView::new(after));
     let mut out = graph.clone();
     for node in &mut out.nodes {
@@ -36,11 +40,13 @@ pub fn graph_after(graph: &ContactGraph, before: &KinematicTree, after: &Kinemat
         // Planes move with the object: [n, d] with n . p + d = 0.
         for plane in &mut node.planes {
             let n = moved.transform_vector3(glam::Vec3::new(plane[0], plane[1], plane[2]));
-            let p = moved.transform_point3(-plane[3] * glam::Vec3::new(plane[0], plane[1], plane[2]));
+            let p =
+                moved.transform_point3(-plane[3] * glam::Vec3::new(plane[0], plane[1], plane[2]));
             *plane = [n.x, n.y, n.z, -n.dot(p)];
         }
     }
-    out.edges.retain(|e| !matches!(e, GraphEdge::Support { .. }));
+    out.edges
+        .retain(|e| !matches!(e, GraphEdge::Support { .. }));
     let mut supports: Vec<GraphEdge> = now
         .nodes()
         .into_iter()

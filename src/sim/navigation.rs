@@ -83,14 +83,13 @@ impl NavGrid {
 
     /// The free cell with the most clearance (the first such in row order): a default start.
     pub fn most_open(&self) -> Option<Vec2> {
-        let (i, _) = self
-            .clearance
-            .iter()
-            .enumerate()
-            .fold(None::<(usize, f32)>, |best, (i, c)| match best {
+        let (i, _) = self.clearance.iter().enumerate().fold(
+            None::<(usize, f32)>,
+            |best, (i, c)| match best {
                 Some((_, b)) if b >= *c => best,
                 _ => Some((i, *c)),
-            })?;
+            },
+        )?;
         Some(self.center((i % self.grid.width, i / self.grid.width)))
     }
 
@@ -256,6 +255,9 @@ mod tests {
         };
         let path = nav.plan(Vec2::new(0.5, 0.5), &goal, 0.25).expect("path");
         let end = *path.waypoints.last().expect("end");
-        assert!(end.y > 2.0 && end.distance(Vec2::new(2.0, 2.3)) >= 0.4, "{end}");
+        assert!(
+            end.y > 2.0 && end.distance(Vec2::new(2.0, 2.3)) >= 0.4,
+            "{end}"
+        );
     }
 }

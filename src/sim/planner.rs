@@ -61,7 +61,12 @@ pub fn ground(scene: &SymbolicScene, goal: &[Fact]) -> GroundProblem {
         index: HashMap::new(),
     };
     let mut ops = Vec::new();
-    let mut op = |t: &mut FactTable, name: String, action: Action, pre: Vec<Fact>, add: Vec<Fact>, del: Vec<Fact>| {
+    let mut op = |t: &mut FactTable,
+                  name: String,
+                  action: Action,
+                  pre: Vec<Fact>,
+                  add: Vec<Fact>,
+                  del: Vec<Fact>| {
         ops.push(GroundOperator {
             name,
             action,
@@ -345,10 +350,7 @@ mod tests {
     fn a_goal_no_action_makes_has_no_plan() {
         let scene = kitchen();
         // Holding two things at once.
-        let goal = [
-            Fact::Holding("box_1".into()),
-            Fact::Holding("cup_1".into()),
-        ];
+        let goal = [Fact::Holding("box_1".into()), Fact::Holding("cup_1".into())];
         assert!(plan(&ground(&scene, &goal), 100_000).is_none());
     }
 

@@ -203,9 +203,9 @@ impl<'a> SceneView<'a> {
         let Some((olo, ohi)) = self.local_bounds(o) else {
             return false;
         };
-        let centre = self.poses[c].inverse().transform_point3(
-            self.poses[o].transform_point3((olo + ohi) / 2.0),
-        );
+        let centre = self.poses[c]
+            .inverse()
+            .transform_point3(self.poses[o].transform_point3((olo + ohi) / 2.0));
         centre.cmpgt(lo).all() && centre.cmplt(hi).all()
     }
 
@@ -239,7 +239,13 @@ impl<'a> SceneView<'a> {
 
     /// Where `object` can stand on top of `surface`: its pose in the world, upright with its
     /// current yaw, at the free spot nearest `near` (the robot) on the surface's top, or `None`.
-    pub fn spot_on(&self, object: usize, surface: &str, near: Vec2, ignore: &[usize]) -> Option<Affine3A> {
+    pub fn spot_on(
+        &self,
+        object: usize,
+        surface: &str,
+        near: Vec2,
+        ignore: &[usize],
+    ) -> Option<Affine3A> {
         let own = self.node_link(surface)?;
         let body = self.body_mesh_in_node(surface);
         let (lo, hi) = body.bounds()?;
@@ -299,12 +305,7 @@ impl<'a> SceneView<'a> {
             // Centred first, then towards the open front (-y in the model frame).
             for dy in [0.0, -0.05, -0.1, 0.05] {
                 let bottom = Vec3::new(centre.x, centre.y + dy, floor + 0.001);
-                let pose = upright_on(
-                    world_from_container.transform_point3(bottom),
-                    yaw,
-                    olo,
-                    ohi,
-                );
+                let pose = upright_on(world_from_container.transform_point3(bottom), yaw, olo, ohi);
                 if self.overlap_at(object, pose, ignore) <= TOUCH_M {
                     return Some(pose);
                 }

@@ -50,7 +50,10 @@ impl Task {
             .iter()
             .all(|x| x.is_finite() && *x > 0.0)
         {
-            return Err(InputError::invalid(path, "robot figures must be positive numbers"));
+            return Err(InputError::invalid(
+                path,
+                "robot figures must be positive numbers",
+            ));
         }
         if let Some(s) = task.start
             && !(s.position.iter().all(|x| x.is_finite()) && s.yaw_deg.is_finite())

@@ -111,7 +111,9 @@ pub fn spawn_robot(world: &mut World, spec: RobotSpec, pose: BasePose) -> Result
 /// and returns what happened.
 pub fn perform(world: &mut World, action: &Action) -> StepRecord {
     let started = Instant::now();
-    let step = world.get_resource::<SimulationTrace>().map_or(0, |t| t.0.len());
+    let step = world
+        .get_resource::<SimulationTrace>()
+        .map_or(0, |t| t.0.len());
     let outcome = read_kinematic_tree(world).and_then(|tree| {
         let spec = robot_spec(world).ok_or("the scene has no robot")?;
         let changes = attempt(&tree, &spec, action)?;
