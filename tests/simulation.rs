@@ -20,8 +20,9 @@ fn kitchen_truth(dir: &Path) -> std::path::PathBuf {
     seq.join("gt")
 }
 
-fn simulate(gt: &Path, task: &Path, out: &Path) -> (i32, serde_json::Value) {
-    let (code, stdout, stderr) = common::iscene(
+/// `iscene simulate GT --task TASK --out OUT`: exit code, stdout, stderr.
+fn run_simulate(gt: &Path, task: &Path, out: &Path) -> (i32, String, String) {
+    common::iscene(
         &[
             "simulate",
             gt.to_str().expect("utf8"),
@@ -31,7 +32,11 @@ fn simulate(gt: &Path, task: &Path, out: &Path) -> (i32, serde_json::Value) {
             out.to_str().expect("utf8"),
         ],
         &common::root(),
-    );
+    )
+}
+
+fn simulate(gt: &Path, task: &Path, out: &Path) -> (i32, serde_json::Value) {
+    let (code, stdout, stderr) = run_simulate(gt, task, out);
     let trace = std::fs::read_to_string(out.join("trace.json"))
         .unwrap_or_else(|e| panic!("no trace ({e}): {stdout}{stderr}"));
     (code, serde_json::from_str(&trace).expect("trace JSON"))
@@ -188,17 +193,7 @@ fn a_malformed_task_is_bad_input() {
     ] {
         std::fs::write(&task, text).expect("task");
         let out = dir.path().join("sim");
-        let (code, _, stderr) = common::iscene(
-            &[
-                "simulate",
-                gt.to_str().expect("utf8"),
-                "--task",
-                task.to_str().expect("utf8"),
-                "--out",
-                out.to_str().expect("utf8"),
-            ],
-            &common::root(),
-        );
+        let (code, _, stderr) = run_simulate(&gt, &task, &out);
         assert_eq!(code, 2, "{text}: {stderr}");
         assert!(
             stderr.contains("bad.json") && stderr.contains(expected),

@@ -238,14 +238,11 @@ fn move_joint(
     let name = tree.links[joint].name.clone();
     let from = tree.links[joint].value;
     let to = match open {
-        None => {
-            let target = closed_value(tree, joint);
-            sweep(&view, joint, target)
-                .map_err(|(hit, at)| format!("{name} would hit {hit} at {at:.2}"))?;
-            target
-        }
-        Some(Some(v)) => {
-            let target = tree.links[joint].joint.clamp(v);
+        None | Some(Some(_)) => {
+            let target = match open {
+                Some(Some(v)) => tree.links[joint].joint.clamp(v),
+                _ => closed_value(tree, joint),
+            };
             sweep(&view, joint, target)
                 .map_err(|(hit, at)| format!("{name} would hit {hit} at {at:.2}"))?;
             target
