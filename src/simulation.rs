@@ -15,8 +15,8 @@ use crate::graph::ContactGraph;
 use crate::io::atomic::StagedDir;
 use crate::io::write_sequence::write_text;
 use crate::kinematics::tree::KinematicTree;
+use crate::sim::actions::nav_grid;
 use crate::sim::graph_sync::graph_after;
-use crate::sim::navigation::NavGrid;
 use crate::sim::planner::{ground, plan};
 use crate::sim::robot::BasePose;
 use crate::sim::scene_view::SceneView;
@@ -76,17 +76,7 @@ pub fn simulation_app(graph: &ContactGraph, task: &Task) -> Result<App, String> 
 
 /// The most open spot of the floor, facing +x.
 fn default_start(tree: &KinematicTree) -> Option<BasePose> {
-    let view = SceneView::new(tree);
-    let floor = view
-        .nodes()
-        .into_iter()
-        .find(|n| view.class_of(n) == Some("floor"))
-        .and_then(|n| view.node_link(n))?;
-    let obstacles: Vec<_> = (1..tree.links.len())
-        .filter(|&l| l != floor && tree.links[l].class.as_deref() != Some("ceiling"))
-        .map(|l| view.world_mesh(l))
-        .collect();
-    let grid = NavGrid::new(&view.world_mesh(floor), &obstacles)?;
+    let grid = nav_grid(&SceneView::new(tree)).ok()?;
     Some(BasePose {
         position: grid.most_open()?,
         yaw: 0.0,

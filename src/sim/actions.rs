@@ -211,28 +211,15 @@ fn move_joint(
     let joint = joint_of(&view, object, part)?;
     let own = view.node_link(object).unwrap_or(0);
     let goal = nav_goal(&view, robot, object, own);
-    let p = state.base.position;
-    let placed = (p - goal.target).length() <= goal.reach
-        && goal.facing.is_none_or(|f| (p - goal.target).dot(f) > 0.0)
-        && goal.keep_out.iter().all(|(c, r)| p.distance(*c) >= *r);
     let mut changes = Vec::new();
     let mut moved = tree.clone();
-    if !placed {
-        let path = nav_grid(&view)?
-            .plan(p, &goal, robot.radius)
-            .filter(|path| path.length_m <= APPROACH_M)
+    if !goal.is_met(state.base.position) {
+        let (change, after) = drive(&view, robot, state, &goal, APPROACH_M)?
             .ok_or_else(|| format!("no place near {object} to work its doors from"))?;
-        let end = *path.waypoints.last().unwrap_or(&p);
-        let to = BasePose::facing(end, goal.target);
         if let Some(base) = view.link(ROBOT_LINK) {
-            moved.links[base].parent_from_link = to.world_from_base();
+            moved.links[base].parent_from_link = after.base.world_from_base();
         }
-        changes.push(Change::MoveBase {
-            from: state.base,
-            to,
-            path_length_m: path.length_m,
-            path: path.waypoints,
-        });
+        changes.push(change);
     }
     let view = SceneView::new(&moved);
     let name = tree.links[joint].name.clone();
@@ -280,17 +267,38 @@ fn navigate(
         return Err(format!("{to} is not in the scene"));
     };
     let goal = nav_goal(view, robot, to, own);
-    let grid = nav_grid(view)?;
-    let path = grid
-        .plan(state.base.position, &goal, robot.radius)
+    let (change, _) = drive(view, robot, state, &goal, f32::INFINITY)?
         .ok_or_else(|| format!("no path for the base to {to}"))?;
+    Ok(vec![change])
+}
+
+/// The base's drive from where it stands to the cheapest place that meets `goal`, if one is
+/// no farther than `max_m` along the path: the move and the robot after it.
+fn drive(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    goal: &NavGoal,
+    max_m: f32,
+) -> Result<Option<(Change, RobotInTree)>, String> {
+    let Some(path) = nav_grid(view)?
+        .plan(state.base.position, goal, robot.radius)
+        .filter(|p| p.length_m <= max_m)
+    else {
+        return Ok(None);
+    };
     let end = *path.waypoints.last().unwrap_or(&state.base.position);
-    Ok(vec![Change::MoveBase {
+    let moved = RobotInTree {
+        base: BasePose::facing(end, goal.target),
+        holding: state.holding.clone(),
+    };
+    let change = Change::MoveBase {
         from: state.base,
-        to: BasePose::facing(end, goal.target),
+        to: moved.base,
         path_length_m: path.length_m,
         path: path.waypoints,
-    }])
+    };
+    Ok(Some((change, moved)))
 }
 
 /// The last stretch before picking or placing: when node `id` is out of reach but a short drive
@@ -314,25 +322,9 @@ fn approach(
         facing: None,
         keep_out: Vec::new(),
     };
-    let path = nav_grid(view)?
-        .plan(state.base.position, &goal, robot.radius)
-        .filter(|p| p.length_m <= APPROACH_M)
-        .ok_or(out_of_reach)?;
-    let end = *path.waypoints.last().unwrap_or(&state.base.position);
-    let moved = RobotInTree {
-        base: BasePose::facing(end, goal.target),
-        holding: state.holding.clone(),
-    };
+    let (change, moved) = drive(view, robot, state, &goal, APPROACH_M)?.ok_or(out_of_reach)?;
     within_reach(view, robot, &moved, id)?;
-    Ok((
-        vec![Change::MoveBase {
-            from: state.base,
-            to: moved.base,
-            path_length_m: path.length_m,
-            path: path.waypoints,
-        }],
-        moved,
-    ))
+    Ok((vec![change], moved))
 }
 
 /// A drive (if needed, at most `APPROACH_M`) to within reach of the point `target` on `what`.
@@ -352,28 +344,13 @@ fn approach_point(
         facing: None,
         keep_out: Vec::new(),
     };
-    let path = nav_grid(view)?
-        .plan(state.base.position, &goal, robot.radius)
-        .filter(|p| p.length_m <= APPROACH_M)
+    let (change, moved) = drive(view, robot, state, &goal, APPROACH_M)?
         .ok_or_else(|| format!("no way to get within reach of the free spot on {what}"))?;
-    let end = *path.waypoints.last().unwrap_or(&state.base.position);
-    let moved = RobotInTree {
-        base: BasePose::facing(end, target),
-        holding: state.holding.clone(),
-    };
-    Ok((
-        vec![Change::MoveBase {
-            from: state.base,
-            to: moved.base,
-            path_length_m: path.length_m,
-            path: path.waypoints,
-        }],
-        moved,
-    ))
+    Ok((vec![change], moved))
 }
 
 /// The grid of the scene as it stands, without the robot and what it holds.
-fn nav_grid(view: &SceneView) -> Result<NavGrid, String> {
+pub fn nav_grid(view: &SceneView) -> Result<NavGrid, String> {
     let robot = view.link(ROBOT_LINK);
     let floor = view
         .nodes()

@@ -38,6 +38,16 @@ pub struct NavGoal {
     pub keep_out: Vec<(Vec2, f32)>,
 }
 
+impl NavGoal {
+    /// Whether a base centred at `p` satisfies the goal.
+    pub fn is_met(&self, p: Vec2) -> bool {
+        let d = p - self.target;
+        d.length() <= self.reach
+            && self.facing.is_none_or(|f| d.dot(f) > 0.0)
+            && self.keep_out.iter().all(|(c, r)| p.distance(*c) >= *r)
+    }
+}
+
 /// A path of base positions (cell centres) from the start to the goal, and its length.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NavPath {
@@ -99,12 +109,6 @@ impl NavGrid {
     pub fn plan(&self, start: Vec2, goal: &NavGoal, radius: f32) -> Option<NavPath> {
         let start_cell = self.cell_of(start)?;
         let res = self.grid.resolution;
-        let reaches = |p: Vec2| {
-            let d = p - goal.target;
-            d.length() <= goal.reach
-                && goal.facing.is_none_or(|f| d.dot(f) > 0.0)
-                && goal.keep_out.iter().all(|(c, r)| p.distance(*c) >= *r)
-        };
         let mm = |m: f32| (m * 1000.0).round() as u32;
         let (cells, _cost) = astar(
             &start_cell,
@@ -137,7 +141,7 @@ impl NavGrid {
                 next
             },
             |&cell| mm((self.center(cell).distance(goal.target) - goal.reach - res).max(0.0)),
-            |&cell| reaches(self.center(cell)),
+            |&cell| goal.is_met(self.center(cell)),
         )?;
         let waypoints: Vec<Vec2> = cells.iter().map(|c| self.center(*c)).collect();
         let length_m = waypoints.windows(2).map(|w| w[0].distance(w[1])).sum();
