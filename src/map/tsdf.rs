@@ -591,16 +591,21 @@ mod tests {
         );
     }
 
-    #[test]
-    fn the_label_vote_follows_the_majority_and_relabel_renames() {
-        let camera = Pinhole {
+    /// An 8 x 8 camera looking down +z (the label-vote tests).
+    fn eight_pixel_camera() -> Pinhole {
+        Pinhole {
             width: 8,
             height: 8,
             fx: 8.0,
             fy: 8.0,
             cx: 3.5,
             cy: 3.5,
-        };
+        }
+    }
+
+    #[test]
+    fn the_label_vote_follows_the_majority_and_relabel_renames() {
+        let camera = eight_pixel_camera();
         let depth = vec![1.0f32; 64];
         let pose = Affine3A::IDENTITY;
         let mut map = TsdfMap::new(0.05);
@@ -624,14 +629,7 @@ mod tests {
 
     #[test]
     fn a_cut_out_label_voting_twice_overturns_a_label_seen_in_more_frames() {
-        let camera = Pinhole {
-            width: 8,
-            height: 8,
-            fx: 8.0,
-            fy: 8.0,
-            cx: 3.5,
-            cy: 3.5,
-        };
+        let camera = eight_pixel_camera();
         let depth = vec![1.0f32; 64];
         let pose = Affine3A::IDENTITY;
         let label_after = |votes: &[(SegmentLabel, u8)]| {
