@@ -22,5 +22,11 @@ echo "== validators (check_urdf, MuJoCo, PyBullet, Khronos glTF validator)"
 echo "== tests"
 cargo test --locked --lib --bins --tests --no-fail-fast
 
+echo "== viewer (cargo feature viewer) off screen on Mesa's software Vulkan driver"
+./scripts/setup-viewer.sh
+# Lints of the viewer code: run `cargo clippy --features viewer --all-targets -- -D warnings`
+# before committing; CI builds the feature once, for its tests, to stay in its time budget.
+cargo test --locked --features viewer --test viewer
+
 echo "== benchmarks build (run them with: cargo bench)"
 cargo bench --locked --no-run

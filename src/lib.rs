@@ -25,6 +25,8 @@ pub mod segmentation;
 pub mod sim;
 pub mod simulation;
 pub mod systems;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 
 use bevy::app::PluginGroupBuilder;
 use bevy::prelude::*;

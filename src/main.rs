@@ -53,6 +53,27 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Look at a scene folder (a reconstruction, or a rendered sequence's gt/) in a window, or
+    /// render it off screen into a PNG (built with `--features viewer`).
+    View {
+        /// A folder with contact_graph.json.
+        dir: PathBuf,
+        /// Render off screen into this PNG and exit.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Layers shown: colour, segments, boxes, graph (repeat or separate with commas).
+        #[arg(long, value_delimiter = ',')]
+        layer: Vec<String>,
+        /// Frames rendered before the screenshot.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: u32,
+        /// Screenshot size in pixels, WIDTHxHEIGHT.
+        #[arg(long, default_value = "960x720", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Open this object's main door or drawer first (repeatable).
+        #[arg(long)]
+        open: Vec<String>,
+    },
     /// Benchmarks that print their figures as one JSON object on stdout.
     Bench {
         #[command(subcommand)]
@@ -143,6 +164,15 @@ enum BenchCommand {
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
         runs: u32,
     },
+    /// Time per action of a task (with its physics check), over fresh runs of the task on a
+    /// scene folder (as `iscene simulate` takes).
+    Simulation {
+        dir: PathBuf,
+        #[arg(long)]
+        task: PathBuf,
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
+    },
 }
 
 #[derive(Subcommand)]
@@ -152,6 +182,48 @@ enum CadCommand {
         #[arg(long, default_value = "assets/cad")]
         into: PathBuf,
     },
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT"))?;
+    let number = |p: &str| {
+        p.parse::<u32>()
+            .ok()
+            .filter(|n| (16..=8192).contains(n))
+            .ok_or_else(|| format!("{p:?} in {s:?} is not a size from 16 to 8192 pixels"))
+    };
+    Ok((number(w)?, number(h)?))
+}
+
+#[cfg(feature = "viewer")]
+#[expect(clippy::print_stdout, reason = "the CLI's job is to print the summary")]
+fn view(options: iscene::viewer::ViewOptions, layers: &[String]) -> Result<(), IsceneError> {
+    use clap::ValueEnum;
+    let layers = layers
+        .iter()
+        .map(|l| {
+            iscene::viewer::Layer::from_str(l, true).map_err(|_| {
+                IsceneError::Input(iscene::error::InputError::invalid(
+                    &options.dir,
+                    format!("--layer {l:?}: the layers are colour, segments, boxes, graph"),
+                ))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let screenshot = options.screenshot.clone();
+    let timing = iscene::viewer::view(&iscene::viewer::ViewOptions { layers, ..options })?;
+    if let (Some(path), Some(t)) = (screenshot, timing) {
+        println!(
+            "{} ({} frames after the first in {:.2} s: {:.1} frames/s)",
+            path.display(),
+            t.frames,
+            t.seconds,
+            t.frames_per_s()
+        );
+    }
+    Ok(())
 }
 
 fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), String> {
@@ -225,10 +297,11 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 });
                 match &s.failed_precondition {
                     None => println!(
-                        "{:>2} {:<36} ok{physics} ({:.0} ms)",
+                        "{:>2} {:<36} ok{physics} ({:.0} ms, physics {:.0} ms)",
                         s.step,
                         s.action.label(),
-                        s.wall_ms
+                        s.wall_ms,
+                        s.physics_ms
                     ),
                     Some(why) => println!("{:>2} {:<36} FAILED: {why}", s.step, s.action.label()),
                 }
@@ -290,6 +363,41 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 },
             )?;
             print_json(&report)?;
+        }
+        Some(Command::Bench {
+            command: BenchCommand::Simulation { dir, task, runs },
+        }) => {
+            let report = iscene::simulation::bench_simulation(&dir, &task, runs as usize)?;
+            print_json(&report)?;
+        }
+        Some(Command::View {
+            dir,
+            screenshot,
+            layer,
+            frames,
+            size,
+            open,
+        }) => {
+            #[cfg(feature = "viewer")]
+            view(
+                iscene::viewer::ViewOptions {
+                    dir,
+                    screenshot,
+                    layers: Vec::new(),
+                    frames,
+                    size,
+                    open,
+                },
+                &layer,
+            )?;
+            #[cfg(not(feature = "viewer"))]
+            {
+                let _ = (dir, screenshot, layer, frames, size, open);
+                return Err(IsceneError::Internal(
+                    "this iscene was built without the viewer: cargo run --release --features viewer -- view ..."
+                        .into(),
+                ));
+            }
         }
         Some(Command::Eval { dir, gt }) => {
             let report = iscene::eval::evaluate_reconstruction(&dir, &gt)?;

@@ -4,6 +4,7 @@
 //! the scene's exports after the last step.
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use bevy::prelude::*;
 use serde::Serialize;
@@ -20,13 +21,15 @@ use crate::sim::graph_sync::graph_after;
 use crate::sim::planner::{ground, plan};
 use crate::sim::robot::BasePose;
 use crate::sim::scene_view::SceneView;
-use crate::sim::symbolic::{Fact, parse_goal, symbolic_scene};
+use crate::sim::symbolic::{Fact, SymbolicScene, parse_goal, symbolic_scene};
 use crate::sim::task::Task;
 use crate::sim::{actions::Action, pddl};
 use crate::systems::kinematic_tree::{read_kinematic_tree, spawn_node_links};
+use crate::systems::physics_validation::rest_physics;
 use crate::systems::scene_graph::spawn_contact_graph;
 use crate::systems::simulation::{
-    ActionRequest, SimulationPlugin, SimulationTrace, StepRecord, robot_state, spawn_robot,
+    ActionRequest, SimulationPlugin, SimulationTrace, StepPhysics, StepRecord, robot_state,
+    spawn_robot, step_physics,
 };
 
 /// States the planner may expand before it gives up.
@@ -46,6 +49,8 @@ pub struct SimulationSummary {
     pub goals: Vec<String>,
     /// The planner's plan (PDDL operator names), when the task has goals.
     pub plan: Option<Vec<String>>,
+    /// The rest test of the whole scene before the first action.
+    pub physics_before: StepPhysics,
     pub steps: Vec<StepRecord>,
     /// Every step succeeded (and the goals hold at the end).
     pub success: bool,
@@ -83,41 +88,64 @@ fn default_start(tree: &KinematicTree) -> Option<BasePose> {
     })
 }
 
-/// Runs `options.task` on the scene in `options.dir` and writes `options.out`.
-pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneError> {
-    let graph_path = options.dir.join("contact_graph.json");
-    let graph = ContactGraph::load(&graph_path)?;
-    let task = Task::load(&options.task)?;
+/// A task ready to run: the scene's graph, its symbolic start state, the goals and the actions
+/// (the task's own steps, or the planner's plan for its goals).
+struct PreparedTask {
+    graph: ContactGraph,
+    task: Task,
+    scene: SymbolicScene,
+    goals: Vec<Fact>,
+    plan: Option<Vec<String>>,
+    actions: Vec<Action>,
+}
+
+/// The task on the scene in `dir`, and the world built to read its start state (ready to run).
+fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneError> {
+    let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
+    let task = Task::load(task_path)?;
     let mut app = simulation_app(&graph, &task).map_err(IsceneError::Internal)?;
     let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
-
-    // The symbolic start state, the goals and the plan.
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
-    let view = SceneView::new(&before);
-    let scene = symbolic_scene(&view, &place, holding.as_deref());
+    let scene = symbolic_scene(&SceneView::new(&before), &place, holding.as_deref());
     let goals: Vec<Fact> = task
         .goals
         .iter()
-        .map(|g| parse_goal(g, &scene).map_err(|p| InputError::invalid(&options.task, p)))
+        .map(|g| parse_goal(g, &scene).map_err(|p| InputError::invalid(task_path, p)))
         .collect::<Result<_, _>>()?;
-    let (plan_names, actions): (Option<Vec<String>>, Vec<Action>) = if goals.is_empty() {
+    let (plan, actions) = if goals.is_empty() {
         (None, task.steps.clone())
     } else {
         let found = plan(&ground(&scene, &goals), MAX_EXPANDED).ok_or_else(|| {
             InputError::invalid(
-                &options.task,
+                task_path,
                 format!("no plan reaches the goals {:?}", task.goals),
             )
         })?;
         let (names, actions) = found.steps.into_iter().unzip();
         (Some(names), actions)
     };
+    let prepared = PreparedTask {
+        graph,
+        task,
+        scene,
+        goals,
+        plan,
+        actions,
+    };
+    Ok((prepared, app))
+}
 
+/// Asks for each action in turn through the ECS, one update each, until one fails; returns
+/// each update's wall-clock milliseconds.
+fn run_actions(app: &mut App, actions: &[Action]) -> Vec<f64> {
+    let mut update_ms = Vec::with_capacity(actions.len());
     for action in actions {
         app.world_mut()
             .resource_mut::<Messages<ActionRequest>>()
-            .write(ActionRequest(action));
+            .write(ActionRequest(action.clone()));
+        let started = Instant::now();
         app.update();
+        update_ms.push(started.elapsed().as_secs_f64() * 1e3);
         let failed = app
             .world()
             .resource::<SimulationTrace>()
@@ -128,39 +156,125 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
             break;
         }
     }
+    update_ms
+}
+
+/// Runs `options.task` on the scene in `options.dir` and writes `options.out`.
+pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneError> {
+    let (prepared, mut app) = prepare(&options.dir, &options.task)?;
+    let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
+    let physics_before = step_physics(rest_physics(&before));
+    run_actions(&mut app, &prepared.actions);
     let steps = app.world().resource::<SimulationTrace>().0.clone();
     let after = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
     let end = symbolic_scene(&SceneView::new(&after), &place, holding.as_deref());
-    let goals_hold = goals.iter().all(|g| end.facts.contains(g));
-    let all_ran = plan_names.as_ref().map_or(task.steps.len(), Vec::len) == steps.len();
+    let goals_hold = prepared.goals.iter().all(|g| end.facts.contains(g));
+    let all_ran = prepared.actions.len() == steps.len();
     let summary = SimulationSummary {
         task: options.task.display().to_string(),
-        goals: task.goals.clone(),
-        plan: plan_names,
+        goals: prepared.task.goals.clone(),
+        plan: prepared.plan.clone(),
+        physics_before,
         success: all_ran && steps.iter().all(|s| s.success) && goals_hold,
         steps,
         output: options.out.clone(),
     };
-    write_outputs(
-        &options.out,
-        &graph,
-        &before,
-        &after,
-        &scene,
-        &goals,
-        &summary,
-    )?;
+    write_outputs(&options.out, &prepared, &before, &after, &summary)?;
     Ok(summary)
+}
+
+/// Figures of `iscene bench simulation`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SimulationBenchReport {
+    pub task: String,
+    pub runs: usize,
+    pub threads: usize,
+    pub steps: Vec<StepTiming>,
+    /// The slowest step's median, milliseconds (issue 7's bar: under 200 ms).
+    pub slowest_median_ms: f64,
+}
+
+/// One step's time over the runs: the action with its physics check (inside the system) and
+/// the whole ECS update that performed it.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepTiming {
+    pub action: String,
+    pub median_ms: f64,
+    pub max_ms: f64,
+    pub median_physics_ms: f64,
+    pub median_update_ms: f64,
+    /// Objects the physics check simulated.
+    pub checked: usize,
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// Runs the task `runs` times in fresh worlds and reports each step's time. Every run must
+/// succeed: a failing task is not a benchmark.
+pub fn bench_simulation(
+    dir: &Path,
+    task: &Path,
+    runs: usize,
+) -> Result<SimulationBenchReport, IsceneError> {
+    let (prepared, first) = prepare(dir, task)?;
+    let mut first = Some(first);
+    let mut per_run: Vec<(Vec<StepRecord>, Vec<f64>)> = Vec::with_capacity(runs);
+    for _ in 0..runs {
+        let mut app = match first.take() {
+            Some(app) => app,
+            None => {
+                simulation_app(&prepared.graph, &prepared.task).map_err(IsceneError::Internal)?
+            }
+        };
+        let update_ms = run_actions(&mut app, &prepared.actions);
+        let steps = app.world().resource::<SimulationTrace>().0.clone();
+        if let Some(failed) = steps.iter().find(|s| !s.success) {
+            return Err(IsceneError::Internal(format!(
+                "step {} ({}) failed: {}",
+                failed.step,
+                failed.action.label(),
+                failed.failed_precondition.as_deref().unwrap_or("?")
+            )));
+        }
+        per_run.push((steps, update_ms));
+    }
+    let steps: Vec<StepTiming> = prepared
+        .actions
+        .iter()
+        .enumerate()
+        .map(|(i, action)| StepTiming {
+            action: action.label(),
+            median_ms: median(per_run.iter().map(|(s, _)| s[i].wall_ms).collect()),
+            max_ms: per_run
+                .iter()
+                .map(|(s, _)| s[i].wall_ms)
+                .fold(0.0, f64::max),
+            median_physics_ms: median(per_run.iter().map(|(s, _)| s[i].physics_ms).collect()),
+            median_update_ms: median(per_run.iter().map(|(_, u)| u[i]).collect()),
+            checked: per_run[0].0[i]
+                .physics
+                .as_ref()
+                .map_or(0, |p| p.checked.len()),
+        })
+        .collect();
+    Ok(SimulationBenchReport {
+        task: task.display().to_string(),
+        runs,
+        threads: rayon::current_num_threads(),
+        slowest_median_ms: steps.iter().map(|s| s.median_ms).fold(0.0, f64::max),
+        steps,
+    })
 }
 
 fn write_outputs(
     out: &Path,
-    graph: &ContactGraph,
+    prepared: &PreparedTask,
     before: &KinematicTree,
     after: &KinematicTree,
-    scene: &crate::sim::symbolic::SymbolicScene,
-    goals: &[Fact],
     summary: &SimulationSummary,
 ) -> Result<(), IsceneError> {
     let staged = StagedDir::new(out)?;
@@ -173,11 +287,11 @@ fn write_outputs(
     write_text(&dir.join("domain.pddl"), &pddl::domain())?;
     write_text(
         &dir.join("problem.pddl"),
-        &pddl::problem("task", scene, goals),
+        &pddl::problem("task", &prepared.scene, &prepared.goals),
     )?;
     write_text(
         &dir.join("contact_graph.json"),
-        &graph_after(graph, before, after).to_json(),
+        &graph_after(&prepared.graph, before, after).to_json(),
     )?;
     write_tree_exports(dir, after, "scene")?;
     staged.commit()?;

@@ -52,12 +52,24 @@ fn the_fridge_to_microwave_demonstration_runs_and_the_box_ends_under_the_microwa
     assert_eq!(code, 0, "{trace:#}");
     let steps = trace["steps"].as_array().expect("steps");
     assert_eq!(steps.len(), 9);
+    let objects = trace["physics_before"]["checked"]
+        .as_array()
+        .expect("the whole scene's rest test before the first step")
+        .len();
+    assert_eq!(
+        objects, 15,
+        "every movable and furniture object is simulated"
+    );
+    assert_eq!(trace["physics_before"]["stable_fraction"], 1.0);
     for s in steps {
         assert_eq!(s["success"], true, "{s:#}");
         assert_eq!(
             s["physics"]["stable_fraction"], 1.0,
             "every step stands: {s:#}"
         );
+        // The whole scene is checked after every step (less the box while the gripper holds it).
+        let checked = s["physics"]["checked"].as_array().expect("checked").len();
+        assert!(checked >= objects - 1, "{s:#}");
     }
     // The final URDF: the box hangs from the microwave's link; both doors are closed.
     let urdf = urdf_rs::read_file(out.join("scene.urdf")).expect("URDF");
@@ -200,5 +212,38 @@ fn a_malformed_task_is_bad_input() {
             "{stderr}"
         );
         assert!(!out.exists(), "no output for bad input");
+    }
+}
+
+/// `iscene bench simulation` runs the demonstration and reports every step (its figures go to
+/// the README; only their presence and shape are checked here, never a time).
+#[test]
+fn the_simulation_benchmark_reports_every_step_of_the_demonstration() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let task = common::root().join("scenes/tasks/kitchen_fridge_to_microwave.json");
+    let (code, stdout, stderr) = common::iscene(
+        &[
+            "bench",
+            "simulation",
+            gt.to_str().expect("utf8"),
+            "--task",
+            task.to_str().expect("utf8"),
+            "--runs",
+            "1",
+        ],
+        &common::root(),
+    );
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+    let steps = report["steps"].as_array().expect("steps");
+    assert_eq!(steps.len(), 9, "{report:#}");
+    assert_eq!(steps[1]["action"], "open fridge_1");
+    for s in steps {
+        let (total, physics) = (
+            s["median_ms"].as_f64().expect("ms"),
+            s["median_physics_ms"].as_f64().expect("ms"),
+        );
+        assert!(physics > 0.0 && physics <= total, "{s:#}");
     }
 }

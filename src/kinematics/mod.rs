@@ -4,6 +4,7 @@ pub mod inertial;
 pub mod joint;
 pub mod joint_sweep;
 pub mod link;
+pub mod ray_pick;
 pub mod rest_test;
 pub mod tree;
 

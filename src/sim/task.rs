@@ -20,7 +20,7 @@ pub struct Start {
 
 /// A task: `steps` to run as written, or `goals` (`cup_1 in microwave_1`, `microwave_1
 /// closed`, ...) to plan for and then run.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Task {
     #[serde(default)]

@@ -3,6 +3,7 @@
 //! stable, unstable or penetrating with the reason; and every door and drawer swept across its
 //! range for collisions.
 
+use bevy::ecs::schedule::SingleThreadedExecutor;
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier3d::rapier::prelude::{
@@ -182,6 +183,8 @@ pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
     let penetrations = start_penetrations(tree, &bodies);
     let mut app = App::new();
     app.add_plugins((
+        // Transform propagation asks for the compute pool even on one thread.
+        bevy::app::TaskPoolPlugin::default(),
         bevy::time::TimePlugin,
         bevy::transform::TransformPlugin,
         RapierPhysicsPlugin::<NoUserData>::default()
@@ -193,6 +196,12 @@ pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
     });
     app.finish();
     app.cleanup();
+    // A scene's worth of bodies steps in well under a millisecond; handing each system to a
+    // thread pool and back cost more than that (three quarters of the kitchen's rest test went
+    // to parking and waking threads: 120 ms, 32 ms on one thread).
+    for (_, schedule) in app.world_mut().resource_mut::<Schedules>().iter_mut() {
+        schedule.set_executor(SingleThreadedExecutor::new());
+    }
     app.update();
     let frozen: Vec<bool> = penetrations
         .iter()

@@ -13,11 +13,10 @@ use crate::components::{Joint, LinkBody, Panoptic};
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::LinkGeometry;
 use crate::kinematics::rest_test::{ObjectVerdict, Verdict};
-use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::systems::kinematic_tree::read_kinematic_tree;
-use crate::systems::physics_validation::rest_physics;
+use crate::systems::physics_validation::{PhysicsReport, rest_physics};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 
 /// The robot's base entity: its figures and the place it last navigated to (for the planner).
@@ -35,9 +34,12 @@ pub struct Gripper;
 #[derive(Message, Clone, Debug)]
 pub struct ActionRequest(pub Action);
 
-/// The physics check after an action.
+/// The physics check after an action: the rest test of the whole scene.
 #[derive(Clone, Debug, Serialize)]
 pub struct StepPhysics {
+    /// The objects simulated and judged.
+    pub checked: Vec<String>,
+    /// Share of them judged stable.
     pub stable_fraction: f32,
     /// Objects judged unstable or penetrating, with the reason.
     pub not_stable: Vec<ObjectVerdict>,
@@ -57,6 +59,8 @@ pub struct StepRecord {
     pub physics: Option<StepPhysics>,
     /// Wall-clock milliseconds for the action and its physics check.
     pub wall_ms: f64,
+    /// Of `wall_ms`, the milliseconds of the physics check.
+    pub physics_ms: f64,
 }
 
 /// Every action performed so far, in order.
@@ -128,17 +132,22 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
             changes: Vec::new(),
             physics: None,
             wall_ms: started.elapsed().as_secs_f64() * 1e3,
+            physics_ms: 0.0,
         },
         Ok(changes) => {
             for change in &changes {
-                apply(world, change);
+                apply_change(world, change);
             }
             if let Action::Navigate { to } = action {
                 for mut robot in world.query::<&mut Robot>().iter_mut(world) {
                     robot.place = to.clone();
                 }
             }
-            let physics = read_kinematic_tree(world).ok().map(|tree| check(&tree));
+            let physics_started = Instant::now();
+            let physics = read_kinematic_tree(world)
+                .ok()
+                .map(|tree| step_physics(rest_physics(&tree)));
+            let physics_ms = physics_started.elapsed().as_secs_f64() * 1e3;
             StepRecord {
                 step,
                 action: action.clone(),
@@ -147,6 +156,7 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
                 changes,
                 physics,
                 wall_ms: started.elapsed().as_secs_f64() * 1e3,
+                physics_ms,
             }
         }
     };
@@ -177,7 +187,7 @@ fn entity_named(world: &mut World, name: &str) -> Option<Entity> {
 }
 
 /// Applies one change to the transform hierarchy.
-fn apply(world: &mut World, change: &Change) {
+pub fn apply_change(world: &mut World, change: &Change) {
     match change {
         Change::MoveBase { to, .. } => {
             if let Some(base) = entity_named(world, ROBOT_LINK) {
@@ -237,10 +247,10 @@ fn apply(world: &mut World, change: &Change) {
     }
 }
 
-/// The rest test of the tree, reduced to what a step reports.
-fn check(tree: &KinematicTree) -> StepPhysics {
-    let report = rest_physics(tree);
+/// A rest test reduced to what a step reports.
+pub fn step_physics(report: PhysicsReport) -> StepPhysics {
     StepPhysics {
+        checked: report.objects.iter().map(|o| o.object.clone()).collect(),
         stable_fraction: report.stable_fraction,
         not_stable: report
             .objects

@@ -1,0 +1,162 @@
+//! Gives every link body a Bevy mesh (flat-shaded, from its visual triangles) and two materials:
+//! its own colour and its object's instance colour (the panoptic segments layer). Every entity of
+//! the scene hierarchy gets a visibility so that hiding a parent hides what it carries.
+
+use bevy::asset::RenderAssetUsages;
+use bevy::mesh::{Indices, PrimitiveTopology};
+use bevy::prelude::*;
+
+use crate::components::{LinkBody, ModelPart, Panoptic, SceneEntity};
+use crate::geometry::TriMesh;
+use crate::viewer::layers::{ActiveLayers, Layer};
+
+/// A link's two looks.
+#[derive(Component, Clone, Debug)]
+pub struct LinkMaterials {
+    pub colour: Handle<StandardMaterial>,
+    pub segment: Handle<StandardMaterial>,
+}
+
+/// Classes never drawn: the viewer looks into the room from above.
+pub const HIDDEN_CLASSES: [&str; 1] = ["ceiling"];
+
+/// A Bevy mesh of `mesh`, one normal per face (the CAD models are boxy).
+pub fn bevy_mesh(mesh: &TriMesh) -> Mesh {
+    let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+    let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    let mut out = Mesh::new(
+        PrimitiveTopology::TriangleList,
+        RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, positions)
+    .with_inserted_indices(Indices::U32(indices));
+    out.duplicate_vertices();
+    out.compute_flat_normals();
+    out
+}
+
+/// The colour of instance `instance`: hues a golden angle apart, so neighbours differ.
+pub fn instance_colour(instance: u32) -> Color {
+    let hue = (instance as f32 * 137.507_77) % 360.0;
+    Color::hsl(hue, 0.65, 0.55)
+}
+
+fn material(colour: Color) -> StandardMaterial {
+    StandardMaterial {
+        base_color: colour,
+        perceptual_roughness: 0.8,
+        ..default()
+    }
+}
+
+/// The object a link belongs to: its own entity, or the object its part belongs to.
+fn object_instance(
+    entity: Entity,
+    part: Option<&ModelPart>,
+    panoptic: &Query<(&SceneEntity, &Panoptic)>,
+) -> (u32, String) {
+    if let Ok((_, p)) = panoptic.get(entity) {
+        return (p.instance, p.class.clone());
+    }
+    let Some(part) = part else {
+        return (0, String::new());
+    };
+    panoptic
+        .iter()
+        .find(|(id, _)| id.0 == part.object)
+        .map_or((0, String::new()), |(_, p)| (p.instance, p.class.clone()))
+}
+
+fn attach_link_meshes(
+    mut commands: Commands,
+    links: Query<(Entity, &LinkBody, Option<&ModelPart>), Without<Mesh3d>>,
+    panoptic: Query<(&SceneEntity, &Panoptic)>,
+    layers: Res<ActiveLayers>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+) {
+    for (entity, body, part) in &links {
+        let geometry = &body.0;
+        let [r, g, b] = geometry.color;
+        let (instance, class) = object_instance(entity, part, &panoptic);
+        let looks = LinkMaterials {
+            colour: materials.add(material(Color::linear_rgb(r, g, b))),
+            segment: materials.add(material(instance_colour(instance))),
+        };
+        let shown = if layers.is_on(Layer::Segments) {
+            looks.segment.clone()
+        } else {
+            looks.colour.clone()
+        };
+        let visibility = if HIDDEN_CLASSES.contains(&class.as_str()) {
+            Visibility::Hidden
+        } else {
+            Visibility::Inherited
+        };
+        commands.entity(entity).insert((
+            Mesh3d(meshes.add(bevy_mesh(&geometry.visual))),
+            MeshMaterial3d(shown),
+            looks,
+            visibility,
+        ));
+    }
+}
+
+/// Entities of the hierarchy without a visibility get one (the scene root, bodiless nodes).
+fn give_hierarchy_visibility(
+    mut commands: Commands,
+    entities: Query<Entity, (With<Transform>, Without<Visibility>)>,
+) {
+    for entity in &entities {
+        commands.entity(entity).insert(Visibility::Inherited);
+    }
+}
+
+/// Switches every link between its colour and its segment material when the layers change.
+fn show_segment_colours(
+    layers: Res<ActiveLayers>,
+    mut links: Query<(&LinkMaterials, &mut MeshMaterial3d<StandardMaterial>)>,
+) {
+    if !layers.is_changed() {
+        return;
+    }
+    let segments = layers.is_on(Layer::Segments);
+    for (looks, mut shown) in &mut links {
+        let want = if segments {
+            &looks.segment
+        } else {
+            &looks.colour
+        };
+        if shown.0 != *want {
+            shown.0 = want.clone();
+        }
+    }
+}
+
+/// A sun from above and a little to the side, with shadows off (software rendering).
+fn spawn_light(mut commands: Commands) {
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 3000.0,
+            shadow_maps_enabled: false,
+            ..default()
+        },
+        Transform::from_xyz(1.0, -2.0, 6.0).looking_at(Vec3::ZERO, Vec3::Z),
+    ));
+}
+
+pub struct LinkMeshesPlugin;
+
+impl Plugin for LinkMeshesPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(Startup, spawn_light).add_systems(
+            Update,
+            (
+                give_hierarchy_visibility,
+                attach_link_meshes,
+                show_segment_colours,
+            )
+                .chain(),
+        );
+    }
+}

@@ -1,0 +1,156 @@
+//! `iscene view DIR` (cargo feature `viewer`): a Bevy window on a scene folder's live world (the
+//! contact graph's entities with their CAD links, as `iscene simulate` builds it), with layers
+//! switched from the keyboard, an orbit camera, and doors and drawers worked by clicking them;
+//! or, with `--screenshot`, the same world rendered off screen into a PNG.
+//!
+//! The kinematic tree is the transform hierarchy, so a joint that moves moves its meshes.
+
+mod camera;
+mod interaction;
+mod layers;
+mod link_meshes;
+mod screenshot;
+
+use std::path::PathBuf;
+
+use bevy::prelude::*;
+use bevy::render::RenderPlugin;
+use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
+use bevy::window::ExitCondition;
+use bevy::winit::WinitPlugin;
+
+use crate::error::{InputError, IsceneError};
+use crate::graph::ContactGraph;
+use crate::sim::scene_view::{SceneView, open_value};
+use crate::sim::task::Task;
+use crate::simulation::simulation_app;
+use crate::systems::kinematic_tree::read_kinematic_tree;
+use crate::systems::simulation::apply_change;
+
+pub use camera::OrbitCamera;
+pub use interaction::work_joint_at;
+pub use interaction::{PointerPosition, ViewerStatus};
+pub use layers::{ActiveLayers, Layer};
+pub use screenshot::{RenderTiming, ScreenshotDone, ScreenshotRequest, render_offscreen};
+
+/// What `iscene view` shows and does.
+#[derive(Clone, Debug)]
+pub struct ViewOptions {
+    /// A folder with contact_graph.json.
+    pub dir: PathBuf,
+    /// Render off screen into this PNG and exit.
+    pub screenshot: Option<PathBuf>,
+    /// The layers shown (default: colour).
+    pub layers: Vec<Layer>,
+    /// Frames rendered before the screenshot is taken.
+    pub frames: u32,
+    /// Off-screen image size in pixels.
+    pub size: (u32, u32),
+    /// Objects whose main door or drawer is opened before the first frame.
+    pub open: Vec<String>,
+}
+
+/// Adds what the viewer draws and how it reacts, on top of a scene world and Bevy's renderer.
+pub struct ViewerPlugin {
+    pub layers: Vec<Layer>,
+}
+
+impl Plugin for ViewerPlugin {
+    fn build(&self, app: &mut App) {
+        app.insert_resource(ActiveLayers::new(&self.layers))
+            .insert_resource(GlobalAmbientLight {
+                brightness: 300.0,
+                ..default()
+            })
+            .insert_resource(ClearColor(Color::srgb(0.93, 0.94, 0.96)))
+            .add_plugins((
+                link_meshes::LinkMeshesPlugin,
+                layers::LayersPlugin,
+                camera::OrbitCameraPlugin,
+                interaction::InteractionPlugin,
+            ));
+    }
+}
+
+/// The scene world of `options.dir` with the robot, doors opened as asked, and the viewer's
+/// plugins; `offscreen` renders into an image of that size instead of a window.
+pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneError> {
+    let graph = ContactGraph::load(&options.dir.join("contact_graph.json"))?;
+    let mut app = simulation_app(&graph, &Task::default()).map_err(IsceneError::Internal)?;
+    open_doors(app.world_mut(), &options.open)
+        .map_err(|why| InputError::invalid(&options.dir, why))?;
+    let render = RenderPlugin {
+        // Every pipeline ready on the frame that first needs it: a screenshot after N frames
+        // shows the whole scene, not whatever had compiled by then.
+        synchronous_pipeline_compilation: true,
+        ..default()
+    };
+    if offscreen {
+        app.add_plugins(
+            DefaultPlugins
+                .set(WindowPlugin {
+                    primary_window: None,
+                    exit_condition: ExitCondition::DontExit,
+                    close_when_requested: false,
+                    ..default()
+                })
+                .set(render)
+                .set(bevy::log::LogPlugin {
+                    level: bevy::log::Level::WARN,
+                    ..default()
+                })
+                .disable::<WinitPlugin>()
+                // One frame in, one frame out: the screenshot frame is the frame asked for.
+                .disable::<PipelinedRenderingPlugin>(),
+        );
+    } else {
+        app.add_plugins(
+            DefaultPlugins
+                .set(WindowPlugin {
+                    primary_window: Some(Window {
+                        title: format!("iscene: {}", options.dir.display()),
+                        ..default()
+                    }),
+                    ..default()
+                })
+                .set(render),
+        );
+    }
+    app.add_plugins(ViewerPlugin {
+        layers: options.layers.clone(),
+    });
+    Ok(app)
+}
+
+/// Opens the main door or drawer of each object in `objects`.
+fn open_doors(world: &mut World, objects: &[String]) -> Result<(), String> {
+    for object in objects {
+        let tree = read_kinematic_tree(world)?;
+        let view = SceneView::new(&tree);
+        let part = view
+            .main_part(object)
+            .ok_or_else(|| format!("--open {object}: no such object with a door or drawer"))?;
+        let link = &tree.links[part];
+        apply_change(
+            world,
+            &crate::sim::actions::Change::SetJoint {
+                link: link.name.clone(),
+                from: link.value,
+                to: open_value(&tree, part),
+            },
+        );
+    }
+    Ok(())
+}
+
+/// Runs the viewer: a window until it is closed (`None`), or one off-screen screenshot (how fast
+/// its frames rendered).
+pub fn view(options: &ViewOptions) -> Result<Option<RenderTiming>, IsceneError> {
+    let Some(path) = &options.screenshot else {
+        let mut app = viewer_app(options, false)?;
+        app.run();
+        return Ok(None);
+    };
+    let mut app = viewer_app(options, true)?;
+    screenshot::take(&mut app, path, options.frames, options.size).map(Some)
+}

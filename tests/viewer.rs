@@ -1,0 +1,179 @@
+//! The viewer (issue 9), built with `--features viewer` and run off screen on Mesa's software
+//! Vulkan driver (lavapipe; scripts/setup-viewer.sh installs it): a screenshot of the rendered
+//! kitchen is a picture of the kitchen (not blank, many colours), an opened fridge door and each
+//! layer change the picture, and a click on the fridge door through Bevy's input opens it.
+#![cfg(feature = "viewer")]
+
+use std::path::{Path, PathBuf};
+
+mod common;
+
+use bevy::input::ButtonState;
+use bevy::input::mouse::MouseButtonInput;
+use bevy::prelude::*;
+use bevy::window::CursorMoved;
+use iscene::components::Joint;
+use iscene::viewer::{ViewOptions, render_offscreen, viewer_app};
+
+fn kitchen_truth(dir: &Path) -> PathBuf {
+    let seq = dir.join("seq");
+    common::render_scene("kitchen", &seq, 2, true);
+    seq.join("gt")
+}
+
+/// `iscene view GT --screenshot OUT ...extra`, asserting success; the picture as RGB.
+fn screenshot(gt: &Path, out: &Path, extra: &[&str]) -> image::RgbImage {
+    let mut args = vec![
+        "view",
+        gt.to_str().expect("utf8"),
+        "--screenshot",
+        out.to_str().expect("utf8"),
+        "--size",
+        "480x360",
+    ];
+    args.extend_from_slice(extra);
+    let (code, stdout, stderr) = common::iscene(&args, &common::root());
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    image::open(out).expect("a PNG").to_rgb8()
+}
+
+/// Share of pixels that differ between two pictures by more than a rounding step.
+fn changed_fraction(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let changed = a
+        .pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 8))
+        .count();
+    changed as f64 / (a.width() * a.height()) as f64
+}
+
+#[test]
+fn a_screenshot_of_the_kitchen_shows_the_kitchen_and_changes_with_doors_and_layers() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let plain = screenshot(&gt, &dir.path().join("colour.png"), &[]);
+    assert_eq!(plain.dimensions(), (480, 360));
+
+    // Not blank: most pixels are scene, not the clear colour, in many distinct colours.
+    let background = image::Rgb([237u8, 240, 245]);
+    let scene_pixels = plain
+        .pixels()
+        .filter(|p| {
+            p.0.iter()
+                .zip(background.0)
+                .any(|(x, y)| x.abs_diff(y) > 12)
+        })
+        .count();
+    let coverage = scene_pixels as f64 / (480.0 * 360.0);
+    assert!(coverage > 0.5, "scene covers {coverage:.2} of the picture");
+    let mut colours: Vec<[u8; 3]> = plain.pixels().map(|p| p.0.map(|c| c / 16)).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(colours.len() > 40, "{} colours", colours.len());
+    let luma: Vec<f64> = plain
+        .pixels()
+        .map(|p| 0.299 * p.0[0] as f64 + 0.587 * p.0[1] as f64 + 0.114 * p.0[2] as f64)
+        .collect();
+    let mean = luma.iter().sum::<f64>() / luma.len() as f64;
+    let sd = (luma.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / luma.len() as f64).sqrt();
+    assert!(sd > 15.0, "luma standard deviation {sd:.1}");
+
+    // The same picture twice: rendering is deterministic.
+    let again = screenshot(&gt, &dir.path().join("again.png"), &[]);
+    assert!(changed_fraction(&plain, &again) < 0.001);
+
+    let opened = screenshot(&gt, &dir.path().join("open.png"), &["--open", "fridge_1"]);
+    let by_door = changed_fraction(&plain, &opened);
+    assert!(by_door > 0.01, "opening the fridge changed {by_door:.4}");
+
+    for layer in ["segments", "boxes", "graph"] {
+        let shown = screenshot(
+            &gt,
+            &dir.path().join(format!("{layer}.png")),
+            &["--layer", layer],
+        );
+        let changed = changed_fraction(&plain, &shown);
+        assert!(changed > 0.005, "layer {layer} changed {changed:.4}");
+    }
+}
+
+#[test]
+fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let options = ViewOptions {
+        dir: gt,
+        screenshot: None,
+        layers: Vec::new(),
+        frames: 1,
+        size: (480, 360),
+        open: Vec::new(),
+    };
+    let mut app = viewer_app(&options, true).expect("viewer app");
+    render_offscreen(&mut app, options.size);
+    app.finish();
+    app.cleanup();
+    for _ in 0..3 {
+        app.update();
+    }
+    let door = |app: &mut App| {
+        app.world_mut()
+            .query::<(&Name, &Joint)>()
+            .iter(app.world())
+            .find(|(n, _)| n.as_str() == "fridge_1_door")
+            .map(|(_, j)| j.value)
+            .expect("the fridge door")
+    };
+    assert_eq!(door(&mut app), 0.0);
+    // Where the door's middle shows on the picture.
+    let middle = {
+        let world = app.world_mut();
+        let centre = world
+            .query::<(&Name, &GlobalTransform, &iscene::components::LinkBody)>()
+            .iter(world)
+            .find(|(n, _, _)| n.as_str() == "fridge_1_door")
+            .map(|(_, t, body)| {
+                // Low on the door: its top is out of the picture.
+                let (lo, hi) = body.0.visual.bounds().expect("door mesh");
+                let low = (lo + hi) / 2.0;
+                t.transform_point(low.with_z(lo.z + 0.15 * (hi.z - lo.z)))
+            })
+            .expect("door");
+        let (camera, at) = world
+            .query::<(&Camera, &GlobalTransform)>()
+            .iter(world)
+            .next()
+            .expect("camera");
+        camera.world_to_viewport(at, centre).expect("door in view")
+    };
+    assert!(
+        (0.0..480.0).contains(&middle.x) && (0.0..360.0).contains(&middle.y),
+        "the door shows at {middle}"
+    );
+    let window = Entity::PLACEHOLDER;
+    app.world_mut().write_message(CursorMoved {
+        window,
+        position: middle,
+        delta: None,
+    });
+    for state in [ButtonState::Pressed, ButtonState::Released] {
+        app.world_mut().write_message(MouseButtonInput {
+            button: MouseButton::Left,
+            state,
+            window,
+        });
+        app.update();
+    }
+    let opened = door(&mut app);
+    let status = app
+        .world()
+        .resource::<iscene::viewer::ViewerStatus>()
+        .0
+        .clone();
+    assert!(
+        opened > 0.5,
+        "the door opened to {opened}: {status:?} (clicked at {middle})"
+    );
+    assert!(status[0].starts_with("opened fridge_1_door"), "{status:?}");
+}
