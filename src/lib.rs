@@ -20,6 +20,7 @@ pub mod panoptic;
 pub mod pipeline;
 pub mod progress;
 pub mod render;
+pub mod replay;
 pub mod scene;
 pub mod segmentation;
 pub mod sim;

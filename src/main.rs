@@ -56,12 +56,13 @@ enum Command {
     /// Look at a scene folder (a reconstruction, or a rendered sequence's gt/) in a window, or
     /// render it off screen into a PNG (built with `--features viewer`).
     View {
-        /// A folder with contact_graph.json.
+        /// A folder with contact_graph.json; with --replay, a reconstruction's output folder.
         dir: PathBuf,
         /// Render off screen into this PNG and exit.
         #[arg(long)]
         screenshot: Option<PathBuf>,
-        /// Layers shown: colour, segments, boxes, graph (repeat or separate with commas).
+        /// Layers shown: colour, segments, boxes, graph, planes, collision, occupancy, physics
+        /// (repeat or separate with commas).
         #[arg(long, value_delimiter = ',')]
         layer: Vec<String>,
         /// Frames rendered before the screenshot.
@@ -73,6 +74,13 @@ enum Command {
         /// Open this object's main door or drawer first (repeatable).
         #[arg(long)]
         open: Vec<String>,
+        /// Play back the reconstruction in DIR (written by `iscene reconstruct`) frame by frame.
+        #[arg(long)]
+        replay: bool,
+        /// With --replay and --screenshot: this many pictures from the first frame to the last
+        /// (FILE.gif: one animated GIF; otherwise numbered PNGs FILE_00.png ...).
+        #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=200))]
+        shots: u32,
     },
     /// Benchmarks that print their figures as one JSON object on stdout.
     Bench {
@@ -207,7 +215,10 @@ fn view(options: iscene::viewer::ViewOptions, layers: &[String]) -> Result<(), I
             iscene::viewer::Layer::from_str(l, true).map_err(|_| {
                 IsceneError::Input(iscene::error::InputError::invalid(
                     &options.dir,
-                    format!("--layer {l:?}: the layers are colour, segments, boxes, graph"),
+                    format!(
+                        "--layer {l:?}: the layers are {}",
+                        iscene::viewer::Layer::ALL.map(|l| l.name()).join(", ")
+                    ),
                 ))
             })
         })
@@ -224,6 +235,36 @@ fn view(options: iscene::viewer::ViewOptions, layers: &[String]) -> Result<(), I
         );
     }
     Ok(())
+}
+
+/// `view --replay` on a specification or sequence: reconstruct it first, into out/<name> as
+/// `iscene reconstruct` does by default (the oracle segmentation where ground-truth labels
+/// exist, geometry only otherwise).
+#[cfg(feature = "viewer")]
+fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<PathBuf, IsceneError> {
+    let stem = input
+        .file_stem()
+        .map_or("replay".into(), |s| s.to_string_lossy().into_owned());
+    let out = PathBuf::from("out").join(stem);
+    let labelled = input.extension().is_some_and(|e| e == "json") || input.join("labels.json").is_file();
+    reconstruct(&ReconstructOptions {
+        input: Some(input.to_path_buf()),
+        out: out.clone(),
+        frames: None,
+        voxel: 0.02,
+        segmentation: if labelled {
+            SegmentationChoice::Oracle
+        } else {
+            SegmentationChoice::None
+        },
+        segment_every: 1,
+        models: None,
+        fusion: InstanceFusion::Joint,
+        estimate_gravity: false,
+        progress,
+    })?;
+    eprintln!("reconstructed {} into {}; replaying it", input.display(), out.display());
+    Ok(out)
 }
 
 fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), String> {
@@ -377,7 +418,15 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
             frames,
             size,
             open,
+            replay,
+            shots,
         }) => {
+            #[cfg(feature = "viewer")]
+            let dir = if replay && !dir.join("report.json").is_file() {
+                reconstruct_for_replay(&dir, interactive)?
+            } else {
+                dir
+            };
             #[cfg(feature = "viewer")]
             view(
                 iscene::viewer::ViewOptions {
@@ -387,12 +436,14 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     frames,
                     size,
                     open,
+                    replay,
+                    shots,
                 },
                 &layer,
             )?;
             #[cfg(not(feature = "viewer"))]
             {
-                let _ = (dir, screenshot, layer, frames, size, open);
+                let _ = (dir, screenshot, layer, frames, size, open, replay, shots);
                 return Err(IsceneError::Internal(
                     "this iscene was built without the viewer: cargo run --release --features viewer -- view ..."
                         .into(),

@@ -55,6 +55,8 @@ pub struct ReconstructReport {
     pub input: PathBuf,
     pub format: String,
     pub rendered: bool,
+    /// `--frames` as `[start, end or null, step]` over the input's frames, when given.
+    pub frame_selection: Option<(usize, Option<usize>, usize)>,
     pub ingest: IngestReport,
     pub entities: usize,
     /// Support and proximal edges of the contact graph.
@@ -296,6 +298,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         input: sequence_dir,
         format: format.into(),
         rendered,
+        frame_selection: options.frames,
         ingest,
         entities: panoptic.as_ref().map_or(0, |p| p.entities.len()),
         relations: contact_graph.map_or(0, |c| c.graph.edges.len()),

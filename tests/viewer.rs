@@ -37,6 +37,20 @@ fn screenshot(gt: &Path, out: &Path, extra: &[&str]) -> image::RgbImage {
     image::open(out).expect("a PNG").to_rgb8()
 }
 
+/// Share of pixels that are not the clear colour.
+fn coverage(picture: &image::RgbImage) -> f64 {
+    let background = image::Rgb([237u8, 240, 245]);
+    let scene = picture
+        .pixels()
+        .filter(|p| {
+            p.0.iter()
+                .zip(background.0)
+                .any(|(x, y)| x.abs_diff(y) > 12)
+        })
+        .count();
+    scene as f64 / (picture.width() * picture.height()) as f64
+}
+
 /// Share of pixels that differ between two pictures by more than a rounding step.
 fn changed_fraction(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
     assert_eq!(a.dimensions(), b.dimensions());
@@ -56,17 +70,8 @@ fn a_screenshot_of_the_kitchen_shows_the_kitchen_and_changes_with_doors_and_laye
     assert_eq!(plain.dimensions(), (480, 360));
 
     // Not blank: most pixels are scene, not the clear colour, in many distinct colours.
-    let background = image::Rgb([237u8, 240, 245]);
-    let scene_pixels = plain
-        .pixels()
-        .filter(|p| {
-            p.0.iter()
-                .zip(background.0)
-                .any(|(x, y)| x.abs_diff(y) > 12)
-        })
-        .count();
-    let coverage = scene_pixels as f64 / (480.0 * 360.0);
-    assert!(coverage > 0.5, "scene covers {coverage:.2} of the picture");
+    let covered = coverage(&plain);
+    assert!(covered > 0.5, "scene covers {covered:.2} of the picture");
     let mut colours: Vec<[u8; 3]> = plain.pixels().map(|p| p.0.map(|c| c / 16)).collect();
     colours.sort_unstable();
     colours.dedup();
@@ -87,7 +92,15 @@ fn a_screenshot_of_the_kitchen_shows_the_kitchen_and_changes_with_doors_and_laye
     let by_door = changed_fraction(&plain, &opened);
     assert!(by_door > 0.01, "opening the fridge changed {by_door:.4}");
 
-    for layer in ["segments", "boxes", "graph"] {
+    for layer in [
+        "segments",
+        "boxes",
+        "graph",
+        "planes",
+        "collision",
+        "occupancy",
+        "physics",
+    ] {
         let shown = screenshot(
             &gt,
             &dir.path().join(format!("{layer}.png")),
@@ -109,6 +122,8 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
         frames: 1,
         size: (480, 360),
         open: Vec::new(),
+        replay: false,
+        shots: 1,
     };
     let mut app = viewer_app(&options, true).expect("viewer app");
     render_offscreen(&mut app, options.size);
@@ -176,4 +191,110 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
         "the door opened to {opened}: {status:?} (clicked at {middle})"
     );
     assert!(status[0].starts_with("opened fridge_1_door"), "{status:?}");
+    // The rest test ran on the changed scene (the physics layer and the panel show it).
+    let verdicts = app.world().resource::<iscene::viewer::RestVerdicts>();
+    assert_eq!(verdicts.revision, Some(1));
+    let report = verdicts.report.as_ref().expect("a rest test");
+    assert!(
+        report.objects.iter().any(|o| o.object == "fridge_1"),
+        "{:?}",
+        report.objects
+    );
+}
+
+#[test]
+fn a_replay_grows_the_map_along_the_camera_path() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let seq = dir.path().join("seq");
+    common::render_scene("kitchen", &seq, 24, true);
+    let out = dir.path().join("out");
+    let (code, stdout, stderr) = common::iscene(
+        &[
+            "reconstruct",
+            seq.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+        &common::root(),
+    );
+    assert_eq!(code, 0, "{stdout}{stderr}");
+
+    // The timeline: the sensor saw the room bit by bit, not all at the first or last frame.
+    let replay = iscene::replay::load_replay(&out).expect("replay");
+    assert_eq!(replay.frames(), 24);
+    let triangles: Vec<u32> = replay
+        .segments
+        .iter()
+        .flat_map(|s| s.revealed_at.iter().copied())
+        .collect();
+    let share = |pred: &dyn Fn(u32) -> bool| {
+        triangles.iter().filter(|&&t| pred(t)).count() as f64 / triangles.len() as f64
+    };
+    let at_start = share(&|t| t == 0);
+    let before_end = share(&|t| t < 23);
+    assert!(
+        at_start > 0.02 && at_start < 0.5,
+        "{at_start:.2} of the map seen in the first frame"
+    );
+    assert!(before_end > 0.9, "{before_end:.2} of the map seen before the last frame");
+    assert!(replay.nodes.iter().all(|n| n.appears_at < 24));
+    assert!(replay.support_edges_at(0).len() < replay.support_edges_at(23).len());
+
+    // Four pictures from the first frame to the last: the map grows and every picture differs.
+    let (code, stdout, stderr) = common::iscene(
+        &[
+            "view",
+            out.to_str().expect("utf8"),
+            "--replay",
+            "--screenshot",
+            dir.path().join("replay.png").to_str().expect("utf8"),
+            "--shots",
+            "4",
+            "--size",
+            "320x240",
+        ],
+        &common::root(),
+    );
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let shots: Vec<image::RgbImage> = (0..4)
+        .map(|k| {
+            image::open(dir.path().join(format!("replay_{k:02}.png")))
+                .expect("a PNG per shot")
+                .to_rgb8()
+        })
+        .collect();
+    let covered: Vec<f64> = shots.iter().map(coverage).collect();
+    assert!(
+        covered.windows(2).all(|w| w[1] >= w[0] - 0.01) && covered[3] > covered[0] + 0.1,
+        "coverage along the replay {covered:?}"
+    );
+    assert!(covered[3] > 0.3, "coverage along the replay {covered:?}");
+    for pair in shots.windows(2) {
+        let changed = changed_fraction(&pair[0], &pair[1]);
+        assert!(changed > 0.005, "consecutive shots changed {changed:.4}");
+    }
+
+    // The same as one animated GIF.
+    let gif = dir.path().join("replay.gif");
+    let (code, stdout, stderr) = common::iscene(
+        &[
+            "view",
+            out.to_str().expect("utf8"),
+            "--replay",
+            "--screenshot",
+            gif.to_str().expect("utf8"),
+            "--shots",
+            "3",
+            "--size",
+            "160x120",
+        ],
+        &common::root(),
+    );
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    use image::AnimationDecoder;
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(&gif).expect("the GIF"),
+    ))
+    .expect("a GIF");
+    assert_eq!(decoder.into_frames().count(), 3);
 }

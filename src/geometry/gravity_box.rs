@@ -3,6 +3,7 @@
 use glam::{Affine3A, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::geometry::Plane;
 use crate::geometry::min_area_rect::min_area_rect;
 
 /// A box whose z axis is the world's up axis. `size` is the full extent along the box's own axes;
@@ -136,6 +137,48 @@ impl GravityBox {
             a0 - margin <= b1 && b0 - margin <= a1
         })
     }
+
+    /// Where `plane` cuts the box grown by `margin`: a convex polygon, its corners in order
+    /// around the plane's normal (counter-clockwise seen from the side it points to); empty when
+    /// the plane misses the box. This is how a node's surface plane is drawn within its extent.
+    pub fn section(&self, plane: &Plane, margin: f32) -> Vec<Vec3> {
+        let grown = GravityBox {
+            size: self.size + Vec3::splat(2.0 * margin),
+            ..*self
+        };
+        let corners = grown.corners();
+        let distance = corners.map(|c| plane.signed_distance(c));
+        let mut points: Vec<Vec3> = Vec::new();
+        // The twelve edges join corners that differ in one bit.
+        for a in 0..8 {
+            for bit in [1, 2, 4] {
+                let b = a | bit;
+                if b == a {
+                    continue;
+                }
+                let (da, db) = (distance[a], distance[b]);
+                if (da > 0.0) == (db > 0.0) && da != 0.0 && db != 0.0 {
+                    continue;
+                }
+                let t = if da == db { 0.0 } else { da / (da - db) };
+                let p = corners[a] + (corners[b] - corners[a]) * t.clamp(0.0, 1.0);
+                if points.iter().all(|q| q.distance(p) > 1e-5) {
+                    points.push(p);
+                }
+            }
+        }
+        if points.len() < 3 {
+            return Vec::new();
+        }
+        let centre = points.iter().copied().sum::<Vec3>() / points.len() as f32;
+        let u = (points[0] - centre).normalize_or_zero();
+        let v = plane.normal.cross(u);
+        points.sort_by(|p, q| {
+            let angle = |x: &Vec3| (*x - centre).dot(v).atan2((*x - centre).dot(u));
+            angle(p).total_cmp(&angle(q))
+        });
+        points
+    }
 }
 
 /// Area of the intersection of two convex, counter-clockwise polygons.
@@ -240,6 +283,36 @@ mod tests {
             let b = GravityBox { yaw: other_yaw, ..moved };
             let (ab, ba) = (a.iou(&b), b.iou(&a));
             prop_assert!((ab - ba).abs() < 1e-4 && (0.0..=1.0).contains(&ab));
+        }
+
+        /// A plane's section of a box lies on the plane and in the box, is convex and turns
+        /// counter-clockwise about the normal; a level plane through a box is its footprint.
+        #[test]
+        fn a_section_is_the_convex_cut_of_the_box(
+            sx in 0.1f32..3.0, sy in 0.1f32..3.0, sz in 0.1f32..3.0, yaw in -3.1f32..3.1,
+            nx in -1.0f32..1.0, ny in -1.0f32..1.0, nz in -1.0f32..1.0, along in -0.45f32..0.45,
+        ) {
+            let b = GravityBox { center: Vec3::new(0.3, -0.7, 1.2), yaw, size: Vec3::new(sx, sy, sz) };
+            let normal = Vec3::new(nx, ny, nz);
+            prop_assume!(normal.length() > 0.1);
+            let through = b.center + b.world_from_box().transform_vector3(b.size * along);
+            let plane = Plane::from_point_normal(through, normal);
+            let section = b.section(&plane, 0.0);
+            prop_assert!(section.len() >= 3 && section.len() <= 6, "{} corners", section.len());
+            let n = section.len();
+            for (i, p) in section.iter().enumerate() {
+                prop_assert!(plane.signed_distance(*p).abs() < 1e-3);
+                prop_assert!(b.contains(*p, 1e-3));
+                let (q, r) = (section[(i + 1) % n], section[(i + 2) % n]);
+                prop_assert!((q - *p).cross(r - q).dot(plane.normal) > -1e-5, "not convex");
+            }
+            let level = Plane::from_point_normal(b.center, Vec3::Z);
+            let footprint = b.section(&level, 0.0);
+            prop_assert_eq!(footprint.len(), 4);
+            let area = 0.5 * (footprint[2] - footprint[0]).cross(footprint[3] - footprint[1]).length();
+            prop_assert!((area - sx * sy).abs() < 1e-3 * (1.0 + sx * sy));
+            let above = Plane::from_point_normal(b.center + Vec3::Z * sz, Vec3::Z);
+            prop_assert!(b.section(&above, 0.0).is_empty());
         }
 
         #[test]

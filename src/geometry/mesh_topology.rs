@@ -1,5 +1,6 @@
-//! How a triangle mesh is put together: its connected components, whether it is closed, and
-//! its convex hull. Mass properties and collision shapes are computed per component.
+//! How a triangle mesh is put together: its connected components, whether it is closed, its
+//! convex hull, and its feature edges. Mass properties and collision shapes are computed per
+//! component.
 
 use std::collections::HashMap;
 
@@ -79,6 +80,34 @@ impl TriMesh {
         };
         (hull.signed_volume() > 1e-12).then_some(hull)
     }
+
+    /// The edges a wireframe should show: borders (one triangle) and creases, where the two
+    /// triangles' normals differ by more than `crease_deg`. The diagonals that triangulate a flat
+    /// face are not among them. Edges are matched by shared vertex indices.
+    pub fn feature_edges(&self, crease_deg: f32) -> Vec<[Vec3; 2]> {
+        let mut faces_of_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+        for (i, t) in self.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                faces_of_edge.entry((a.min(b), a.max(b))).or_default().push(i);
+            }
+        }
+        let cos_crease = crease_deg.to_radians().cos();
+        let mut edges: Vec<((u32, u32), [Vec3; 2])> = faces_of_edge
+            .into_iter()
+            .filter(|(_, faces)| match faces[..] {
+                [f, g] => self.face_normal(f).dot(self.face_normal(g)) < cos_crease,
+                _ => true,
+            })
+            .map(|((a, b), _)| {
+                let ends = [self.positions[a as usize], self.positions[b as usize]];
+                ((a, b), ends)
+            })
+            .collect();
+        // In index order, so the same mesh always gives the same list.
+        edges.sort_unstable_by_key(|(key, _)| *key);
+        edges.into_iter().map(|(_, ends)| ends).collect()
+    }
 }
 
 #[cfg(test)]
@@ -108,6 +137,25 @@ mod tests {
         let hull = mesh.convex_hull().expect("a box spans volume");
         assert!(hull.is_closed());
         assert!((hull.signed_volume() - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_box_shows_its_twelve_edges_and_an_open_one_its_border() {
+        let cube = TriMesh::cuboid(Vec3::ZERO, Vec3::ONE);
+        let hull = cube.convex_hull().expect("hull");
+        for mesh in [&cube, &hull] {
+            let edges = mesh.feature_edges(1.0);
+            assert_eq!(edges.len(), 12);
+            for [a, b] in edges {
+                // Every edge of a unit cube is one unit long along one axis.
+                assert!(((a - b).length() - 1.0).abs() < 1e-5);
+            }
+        }
+        let flat = TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE.with_z(0.0)],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+        };
+        assert_eq!(flat.feature_edges(1.0).len(), 4);
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! The orbit camera: it looks at the middle of the floor from inside the room (the ceiling is
-//! not drawn), turns with a drag, and zooms with the wheel. z is up, as everywhere in iscene.
+//! not drawn), turns with a drag, zooms with the wheel and flies with WASD/QE. z is up, as
+//! everywhere in iscene.
 
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
@@ -55,6 +56,12 @@ fn spawn_camera(
         .map_or((Vec3::ZERO, Vec2::splat(4.0)), |(_, b)| {
             (b.0.center.with_z(0.0), b.0.size.truncate())
         });
+    spawn_orbit_camera(&mut commands, centre, size);
+}
+
+/// The camera framing a floor of `size` centred at `centre`. MSAA and tonemapping are off: on
+/// a software renderer they cost a quarter of the frame time.
+pub fn spawn_orbit_camera(commands: &mut Commands, centre: Vec3, size: Vec2) {
     let orbit = OrbitCamera::framing(centre, size);
     commands.spawn((
         Camera3d::default(),
@@ -69,13 +76,30 @@ fn spawn_camera(
 const TURN_PER_PIXEL: f32 = 0.005;
 const ZOOM_PER_LINE: f32 = 0.1;
 
+/// Flying speed in orbit distances per second.
+const FLY_PER_S: f32 = 0.6;
+
 fn orbit(
     buttons: Res<ButtonInput<MouseButton>>,
+    keys: Res<ButtonInput<KeyCode>>,
+    time: Res<Time>,
     motion: Res<AccumulatedMouseMotion>,
     scroll: Res<AccumulatedMouseScroll>,
     mut cameras: Query<(&mut OrbitCamera, &mut Transform)>,
 ) {
+    // W/S fly forward and back over the floor, A/D to the sides, Q/E down and up: the point
+    // looked at moves, the view turns about it as before.
+    let pressed = |k: KeyCode| if keys.pressed(k) { 1.0 } else { 0.0 };
+    let forward = pressed(KeyCode::KeyW) - pressed(KeyCode::KeyS);
+    let right = pressed(KeyCode::KeyD) - pressed(KeyCode::KeyA);
+    let up = pressed(KeyCode::KeyE) - pressed(KeyCode::KeyQ);
     for (mut orbit, mut transform) in &mut cameras {
+        if forward != 0.0 || right != 0.0 || up != 0.0 {
+            let ahead = -Vec2::from_angle(orbit.yaw);
+            let step = FLY_PER_S * orbit.distance * time.delta_secs();
+            let flat = (ahead * forward + ahead.perp() * -right) * step;
+            orbit.target += flat.extend(up * step);
+        }
         if buttons.pressed(MouseButton::Right) || buttons.pressed(MouseButton::Middle) {
             orbit.yaw -= motion.delta.x * TURN_PER_PIXEL;
             orbit.pitch = (orbit.pitch + motion.delta.y * TURN_PER_PIXEL).clamp(0.05, 1.5);

@@ -7,17 +7,21 @@ use bevy::prelude::*;
 use bevy::window::CursorMoved;
 
 use crate::kinematics::ray_pick::{joint_of_click, pick_link};
-use crate::kinematics::rest_test::Verdict;
 use crate::sim::actions::Change;
 use crate::sim::scene_view::{SceneView, closed_value, open_value};
 use crate::systems::kinematic_tree::read_kinematic_tree;
-use crate::systems::physics_validation::rest_physics;
 use crate::systems::simulation::apply_change;
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
+use crate::viewer::physics_layer::run_rest_test;
 
 /// The pointer's last position over the view, in pixels from its top-left corner.
 #[derive(Resource, Clone, Copy, Debug, Default)]
 pub struct PointerPosition(pub Option<Vec2>);
+
+/// Counts the changes made to the scene from the viewer: layers that depend on the scene as it
+/// stands (occupancy, physics) rebuild when it moves on.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct SceneRevision(pub u64);
 
 /// Lines the panel shows about the last interaction.
 #[derive(Resource, Clone, Debug, Default)]
@@ -105,27 +109,18 @@ pub fn work_joint_at(world: &mut World, at: Vec2) -> Vec<String> {
             to,
         },
     );
-    let mut lines = vec![format!(
+    let revision = {
+        let mut revision = world.resource_mut::<SceneRevision>();
+        revision.0 += 1;
+        revision.0
+    };
+    // The rest test on the changed scene; the panel shows its verdicts.
+    run_rest_test(world, revision);
+    vec![format!(
         "{} {link} ({:.2} -> {to:.2})",
         if opening { "opened" } else { "closed" },
         value
-    )];
-    if let Ok(now) = read_kinematic_tree(world) {
-        let report = rest_physics(&now);
-        lines.push(format!(
-            "rest test: {:.0} % of {} objects stable",
-            100.0 * report.stable_fraction,
-            report.objects.len()
-        ));
-        lines.extend(
-            report
-                .objects
-                .iter()
-                .filter(|o| o.verdict != Verdict::Stable)
-                .map(|o| format!("  {}: {}", o.object, o.reason.as_deref().unwrap_or("?"))),
-        );
-    }
-    lines
+    )]
 }
 
 pub struct InteractionPlugin;
@@ -134,6 +129,7 @@ impl Plugin for InteractionPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<PointerPosition>()
             .init_resource::<ViewerStatus>()
+            .init_resource::<SceneRevision>()
             .init_resource::<PendingClicks>()
             .add_systems(
                 Update,

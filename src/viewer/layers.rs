@@ -1,11 +1,11 @@
-//! The viewer's layers, switched with the number keys and listed in the on-screen panel: the
-//! models' own colours, panoptic segment colours, gravity-aligned boxes, and the contact graph
-//! (support edges from parent to child, proximal pairs).
+//! The viewer's layers, switched with the number keys 1-8 and listed in the on-screen panel with
+//! what the last interaction did. Each layer is drawn by its own module (graph_overlays,
+//! collision, occupancy, physics_layer; link_meshes for the two looks of the meshes).
 
 use bevy::prelude::*;
 
-use crate::components::{OrientedBox, ProximalTo, SceneEntity};
 use crate::viewer::interaction::ViewerStatus;
+use crate::viewer::physics_layer::RestVerdicts;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum Layer {
@@ -17,26 +17,55 @@ pub enum Layer {
     Boxes,
     /// Support edges (orange, parent to child) and proximal pairs (blue).
     Graph,
+    /// The nodes' surface planes within their boxes: up-facing green, down-facing red, upright
+    /// blue, each with its normal.
+    Planes,
+    /// The convex collision pieces of every link, as wireframes.
+    Collision,
+    /// The robot's occupancy grid on the floor: occupied dark, free shaded by clearance (amber
+    /// where the base does not fit).
+    Occupancy,
+    /// The rest test's verdicts: stable objects' boxes green, unstable orange, penetrating red.
+    Physics,
 }
 
 impl Layer {
-    pub const ALL: [Layer; 4] = [Layer::Colour, Layer::Segments, Layer::Boxes, Layer::Graph];
+    pub const ALL: [Layer; 8] = [
+        Layer::Colour,
+        Layer::Segments,
+        Layer::Boxes,
+        Layer::Graph,
+        Layer::Planes,
+        Layer::Collision,
+        Layer::Occupancy,
+        Layer::Physics,
+    ];
 
+    /// The number key that switches the layer: its place in `ALL`, from 1.
     fn key(self) -> KeyCode {
-        match self {
-            Layer::Colour => KeyCode::Digit1,
-            Layer::Segments => KeyCode::Digit2,
-            Layer::Boxes => KeyCode::Digit3,
-            Layer::Graph => KeyCode::Digit4,
-        }
+        const KEYS: [KeyCode; 8] = [
+            KeyCode::Digit1,
+            KeyCode::Digit2,
+            KeyCode::Digit3,
+            KeyCode::Digit4,
+            KeyCode::Digit5,
+            KeyCode::Digit6,
+            KeyCode::Digit7,
+            KeyCode::Digit8,
+        ];
+        KEYS[Self::ALL.iter().position(|l| *l == self).unwrap_or(0)]
     }
 
-    fn name(self) -> &'static str {
+    pub fn name(self) -> &'static str {
         match self {
             Layer::Colour => "colour",
             Layer::Segments => "segments",
             Layer::Boxes => "boxes",
             Layer::Graph => "graph",
+            Layer::Planes => "planes",
+            Layer::Collision => "collision",
+            Layer::Occupancy => "occupancy",
+            Layer::Physics => "physics",
         }
     }
 }
@@ -85,65 +114,6 @@ fn toggle_layers(keys: Res<ButtonInput<KeyCode>>, mut layers: ResMut<ActiveLayer
     }
 }
 
-const SUPPORT_COLOUR: Color = Color::srgb(1.0, 0.45, 0.0);
-const PROXIMAL_COLOUR: Color = Color::srgb(0.1, 0.35, 1.0);
-const BOX_COLOUR: Color = Color::srgb(0.1, 0.1, 0.1);
-
-fn draw_boxes(
-    layers: Res<ActiveLayers>,
-    boxes: Query<&OrientedBox, With<SceneEntity>>,
-    mut gizmos: Gizmos,
-) {
-    if !layers.is_on(Layer::Boxes) {
-        return;
-    }
-    for b in &boxes {
-        let b = b.0;
-        gizmos.cube(
-            Transform::from_translation(b.center)
-                .with_rotation(Quat::from_rotation_z(b.yaw))
-                .with_scale(b.size),
-            BOX_COLOUR,
-        );
-    }
-}
-
-/// A node as the graph layer draws it: its box, support parent and proximal partners.
-type GraphNodeView<'a> = (
-    Entity,
-    &'a OrientedBox,
-    Option<&'a ChildOf>,
-    Option<&'a ProximalTo>,
-);
-
-fn draw_graph(
-    layers: Res<ActiveLayers>,
-    nodes: Query<GraphNodeView, With<SceneEntity>>,
-    mut gizmos: Gizmos,
-) {
-    if !layers.is_on(Layer::Graph) {
-        return;
-    }
-    for (entity, b, parent, proximal) in &nodes {
-        // The edge runs from the parent's top centre to the child's bottom centre.
-        let bottom = b.0.center - Vec3::Z * b.0.size.z / 2.0;
-        if let Some((_, pb, _, _)) = parent.and_then(|p| nodes.get(p.parent()).ok()) {
-            let top = pb.0.center + Vec3::Z * pb.0.size.z / 2.0;
-            gizmos.line(top, bottom, SUPPORT_COLOUR);
-            gizmos.sphere(Isometry3d::from_translation(bottom), 0.03, SUPPORT_COLOUR);
-        }
-        for &other in proximal.map(|p| p.0.as_slice()).unwrap_or_default() {
-            // Each pair once.
-            if other < entity {
-                continue;
-            }
-            if let Ok((_, ob, _, _)) = nodes.get(other) {
-                gizmos.line(b.0.center, ob.0.center, PROXIMAL_COLOUR);
-            }
-        }
-    }
-}
-
 /// The panel's text: the layers with their keys, then the last interaction.
 #[derive(Component)]
 struct PanelText;
@@ -169,9 +139,10 @@ fn spawn_panel(mut commands: Commands) {
 fn update_panel(
     layers: Res<ActiveLayers>,
     status: Res<ViewerStatus>,
+    verdicts: Res<RestVerdicts>,
     mut text: Query<&mut Text, With<PanelText>>,
 ) {
-    if !layers.is_changed() && !status.is_changed() {
+    if !layers.is_changed() && !status.is_changed() && !verdicts.is_changed() {
         return;
     }
     let mut lines: Vec<String> = Layer::ALL
@@ -186,6 +157,8 @@ fn update_panel(
         "click a door or drawer to open or close it; right-drag to orbit, wheel to zoom".into(),
     );
     lines.extend(status.0.iter().cloned());
+    // The rest test's verdicts, once asked for or once the scene changed from here.
+    lines.extend(verdicts.summary());
     for mut t in &mut text {
         t.0 = lines.join("\n");
     }
@@ -197,7 +170,7 @@ impl Plugin for LayersPlugin {
     fn build(&self, app: &mut App) {
         app.add_systems(Startup, spawn_panel).add_systems(
             Update,
-            (toggle_layers, draw_boxes, draw_graph, update_panel).chain(),
+            (toggle_layers, update_panel).chain(),
         );
     }
 }

@@ -2,14 +2,22 @@
 //! contact graph's entities with their CAD links, as `iscene simulate` builds it), with layers
 //! switched from the keyboard, an orbit camera, and doors and drawers worked by clicking them;
 //! or, with `--screenshot`, the same world rendered off screen into a PNG.
+//! `iscene view OUT --replay` plays a reconstruction back frame by frame instead: the map
+//! growing as the sensor saw it, the camera moving, the contact graph's nodes appearing.
 //!
 //! The kinematic tree is the transform hierarchy, so a joint that moves moves its meshes.
 
 mod camera;
+mod collision;
+mod graph_overlays;
 mod interaction;
 mod layers;
 mod link_meshes;
+mod occupancy;
+mod physics_layer;
+mod replay_scene;
 mod screenshot;
+mod timeline;
 
 use std::path::PathBuf;
 
@@ -21,6 +29,7 @@ use bevy::winit::WinitPlugin;
 
 use crate::error::{InputError, IsceneError};
 use crate::graph::ContactGraph;
+use crate::replay::{Replay, load_replay};
 use crate::sim::scene_view::{SceneView, open_value};
 use crate::sim::task::Task;
 use crate::simulation::simulation_app;
@@ -29,9 +38,12 @@ use crate::systems::simulation::apply_change;
 
 pub use camera::OrbitCamera;
 pub use interaction::work_joint_at;
-pub use interaction::{PointerPosition, ViewerStatus};
+pub use interaction::{PointerPosition, SceneRevision, ViewerStatus};
+pub use physics_layer::RestVerdicts;
 pub use layers::{ActiveLayers, Layer};
-pub use screenshot::{RenderTiming, ScreenshotDone, ScreenshotRequest, render_offscreen};
+pub use replay_scene::ReplayData;
+pub use screenshot::{RenderTiming, render_offscreen};
+pub use timeline::ReplayClock;
 
 /// What `iscene view` shows and does.
 #[derive(Clone, Debug)]
@@ -48,7 +60,14 @@ pub struct ViewOptions {
     pub size: (u32, u32),
     /// Objects whose main door or drawer is opened before the first frame.
     pub open: Vec<String>,
+    /// Play back the reconstruction in `dir` instead of showing its world.
+    pub replay: bool,
+    /// Screenshots of a replay, evenly spaced from its first frame to its last.
+    pub shots: u32,
 }
+
+/// The clear colour: a light grey-blue that no model uses.
+const BACKGROUND: Color = Color::srgb(0.93, 0.94, 0.96);
 
 /// Adds what the viewer draws and how it reacts, on top of a scene world and Bevy's renderer.
 pub struct ViewerPlugin {
@@ -62,10 +81,14 @@ impl Plugin for ViewerPlugin {
                 brightness: 300.0,
                 ..default()
             })
-            .insert_resource(ClearColor(Color::srgb(0.93, 0.94, 0.96)))
+            .insert_resource(ClearColor(BACKGROUND))
             .add_plugins((
                 link_meshes::LinkMeshesPlugin,
                 layers::LayersPlugin,
+                graph_overlays::GraphOverlaysPlugin,
+                collision::CollisionLayerPlugin,
+                occupancy::OccupancyLayerPlugin,
+                physics_layer::PhysicsLayerPlugin,
                 camera::OrbitCameraPlugin,
                 interaction::InteractionPlugin,
             ));
@@ -79,6 +102,16 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
     let mut app = simulation_app(&graph, &Task::default()).map_err(IsceneError::Internal)?;
     open_doors(app.world_mut(), &options.open)
         .map_err(|why| InputError::invalid(&options.dir, why))?;
+    add_render_plugins(&mut app, &options.dir, offscreen);
+    app.add_plugins(ViewerPlugin {
+        layers: options.layers.clone(),
+    });
+    Ok(app)
+}
+
+/// Bevy's renderer, UI and input: into a window titled after `dir`, or off screen (no window,
+/// one frame rendered per update, so the screenshot frame is the frame asked for).
+fn add_render_plugins(app: &mut App, dir: &std::path::Path, offscreen: bool) {
     let render = RenderPlugin {
         // Every pipeline ready on the frame that first needs it: a screenshot after N frames
         // shows the whole scene, not whatever had compiled by then.
@@ -100,7 +133,6 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
                     ..default()
                 })
                 .disable::<WinitPlugin>()
-                // One frame in, one frame out: the screenshot frame is the frame asked for.
                 .disable::<PipelinedRenderingPlugin>(),
         );
     } else {
@@ -108,7 +140,7 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
             DefaultPlugins
                 .set(WindowPlugin {
                     primary_window: Some(Window {
-                        title: format!("iscene: {}", options.dir.display()),
+                        title: format!("iscene: {}", dir.display()),
                         ..default()
                     }),
                     ..default()
@@ -116,10 +148,31 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
                 .set(render),
         );
     }
-    app.add_plugins(ViewerPlugin {
-        layers: options.layers.clone(),
-    });
-    Ok(app)
+}
+
+/// The replay of the reconstruction in `replay.dir`, on Bevy's renderer.
+pub fn replay_app(replay: Replay, offscreen: bool) -> App {
+    let mut app = App::new();
+    add_render_plugins(&mut app, &replay.dir.clone(), offscreen);
+    let clock = ReplayClock::new(replay.frames());
+    app.insert_resource(ReplayData(replay))
+        .insert_resource(ReplayClock {
+            // A window starts playing; screenshots set the clock themselves.
+            playing: !offscreen,
+            ..clock
+        })
+        .insert_resource(ActiveLayers::new(&[Layer::Boxes, Layer::Graph]))
+        .insert_resource(GlobalAmbientLight {
+            brightness: 300.0,
+            ..default()
+        })
+        .insert_resource(ClearColor(BACKGROUND))
+        .add_plugins((
+            timeline::TimelinePlugin,
+            replay_scene::ReplayScenePlugin,
+            camera::OrbitCameraPlugin,
+        ));
+    app
 }
 
 /// Opens the main door or drawer of each object in `objects`.
@@ -146,6 +199,17 @@ fn open_doors(world: &mut World, objects: &[String]) -> Result<(), String> {
 /// Runs the viewer: a window until it is closed (`None`), or one off-screen screenshot (how fast
 /// its frames rendered).
 pub fn view(options: &ViewOptions) -> Result<Option<RenderTiming>, IsceneError> {
+    if options.replay {
+        let replay = load_replay(&options.dir)?;
+        let Some(path) = &options.screenshot else {
+            replay_app(replay, false).run();
+            return Ok(None);
+        };
+        let frames = replay.frames();
+        let mut app = replay_app(replay, true);
+        return screenshot::take_replay(&mut app, path, options.shots, frames, options.size)
+            .map(Some);
+    }
     let Some(path) = &options.screenshot else {
         let mut app = viewer_app(options, false)?;
         app.run();

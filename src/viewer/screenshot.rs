@@ -1,7 +1,8 @@
 //! Off-screen screenshots: the camera renders into an image; after the asked number of frames
-//! the image is captured and written as PNG (staged, so a failed run leaves no file).
+//! the image is captured and written as PNG (staged, so a failed run leaves no file); a replay
+//! is captured at several clock positions, as numbered PNGs or one animated GIF.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use bevy::camera::{ImageRenderTarget, RenderTarget};
 use bevy::prelude::*;
@@ -11,20 +12,8 @@ use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 use crate::error::IsceneError;
 use crate::io::atomic::write_file_atomically;
 
-/// Frames to wait for the capture once asked for, before giving up.
+/// Frames to wait for a capture once asked for, before giving up.
 const CAPTURE_PATIENCE_FRAMES: u32 = 120;
-
-/// Where the screenshot goes and after how many frames.
-#[derive(Resource, Clone, Debug)]
-pub struct ScreenshotRequest {
-    pub path: PathBuf,
-    pub after_frames: u32,
-    frame: u32,
-}
-
-/// The screenshot's outcome, once captured.
-#[derive(Resource, Clone, Debug)]
-pub struct ScreenshotDone(pub Result<(), String>);
 
 /// The image every camera renders into when there is no window.
 #[derive(Resource, Clone, Debug)]
@@ -68,32 +57,101 @@ pub fn take(
     size: (u32, u32),
 ) -> Result<RenderTiming, IsceneError> {
     render_offscreen(app, size);
-    app.insert_resource(ScreenshotRequest {
-        path: path.to_path_buf(),
-        after_frames: frames,
-        frame: 0,
-    });
-    app.add_systems(Update, request_capture);
     app.finish();
     app.cleanup();
-    let mut since_first: Option<(std::time::Instant, u32)> = None;
-    for frame in 0..frames + CAPTURE_PATIENCE_FRAMES {
+    // The first frame compiles the pipelines; the rest are timed.
+    app.update();
+    let started = std::time::Instant::now();
+    for _ in 1..frames {
         app.update();
-        if let Some(done) = app.world().get_resource::<ScreenshotDone>() {
-            done.0.clone().map_err(IsceneError::Internal)?;
-            let (started, first) = since_first.unwrap_or((std::time::Instant::now(), frame));
-            return Ok(RenderTiming {
-                frames: frame - first,
-                seconds: started.elapsed().as_secs_f64(),
-            });
+    }
+    let timing = RenderTiming {
+        frames: frames - 1,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    let picture = capture(app, path)?;
+    save_png(&picture, path)?;
+    Ok(timing)
+}
+
+/// `shots` pictures of a replay, its clock set evenly from the first of its `frames` to the
+/// last: `path` ending in .gif gets one animated GIF, any other `path` numbered PNGs beside it
+/// (`replay.png` gives `replay_00.png`, `replay_01.png`, ...). Nothing is written unless every
+/// picture was captured.
+pub fn take_replay(
+    app: &mut App,
+    path: &Path,
+    shots: u32,
+    frames: u32,
+    size: (u32, u32),
+) -> Result<RenderTiming, IsceneError> {
+    render_offscreen(app, size);
+    app.finish();
+    app.cleanup();
+    app.update();
+    let started = std::time::Instant::now();
+    let shots = shots.max(1);
+    let mut pictures = Vec::with_capacity(shots as usize);
+    for k in 0..shots {
+        let at = if shots == 1 {
+            frames.saturating_sub(1)
+        } else {
+            k * frames.saturating_sub(1) / (shots - 1)
+        };
+        app.world_mut()
+            .resource_mut::<crate::viewer::ReplayClock>()
+            .seek(at as f32);
+        // One frame applies the clock to the meshes, the next renders them settled.
+        app.update();
+        app.update();
+        pictures.push(capture(app, path)?);
+    }
+    let timing = RenderTiming {
+        frames: 3 * shots,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gif")) {
+        save_gif(&pictures, path)?;
+    } else {
+        let stem = path.file_stem().map_or("replay".into(), |s| s.to_string_lossy().into_owned());
+        let extension = path.extension().map_or("png".into(), |e| e.to_string_lossy().into_owned());
+        for (k, picture) in pictures.iter().enumerate() {
+            save_png(picture, &path.with_file_name(format!("{stem}_{k:02}.{extension}")))?;
         }
-        since_first.get_or_insert((std::time::Instant::now(), frame));
+    }
+    Ok(timing)
+}
+
+/// Renders one more frame of `app` and returns it, as RGB.
+fn capture(app: &mut App, path: &Path) -> Result<image::RgbImage, IsceneError> {
+    app.world_mut().remove_resource::<Captured>();
+    let target = app.world().resource::<OffscreenTarget>().0.clone();
+    app.world_mut().spawn(Screenshot::image(target)).observe(
+        |captured: On<ScreenshotCaptured>, mut commands: Commands| {
+            let picture = captured
+                .image
+                .clone()
+                .try_into_dynamic()
+                .map(|d| d.to_rgb8())
+                .map_err(|e| format!("the captured image cannot be converted: {e}"));
+            commands.insert_resource(Captured(picture));
+        },
+    );
+    for _ in 0..CAPTURE_PATIENCE_FRAMES {
+        app.update();
+        if let Some(captured) = app.world_mut().remove_resource::<Captured>() {
+            return captured.0.map_err(IsceneError::Internal);
+        }
     }
     Err(IsceneError::Internal(format!(
         "the screenshot for {} was never captured (no GPU or software Vulkan driver? see README)",
         path.display()
     )))
 }
+
+/// A captured picture.
+#[derive(Resource)]
+struct Captured(Result<image::RgbImage, String>);
 
 /// Every camera renders into the off-screen image instead of a window.
 fn aim_cameras_at_target(
@@ -113,33 +171,33 @@ fn aim_cameras_at_target(
 #[derive(Component)]
 struct ImageTargeted;
 
-/// Counts frames and asks for the capture on the last one.
-fn request_capture(
-    mut request: ResMut<ScreenshotRequest>,
-    target: Res<OffscreenTarget>,
-    mut commands: Commands,
-) {
-    request.frame += 1;
-    if request.frame != request.after_frames {
-        return;
-    }
-    let path = request.path.clone();
-    commands.spawn(Screenshot::image(target.0.clone())).observe(
-        move |captured: On<ScreenshotCaptured>, mut commands: Commands| {
-            let outcome = save_png(&captured.image, &path);
-            commands.insert_resource(ScreenshotDone(outcome));
-        },
-    );
+fn save_png(picture: &image::RgbImage, path: &Path) -> Result<(), IsceneError> {
+    let mut png = Vec::new();
+    picture
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .map_err(|e| IsceneError::Internal(format!("encoding {}: {e}", path.display())))?;
+    write_file_atomically(path, &png)
 }
 
-fn save_png(image: &Image, path: &Path) -> Result<(), String> {
-    let rgb = image
-        .clone()
-        .try_into_dynamic()
-        .map_err(|e| format!("the captured image cannot be converted: {e}"))?
-        .to_rgb8();
-    let mut png = Vec::new();
-    rgb.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .map_err(|e| format!("encoding {}: {e}", path.display()))?;
-    write_file_atomically(path, &png).map_err(|e| format!("{e}"))
+/// Replay frames shown this long each in the GIF, milliseconds.
+const GIF_FRAME_MS: u32 = 400;
+
+fn save_gif(pictures: &[image::RgbImage], path: &Path) -> Result<(), IsceneError> {
+    use image::codecs::gif::{GifEncoder, Repeat};
+    let encode_error = |e: image::ImageError| {
+        IsceneError::Internal(format!("encoding {}: {e}", path.display()))
+    };
+    let mut gif = Vec::new();
+    {
+        let mut encoder = GifEncoder::new_with_speed(&mut gif, 10);
+        encoder.set_repeat(Repeat::Infinite).map_err(encode_error)?;
+        for picture in pictures {
+            let rgba = image::DynamicImage::ImageRgb8(picture.clone()).to_rgba8();
+            let delay = image::Delay::from_numer_denom_ms(GIF_FRAME_MS, 1);
+            encoder
+                .encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))
+                .map_err(encode_error)?;
+        }
+    }
+    write_file_atomically(path, &gif)
 }
