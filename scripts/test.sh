@@ -33,7 +33,7 @@ echo "== viewer (cargo feature viewer) off screen on Mesa's software Vulkan driv
 ./scripts/setup-viewer.sh
 # Lints of the viewer code: run `cargo clippy --features viewer --all-targets -- -D warnings`
 # before committing; CI builds the feature once, for its tests, to stay in its time budget.
-cargo test --locked --features viewer --test viewer
+cargo test --locked --features viewer --lib --test viewer
 disk
 # The benchmarks are type-checked by clippy --all-targets above; building them is a third full
 # build (release profile) that CI has neither the time nor the disk for. Run them with cargo bench.

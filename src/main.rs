@@ -246,7 +246,8 @@ fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<Pat
         .file_stem()
         .map_or("replay".into(), |s| s.to_string_lossy().into_owned());
     let out = PathBuf::from("out").join(stem);
-    let labelled = input.extension().is_some_and(|e| e == "json") || input.join("labels.json").is_file();
+    let labelled =
+        input.extension().is_some_and(|e| e == "json") || input.join("labels.json").is_file();
     reconstruct(&ReconstructOptions {
         input: Some(input.to_path_buf()),
         out: out.clone(),
@@ -263,7 +264,11 @@ fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<Pat
         estimate_gravity: false,
         progress,
     })?;
-    eprintln!("reconstructed {} into {}; replaying it", input.display(), out.display());
+    eprintln!(
+        "reconstructed {} into {}; replaying it",
+        input.display(),
+        out.display()
+    );
     Ok(out)
 }
 

@@ -236,7 +236,10 @@ fn a_replay_grows_the_map_along_the_camera_path() {
         at_start > 0.02 && at_start < 0.5,
         "{at_start:.2} of the map seen in the first frame"
     );
-    assert!(before_end > 0.9, "{before_end:.2} of the map seen before the last frame");
+    assert!(
+        before_end > 0.9,
+        "{before_end:.2} of the map seen before the last frame"
+    );
     assert!(replay.nodes.iter().all(|n| n.appears_at < 24));
     assert!(replay.support_edges_at(0).len() < replay.support_edges_at(23).len());
 

@@ -4,6 +4,8 @@
 
 use std::collections::HashMap;
 
+use glam::Vec3;
+
 use crate::geometry::TriMesh;
 
 impl TriMesh {
@@ -89,7 +91,10 @@ impl TriMesh {
         for (i, t) in self.triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                faces_of_edge.entry((a.min(b), a.max(b))).or_default().push(i);
+                faces_of_edge
+                    .entry((a.min(b), a.max(b)))
+                    .or_default()
+                    .push(i);
             }
         }
         let cos_crease = crease_deg.to_radians().cos();

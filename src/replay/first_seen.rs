@@ -98,11 +98,11 @@ mod tests {
     fn a_point_is_seen_on_the_surface_and_not_behind_it_or_outside_the_picture() {
         let (camera, pose, depth) = wall_view();
         let points = [
-            Vec3::new(0.1, -0.2, 2.01),  // on the wall
-            Vec3::new(0.1, -0.2, 2.5),   // behind it
-            Vec3::new(0.1, -0.2, 1.0),   // in the free space before it
-            Vec3::new(5.0, 0.0, 2.0),    // outside the picture
-            Vec3::new(0.0, 0.0, -2.0),   // behind the camera
+            Vec3::new(0.1, -0.2, 2.01), // on the wall
+            Vec3::new(0.1, -0.2, 2.5),  // behind it
+            Vec3::new(0.1, -0.2, 1.0),  // in the free space before it
+            Vec3::new(5.0, 0.0, 2.0),   // outside the picture
+            Vec3::new(0.0, 0.0, -2.0),  // behind the camera
         ];
         let seen = seen_in_frame(&points, &camera, &pose, &depth, 0.05);
         assert_eq!(seen, [true, false, false, false, false]);

@@ -81,7 +81,9 @@ impl Replay {
             .iter()
             .enumerate()
             .filter_map(|(child, n)| Some((n.parent?, child)))
-            .filter(|&(p, c)| self.nodes[p].appears_at <= frame && self.nodes[c].appears_at <= frame)
+            .filter(|&(p, c)| {
+                self.nodes[p].appears_at <= frame && self.nodes[c].appears_at <= frame
+            })
             .collect()
     }
 }
@@ -115,7 +117,10 @@ fn read_report(path: &Path) -> Result<ReportFacts, InputError> {
             let m: [f32; 16] = serde_json::from_value(value.clone())
                 .map_err(|e| InputError::invalid(path, format!("aligned_from_world: {e}")))?;
             if m.iter().any(|x| !x.is_finite()) {
-                return Err(InputError::invalid(path, "aligned_from_world is not finite"));
+                return Err(InputError::invalid(
+                    path,
+                    "aligned_from_world is not finite",
+                ));
             }
             Affine3A::from_mat4(Mat4::from_cols_array(&m))
         }
@@ -302,14 +307,30 @@ mod tests {
         assert_eq!((s.revealed_by(3), s.revealed_by(4)), (0, 2));
         // Triangle [1, 3, 2] waits for its latest corner; a never-seen corner waits for the end.
         let seen = [Some(6), None, Some(0), Some(2)];
-        let s = reveal_order("a".into(), "box".into(), 1, mesh, &seen, 10, &Affine3A::IDENTITY);
+        let s = reveal_order(
+            "a".into(),
+            "box".into(),
+            1,
+            mesh,
+            &seen,
+            10,
+            &Affine3A::IDENTITY,
+        );
         assert_eq!(s.revealed_at, [9, 9]);
         let seen = [Some(6), Some(0), Some(0), Some(2)];
         let mesh = TriMesh {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE],
             triangles: vec![[0, 1, 2], [1, 3, 2]],
         };
-        let s = reveal_order("a".into(), "box".into(), 1, mesh, &seen, 10, &Affine3A::IDENTITY);
+        let s = reveal_order(
+            "a".into(),
+            "box".into(),
+            1,
+            mesh,
+            &seen,
+            10,
+            &Affine3A::IDENTITY,
+        );
         assert_eq!(s.revealed_at, [2, 6]);
         assert_eq!(s.mesh.triangles, [[1, 3, 2], [0, 1, 2]]);
     }
@@ -331,7 +352,11 @@ mod tests {
             joints: Default::default(),
         };
         let graph = ContactGraph {
-            nodes: vec![node("floor", "floor"), node("table_1", "table"), node("cup_1", "cup")],
+            nodes: vec![
+                node("floor", "floor"),
+                node("table_1", "table"),
+                node("cup_1", "cup"),
+            ],
             edges: vec![
                 GraphEdge::Support {
                     parent: "floor".into(),
@@ -351,7 +376,10 @@ mod tests {
             revealed_at,
         };
         // The cup has no segment: it comes with its table.
-        let segments = [segment("floor", vec![0, 1, 2, 3]), segment("table_1", vec![2, 5, 7, 8])];
+        let segments = [
+            segment("floor", vec![0, 1, 2, 3]),
+            segment("table_1", vec![2, 5, 7, 8]),
+        ];
         let nodes = replay_nodes(&graph, &segments, 12);
         let at: Vec<u32> = nodes.iter().map(|n| n.appears_at).collect();
         assert_eq!(at, [1, 5, 5]);

@@ -69,6 +69,8 @@ pub fn spawn_orbit_camera(commands: &mut Commands, centre: Vec3, size: Vec2) {
         bevy::core_pipeline::tonemapping::Tonemapping::None,
         orbit.transform(),
         orbit,
+        // The panel is drawn by this camera, also off screen, where no window picks it.
+        IsDefaultUiCamera,
     ));
 }
 

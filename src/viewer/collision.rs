@@ -48,7 +48,11 @@ fn draw_collision_edges(
             continue;
         }
         for [a, b] in &edges.0 {
-            gizmos.line(at.transform_point(*a), at.transform_point(*b), COLLISION_COLOUR);
+            gizmos.line(
+                at.transform_point(*a),
+                at.transform_point(*b),
+                COLLISION_COLOUR,
+            );
         }
     }
 }
@@ -57,9 +61,6 @@ pub struct CollisionLayerPlugin;
 
 impl Plugin for CollisionLayerPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(
-            Update,
-            (find_collision_edges, draw_collision_edges).chain(),
-        );
+        app.add_systems(Update, (find_collision_edges, draw_collision_edges).chain());
     }
 }

@@ -114,6 +114,12 @@ fn toggle_layers(keys: Res<ButtonInput<KeyCode>>, mut layers: ResMut<ActiveLayer
     }
 }
 
+/// The panel's look, shared with the replay's: small type on a veil that keeps it legible over
+/// the scene.
+pub const PANEL_FONT_PX: f32 = 12.0;
+pub const PANEL_TEXT: Color = Color::srgb(0.05, 0.05, 0.1);
+pub const PANEL_BACKGROUND: Color = Color::srgba(1.0, 1.0, 1.0, 0.7);
+
 /// The panel's text: the layers with their keys, then the last interaction.
 #[derive(Component)]
 struct PanelText;
@@ -122,16 +128,20 @@ fn spawn_panel(mut commands: Commands) {
     commands.spawn((
         Text::new(""),
         TextFont {
-            font_size: FontSize::Px(16.0),
+            font_size: FontSize::Px(PANEL_FONT_PX),
             ..default()
         },
-        TextColor(Color::srgb(0.05, 0.05, 0.1)),
+        TextColor(PANEL_TEXT),
+        // Bottom left: the camera looks across the room from its -x, -y corner, so the top of
+        // the picture holds the far wall's appliances and the bottom the open floor.
         Node {
             position_type: PositionType::Absolute,
-            top: Val::Px(8.0),
-            left: Val::Px(8.0),
+            bottom: Val::Px(6.0),
+            left: Val::Px(6.0),
+            padding: UiRect::all(Val::Px(4.0)),
             ..default()
         },
+        BackgroundColor(PANEL_BACKGROUND),
         PanelText,
     ));
 }
@@ -145,17 +155,21 @@ fn update_panel(
     if !layers.is_changed() && !status.is_changed() && !verdicts.is_changed() {
         return;
     }
-    let mut lines: Vec<String> = Layer::ALL
+    // Two rows of four layers, the ones shown in brackets: short enough to leave the scene be.
+    let names: Vec<String> = Layer::ALL
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            let mark = if layers.is_on(*l) { "x" } else { " " };
-            format!("[{mark}] {} {}", i + 1, l.name())
+            let name = format!("{} {}", i + 1, l.name());
+            if layers.is_on(*l) {
+                format!("[{name}]")
+            } else {
+                format!(" {name} ")
+            }
         })
         .collect();
-    lines.push(
-        "click a door or drawer to open or close it; right-drag to orbit, wheel to zoom".into(),
-    );
+    let mut lines: Vec<String> = names.chunks(4).map(|row| row.join(" ")).collect();
+    lines.push("click: open/close; right-drag orbit, wheel zoom, WASD/QE fly".into());
     lines.extend(status.0.iter().cloned());
     // The rest test's verdicts, once asked for or once the scene changed from here.
     lines.extend(verdicts.summary());
@@ -168,10 +182,8 @@ pub struct LayersPlugin;
 
 impl Plugin for LayersPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(Startup, spawn_panel).add_systems(
-            Update,
-            (toggle_layers, update_panel).chain(),
-        );
+        app.add_systems(Startup, spawn_panel)
+            .add_systems(Update, (toggle_layers, update_panel).chain());
     }
 }
 

@@ -110,7 +110,9 @@ fn update_occupancy(world: &mut World) {
             return;
         }
     };
-    let mesh = world.resource_mut::<Assets<Mesh>>().add(grid_mesh(&grid, radius));
+    let mesh = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(grid_mesh(&grid, radius));
     let material = world
         .resource_mut::<Assets<StandardMaterial>>()
         .add(StandardMaterial {

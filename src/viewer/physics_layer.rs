@@ -42,7 +42,9 @@ impl RestVerdicts {
 
 /// Runs the rest test on the scene as it stands and keeps it for `revision`.
 pub fn run_rest_test(world: &mut World, revision: u64) {
-    let report = read_kinematic_tree(world).ok().map(|tree| rest_physics(&tree));
+    let report = read_kinematic_tree(world)
+        .ok()
+        .map(|tree| rest_physics(&tree));
     *world.resource_mut::<RestVerdicts>() = RestVerdicts {
         revision: Some(revision),
         report,

@@ -27,7 +27,7 @@ struct SegmentMesh {
 }
 
 /// Floor and walls in one quiet colour: the objects are what the instance colours tell apart.
-const LAYOUT_COLOUR: Color = Color::srgb(0.78, 0.78, 0.75);
+const LAYOUT_COLOUR: Color = Color::srgb(0.62, 0.6, 0.56);
 const FRUSTUM_COLOUR: Color = Color::srgb(0.8, 0.05, 0.3);
 const TRAJECTORY_COLOUR: Color = Color::srgb(0.35, 0.35, 0.4);
 /// How far the frustum reaches from the camera, metres.
@@ -45,7 +45,12 @@ fn spawn_replay(
         if HIDDEN_CLASSES.contains(&segment.class.as_str()) {
             continue;
         }
-        let positions: Vec<[f32; 3]> = segment.mesh.positions.iter().map(|p| p.to_array()).collect();
+        let positions: Vec<[f32; 3]> = segment
+            .mesh
+            .positions
+            .iter()
+            .map(|p| p.to_array())
+            .collect();
         let normals: Vec<[f32; 3]> = segment
             .mesh
             .vertex_normals()
@@ -60,7 +65,14 @@ fn spawn_replay(
         .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, normals)
         // Hidden until revealed; one triangle keeps the index buffer from being empty.
         .with_inserted_indices(Indices::U32(
-            segment.mesh.triangles.iter().take(1).flatten().copied().collect(),
+            segment
+                .mesh
+                .triangles
+                .iter()
+                .take(1)
+                .flatten()
+                .copied()
+                .collect(),
         ));
         commands.spawn((
             Mesh3d(meshes.add(mesh)),
@@ -176,8 +188,8 @@ fn draw_camera(clock: Res<ReplayClock>, replay: Res<ReplayData>, mut gizmos: Giz
     }
     gizmos.linestrip(corners.iter().chain(&corners[..1]).copied(), FRUSTUM_COLOUR);
     // The image's top edge, marked: which way is up in the picture.
-    let up_mark = (corners[0] + corners[1]) / 2.0
-        + (corners[0] - corners[3]).normalize_or_zero() * 0.05;
+    let up_mark =
+        (corners[0] + corners[1]) / 2.0 + (corners[0] - corners[3]).normalize_or_zero() * 0.05;
     gizmos.line(corners[0], up_mark, FRUSTUM_COLOUR);
     gizmos.line(up_mark, corners[1], FRUSTUM_COLOUR);
 }

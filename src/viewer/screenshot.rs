@@ -110,13 +110,23 @@ pub fn take_replay(
         frames: 3 * shots,
         seconds: started.elapsed().as_secs_f64(),
     };
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gif")) {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gif"))
+    {
         save_gif(&pictures, path)?;
     } else {
-        let stem = path.file_stem().map_or("replay".into(), |s| s.to_string_lossy().into_owned());
-        let extension = path.extension().map_or("png".into(), |e| e.to_string_lossy().into_owned());
+        let stem = path
+            .file_stem()
+            .map_or("replay".into(), |s| s.to_string_lossy().into_owned());
+        let extension = path
+            .extension()
+            .map_or("png".into(), |e| e.to_string_lossy().into_owned());
         for (k, picture) in pictures.iter().enumerate() {
-            save_png(picture, &path.with_file_name(format!("{stem}_{k:02}.{extension}")))?;
+            save_png(
+                picture,
+                &path.with_file_name(format!("{stem}_{k:02}.{extension}")),
+            )?;
         }
     }
     Ok(timing)
@@ -184,9 +194,8 @@ const GIF_FRAME_MS: u32 = 400;
 
 fn save_gif(pictures: &[image::RgbImage], path: &Path) -> Result<(), IsceneError> {
     use image::codecs::gif::{GifEncoder, Repeat};
-    let encode_error = |e: image::ImageError| {
-        IsceneError::Internal(format!("encoding {}: {e}", path.display()))
-    };
+    let encode_error =
+        |e: image::ImageError| IsceneError::Internal(format!("encoding {}: {e}", path.display()));
     let mut gif = Vec::new();
     {
         let mut encoder = GifEncoder::new_with_speed(&mut gif, 10);

@@ -4,7 +4,7 @@
 
 use bevy::prelude::*;
 
-use crate::viewer::layers::{ActiveLayers, Layer};
+use crate::viewer::layers::{ActiveLayers, Layer, PANEL_BACKGROUND, PANEL_FONT_PX, PANEL_TEXT};
 
 /// Where the replay stands: a frame position (fractional while playing) and how it moves.
 #[derive(Resource, Clone, Copy, Debug)]
@@ -143,16 +143,18 @@ fn spawn_timeline(mut commands: Commands) {
     commands.spawn((
         Text::new(""),
         TextFont {
-            font_size: FontSize::Px(16.0),
+            font_size: FontSize::Px(PANEL_FONT_PX),
             ..default()
         },
-        TextColor(Color::srgb(0.05, 0.05, 0.1)),
+        TextColor(PANEL_TEXT),
         Node {
             position_type: PositionType::Absolute,
-            top: Val::Px(8.0),
-            left: Val::Px(8.0),
+            top: Val::Px(6.0),
+            left: Val::Px(6.0),
+            padding: UiRect::all(Val::Px(4.0)),
             ..default()
         },
+        BackgroundColor(PANEL_BACKGROUND),
         TimelineText,
     ));
     commands
@@ -206,8 +208,8 @@ fn update_timeline(
             clock.speed
         ),
         counts.0.clone(),
-        "space play/pause, left/right step (shift: 10), home/end, up/down speed, drag the bar".into(),
-        "3 boxes, 4 graph, 5 planes; right-drag to orbit, wheel to zoom, WASD/QE to fly".into(),
+        "space play, left/right step, up/down speed, home/end, drag the bar".into(),
+        "3 boxes 4 graph 5 planes; right-drag orbit, wheel zoom, WASD/QE fly".into(),
     ];
     for mut t in &mut text {
         t.0 = lines.join("\n");
