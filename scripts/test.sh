@@ -25,15 +25,15 @@ echo "== ONNX Runtime for the onnx segmentation backend (from the PyPI wheel)"
 echo "== validators (check_urdf, MuJoCo, PyBullet, Khronos glTF validator)"
 ./scripts/setup-validators.sh
 
-echo "== tests"
-cargo test --locked --lib --bins --tests --no-fail-fast
-disk
-
-echo "== viewer (cargo feature viewer) off screen on Mesa's software Vulkan driver"
+echo "== viewer runtime: Mesa's software Vulkan driver and Xvfb"
 ./scripts/setup-viewer.sh
-# Lints of the viewer code: run `cargo clippy --features viewer --all-targets -- -D warnings`
-# before committing; CI builds the feature once, for its tests, to stay in its time budget.
-cargo test --locked --features viewer --lib --test viewer
+
+echo "== tests (with the viewer feature: one build serves every test)"
+# The viewer feature only adds code (src/viewer, the view command); the default build's code is
+# the same and clippy above checks it as it is. Building the tests once, with the feature,
+# keeps a clean CI run within its time budget: a second build of the Bevy stack would not.
+# Lints of the viewer code: `cargo clippy --features viewer --all-targets -- -D warnings`.
+cargo test --locked --features viewer --lib --bins --tests --no-fail-fast
 disk
-# The benchmarks are type-checked by clippy --all-targets above; building them is a third full
+# The benchmarks are type-checked by clippy --all-targets above; building them is another full
 # build (release profile) that CI has neither the time nor the disk for. Run them with cargo bench.

@@ -77,6 +77,10 @@ enum Command {
         /// Play back the reconstruction in DIR (written by `iscene reconstruct`) frame by frame.
         #[arg(long)]
         replay: bool,
+        /// A task script (scenes/tasks/*.json) to run in the window: N does the next action, P
+        /// plays them; with --screenshot, the picture is taken after the last action.
+        #[arg(long)]
+        task: Option<PathBuf>,
         /// With --replay and --screenshot: this many pictures from the first frame to the last
         /// (FILE.gif: one animated GIF; otherwise numbered PNGs FILE_00.png ...).
         #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=200))]
@@ -425,6 +429,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
             open,
             replay,
             shots,
+            task,
         }) => {
             #[cfg(feature = "viewer")]
             let dir = if replay && !dir.join("report.json").is_file() {
@@ -443,12 +448,15 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     open,
                     replay,
                     shots,
+                    task,
                 },
                 &layer,
             )?;
             #[cfg(not(feature = "viewer"))]
             {
-                let _ = (dir, screenshot, layer, frames, size, open, replay, shots);
+                let _ = (
+                    dir, screenshot, layer, frames, size, open, replay, shots, task,
+                );
                 return Err(IsceneError::Internal(
                     "this iscene was built without the viewer: cargo run --release --features viewer -- view ..."
                         .into(),

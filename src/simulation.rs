@@ -135,6 +135,13 @@ fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneEr
     Ok((prepared, app))
 }
 
+/// The world of the scene in `dir` with the task's robot at its start, and the actions to run
+/// (the task's own steps, or the planner's plan for its goals): what the viewer plays.
+pub fn task_world(dir: &Path, task_path: &Path) -> Result<(Vec<Action>, App), IsceneError> {
+    let (prepared, app) = prepare(dir, task_path)?;
+    Ok((prepared.actions, app))
+}
+
 /// Asks for each action in turn through the ECS, one update each, until one fails; returns
 /// each update's wall-clock milliseconds.
 fn run_actions(app: &mut App, actions: &[Action]) -> Vec<f64> {

@@ -9,11 +9,12 @@ use std::path::{Path, PathBuf};
 mod common;
 
 use bevy::input::ButtonState;
+use bevy::input::keyboard::{Key, KeyboardInput};
 use bevy::input::mouse::MouseButtonInput;
 use bevy::prelude::*;
 use bevy::window::CursorMoved;
 use iscene::components::Joint;
-use iscene::viewer::{ViewOptions, render_offscreen, viewer_app};
+use iscene::viewer::{TaskPlayer, ViewOptions, render_offscreen, viewer_app};
 
 fn kitchen_truth(dir: &Path) -> PathBuf {
     let seq = dir.join("seq");
@@ -124,6 +125,7 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
         open: Vec::new(),
         replay: false,
         shots: 1,
+        task: None,
     };
     let mut app = viewer_app(&options, true).expect("viewer app");
     render_offscreen(&mut app, options.size);
@@ -300,4 +302,88 @@ fn a_replay_grows_the_map_along_the_camera_path() {
     ))
     .expect("a GIF");
     assert_eq!(decoder.into_frames().count(), 3);
+}
+
+/// A key pressed and released through Bevy's input, one update each.
+fn press(app: &mut App, key: KeyCode, character: &str) {
+    for state in [ButtonState::Pressed, ButtonState::Released] {
+        app.world_mut().write_message(KeyboardInput {
+            key_code: key,
+            logical_key: Key::Character(character.into()),
+            state,
+            text: None,
+            repeat: false,
+            window: Entity::PLACEHOLDER,
+        });
+        app.update();
+    }
+}
+
+#[test]
+fn a_task_runs_step_by_step_and_plays_from_the_keyboard() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let options = ViewOptions {
+        dir: gt,
+        screenshot: None,
+        layers: Vec::new(),
+        frames: 1,
+        size: (320, 240),
+        open: Vec::new(),
+        replay: false,
+        shots: 1,
+        task: Some(common::root().join("scenes/tasks/kitchen_fridge_to_microwave.json")),
+    };
+    let mut app = viewer_app(&options, true).expect("viewer app");
+    render_offscreen(&mut app, options.size);
+    app.finish();
+    app.cleanup();
+    app.update();
+    let actions = app.world().resource::<TaskPlayer>().actions.len();
+    assert!(actions >= 7, "{actions} actions");
+    let trace = |app: &App| {
+        app.world()
+            .resource::<iscene::systems::simulation::SimulationTrace>()
+            .0
+            .clone()
+    };
+    assert!(trace(&app).is_empty());
+
+    // N: one action, reported in the panel's status.
+    press(&mut app, KeyCode::KeyN, "n");
+    app.update();
+    let done = trace(&app);
+    assert_eq!(done.len(), 1);
+    assert!(done[0].success, "{:?}", done[0].failed_precondition);
+    let status = app
+        .world()
+        .resource::<iscene::viewer::ViewerStatus>()
+        .0
+        .clone();
+    assert!(
+        status[0].starts_with(&format!("task step 1 of {actions}: ")),
+        "{status:?}"
+    );
+
+    // P: the rest, one a second, until the last.
+    press(&mut app, KeyCode::KeyP, "p");
+    for _ in 0..600 {
+        if trace(&app).len() == actions {
+            break;
+        }
+        app.update();
+    }
+    let done = trace(&app);
+    assert_eq!(done.len(), actions);
+    assert!(done.iter().all(|r| r.success));
+    // The demo ends with both doors closed.
+    let fridge_door = app
+        .world_mut()
+        .query::<(&Name, &Joint)>()
+        .iter(app.world())
+        .find(|(n, _)| n.as_str() == "fridge_1_door")
+        .map(|(_, j)| j.value)
+        .expect("the fridge door");
+    assert!(fridge_door.abs() < 1e-3, "fridge door at {fridge_door}");
+    assert!(!app.world().resource::<TaskPlayer>().playing);
 }

@@ -6,6 +6,7 @@ use bevy::prelude::*;
 
 use crate::viewer::interaction::ViewerStatus;
 use crate::viewer::physics_layer::RestVerdicts;
+use crate::viewer::task_player::TaskPlayer;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum Layer {
@@ -150,9 +151,14 @@ fn update_panel(
     layers: Res<ActiveLayers>,
     status: Res<ViewerStatus>,
     verdicts: Res<RestVerdicts>,
+    player: Res<TaskPlayer>,
     mut text: Query<&mut Text, With<PanelText>>,
 ) {
-    if !layers.is_changed() && !status.is_changed() && !verdicts.is_changed() {
+    if !layers.is_changed()
+        && !status.is_changed()
+        && !verdicts.is_changed()
+        && !player.is_changed()
+    {
         return;
     }
     // Two rows of four layers, the ones shown in brackets: short enough to leave the scene be.
@@ -170,6 +176,14 @@ fn update_panel(
         .collect();
     let mut lines: Vec<String> = names.chunks(4).map(|row| row.join(" ")).collect();
     lines.push("click: open/close; right-drag orbit, wheel zoom, WASD/QE fly".into());
+    if !player.actions.is_empty() {
+        let done = player.next.min(player.actions.len());
+        lines.push(format!(
+            "task: {done} of {} actions done; N next, P {}",
+            player.actions.len(),
+            if player.playing { "pause" } else { "play" }
+        ));
+    }
     lines.extend(status.0.iter().cloned());
     // The rest test's verdicts, once asked for or once the scene changed from here.
     lines.extend(verdicts.summary());

@@ -17,6 +17,7 @@ mod occupancy;
 mod physics_layer;
 mod replay_scene;
 mod screenshot;
+mod task_player;
 mod timeline;
 
 use std::path::PathBuf;
@@ -32,7 +33,7 @@ use crate::graph::ContactGraph;
 use crate::replay::{Replay, load_replay};
 use crate::sim::scene_view::{SceneView, open_value};
 use crate::sim::task::Task;
-use crate::simulation::simulation_app;
+use crate::simulation::{simulation_app, task_world};
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::apply_change;
 
@@ -43,6 +44,7 @@ pub use layers::{ActiveLayers, Layer};
 pub use physics_layer::RestVerdicts;
 pub use replay_scene::ReplayData;
 pub use screenshot::{RenderTiming, render_offscreen};
+pub use task_player::{TaskPlayer, action_words};
 pub use timeline::ReplayClock;
 
 /// What `iscene view` shows and does.
@@ -62,6 +64,8 @@ pub struct ViewOptions {
     pub open: Vec<String>,
     /// Play back the reconstruction in `dir` instead of showing its world.
     pub replay: bool,
+    /// A task script to run step by step (N) or play (P) in the window.
+    pub task: Option<PathBuf>,
     /// Screenshots of a replay, evenly spaced from its first frame to its last.
     pub shots: u32,
 }
@@ -89,6 +93,7 @@ impl Plugin for ViewerPlugin {
                 collision::CollisionLayerPlugin,
                 occupancy::OccupancyLayerPlugin,
                 physics_layer::PhysicsLayerPlugin,
+                task_player::TaskPlayerPlugin,
                 camera::OrbitCameraPlugin,
                 interaction::InteractionPlugin,
             ));
@@ -98,14 +103,21 @@ impl Plugin for ViewerPlugin {
 /// The scene world of `options.dir` with the robot, doors opened as asked, and the viewer's
 /// plugins; `offscreen` renders into an image of that size instead of a window.
 pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneError> {
-    let graph = ContactGraph::load(&options.dir.join("contact_graph.json"))?;
-    let mut app = simulation_app(&graph, &Task::default()).map_err(IsceneError::Internal)?;
+    let (actions, mut app) = match &options.task {
+        Some(task) => task_world(&options.dir, task)?,
+        None => {
+            let graph = ContactGraph::load(&options.dir.join("contact_graph.json"))?;
+            let app = simulation_app(&graph, &Task::default()).map_err(IsceneError::Internal)?;
+            (Vec::new(), app)
+        }
+    };
     open_doors(app.world_mut(), &options.open)
         .map_err(|why| InputError::invalid(&options.dir, why))?;
     add_render_plugins(&mut app, &options.dir, offscreen);
     app.add_plugins(ViewerPlugin {
         layers: options.layers.clone(),
-    });
+    })
+    .insert_resource(TaskPlayer::new(actions));
     Ok(app)
 }
 
@@ -175,6 +187,25 @@ pub fn replay_app(replay: Replay, offscreen: bool) -> App {
     app
 }
 
+/// Runs every action of the task at `task` (a refused one is an error in the task): a
+/// screenshot then shows where the task ends.
+fn run_whole_task(app: &mut App, task: &std::path::Path) -> Result<(), IsceneError> {
+    let actions = app.world().resource::<TaskPlayer>().actions.clone();
+    for action in actions {
+        let record = crate::systems::simulation::perform(app.world_mut(), &action);
+        if let Some(refused) = record.failed_precondition {
+            return Err(InputError::invalid(
+                task,
+                format!("the task stopped at {}: {refused}", action_words(&action)),
+            )
+            .into());
+        }
+    }
+    let mut player = app.world_mut().resource_mut::<TaskPlayer>();
+    player.next = player.actions.len();
+    Ok(())
+}
+
 /// Opens the main door or drawer of each object in `objects`.
 fn open_doors(world: &mut World, objects: &[String]) -> Result<(), String> {
     for object in objects {
@@ -216,5 +247,8 @@ pub fn view(options: &ViewOptions) -> Result<Option<RenderTiming>, IsceneError> 
         return Ok(None);
     };
     let mut app = viewer_app(options, true)?;
+    if let Some(task) = &options.task {
+        run_whole_task(&mut app, task)?;
+    }
     screenshot::take(&mut app, path, options.frames, options.size).map(Some)
 }
