@@ -112,25 +112,32 @@ fn a_screenshot_of_the_kitchen_shows_the_kitchen_and_changes_with_doors_and_laye
     }
 }
 
-#[test]
-fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let gt = kitchen_truth(dir.path());
+/// The viewer's app on `gt` rendering off screen into a `size` image, ready to update, with
+/// `task` loaded when given.
+fn offscreen_viewer(gt: PathBuf, size: (u32, u32), task: Option<PathBuf>) -> App {
     let options = ViewOptions {
         dir: gt,
         screenshot: None,
         layers: Vec::new(),
         frames: 1,
-        size: (480, 360),
+        size,
         open: Vec::new(),
         replay: false,
         shots: 1,
-        task: None,
+        task,
     };
     let mut app = viewer_app(&options, true).expect("viewer app");
-    render_offscreen(&mut app, options.size);
+    render_offscreen(&mut app, size);
     app.finish();
     app.cleanup();
+    app
+}
+
+#[test]
+fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let mut app = offscreen_viewer(gt, (480, 360), None);
     for _ in 0..3 {
         app.update();
     }
@@ -323,21 +330,8 @@ fn press(app: &mut App, key: KeyCode, character: &str) {
 fn a_task_runs_step_by_step_and_plays_from_the_keyboard() {
     let dir = tempfile::tempdir().expect("tempdir");
     let gt = kitchen_truth(dir.path());
-    let options = ViewOptions {
-        dir: gt,
-        screenshot: None,
-        layers: Vec::new(),
-        frames: 1,
-        size: (320, 240),
-        open: Vec::new(),
-        replay: false,
-        shots: 1,
-        task: Some(common::root().join("scenes/tasks/kitchen_fridge_to_microwave.json")),
-    };
-    let mut app = viewer_app(&options, true).expect("viewer app");
-    render_offscreen(&mut app, options.size);
-    app.finish();
-    app.cleanup();
+    let task = common::root().join("scenes/tasks/kitchen_fridge_to_microwave.json");
+    let mut app = offscreen_viewer(gt, (320, 240), Some(task));
     app.update();
     let actions = app.world().resource::<TaskPlayer>().actions.len();
     assert!(actions >= 7, "{actions} actions");
@@ -386,4 +380,117 @@ fn a_task_runs_step_by_step_and_plays_from_the_keyboard() {
         .expect("the fridge door");
     assert!(fridge_door.abs() < 1e-3, "fridge door at {fridge_door}");
     assert!(!app.world().resource::<TaskPlayer>().playing);
+}
+
+/// The pixel where `point` shows.
+fn pixel_of(app: &mut App, point: Vec3) -> Vec2 {
+    let world = app.world_mut();
+    let (camera, at) = world
+        .query::<(&Camera, &GlobalTransform)>()
+        .iter(world)
+        .next()
+        .expect("camera");
+    camera.world_to_viewport(at, point).expect("in view")
+}
+
+#[test]
+fn dragging_a_cup_onto_the_floor_moves_it_there_and_makes_the_floor_its_support() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let size = (480, 360);
+    let mut app = offscreen_viewer(gt, size, None);
+    for _ in 0..3 {
+        app.update();
+    }
+    let cup_at = |app: &mut App| {
+        let world = app.world_mut();
+        world
+            .query::<(&Name, &GlobalTransform)>()
+            .iter(world)
+            .find(|(n, _)| n.as_str() == "cup_1")
+            .map(|(_, t)| t.translation())
+            .expect("cup_1")
+    };
+    let start = cup_at(&mut app);
+    let from = pixel_of(&mut app, start);
+    // A floor pixel with floor all around it: the first, from the bottom right, whose ray and
+    // its neighbours' rays 12 px away all meet the floor first.
+    let tree = iscene::systems::kinematic_tree::read_kinematic_tree(app.world_mut()).expect("tree");
+    let hits_floor = |app: &mut App, px: Vec2| {
+        let world = app.world_mut();
+        let (camera, at) = world
+            .query::<(&Camera, &GlobalTransform)>()
+            .iter(world)
+            .next()
+            .expect("camera");
+        let ray = camera.viewport_to_world(at, px).expect("ray");
+        iscene::kinematics::ray_pick::pick_link(&tree, ray.origin, *ray.direction, &["ceiling"])
+            .is_some_and(|(l, _)| tree.links[l].class.as_deref() == Some("floor"))
+    };
+    let mut to = None;
+    'search: for y in (40..size.1 - 40).rev().step_by(10) {
+        for x in (40..size.0 - 40).rev().step_by(10) {
+            let px = Vec2::new(x as f32, y as f32);
+            let around = [Vec2::ZERO, Vec2::X, -Vec2::X, Vec2::Y, -Vec2::Y].map(|d| px + 12.0 * d);
+            if around.iter().all(|p| hits_floor(&mut app, *p)) {
+                to = Some(px);
+                break 'search;
+            }
+        }
+    }
+    let to = to.expect("a floor pixel");
+    let window = Entity::PLACEHOLDER;
+    for (at, state) in [(from, ButtonState::Pressed), (to, ButtonState::Released)] {
+        app.world_mut().write_message(CursorMoved {
+            window,
+            position: at,
+            delta: None,
+        });
+        app.world_mut().write_message(MouseButtonInput {
+            button: MouseButton::Left,
+            state,
+            window,
+        });
+        app.update();
+    }
+    let status = app
+        .world()
+        .resource::<iscene::viewer::ViewerStatus>()
+        .0
+        .clone();
+    assert!(
+        status[0].starts_with("moved cup_1 onto floor (it was on table_1)"),
+        "{status:?}"
+    );
+    // It stands on the floor now, well away from the table, and its parent is the floor.
+    let end = cup_at(&mut app);
+    assert!(end.z < start.z - 0.4, "the cup went from {start} to {end}");
+    let parent = {
+        let world = app.world_mut();
+        let parent = world
+            .query::<(&Name, &ChildOf)>()
+            .iter(world)
+            .find(|(n, _)| n.as_str() == "cup_1")
+            .map(|(_, c)| c.parent())
+            .expect("cup_1's parent");
+        world
+            .get::<Name>(parent)
+            .expect("named")
+            .as_str()
+            .to_string()
+    };
+    assert_eq!(parent, "floor");
+    // The rest test ran on the new scene and the cup stands there.
+    let verdicts = app.world().resource::<iscene::viewer::RestVerdicts>();
+    assert_eq!(verdicts.revision, Some(1));
+    let cup = verdicts
+        .report
+        .as_ref()
+        .and_then(|r| r.objects.iter().find(|o| o.object == "cup_1"))
+        .expect("the cup's verdict");
+    assert_eq!(
+        cup.verdict,
+        iscene::kinematics::rest_test::Verdict::Stable,
+        "{cup:?}"
+    );
 }

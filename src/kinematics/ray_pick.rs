@@ -18,6 +18,18 @@ pub fn pick_link(
     direction: Vec3,
     see_through: &[&str],
 ) -> Option<(usize, f32)> {
+    pick_link_where(tree, origin, direction, |link| {
+        !see_through.contains(&tree.links[link].class.as_deref().unwrap_or(""))
+    })
+}
+
+/// The first link the ray hits among those `solid` accepts (by index), and the distance.
+pub fn pick_link_where(
+    tree: &KinematicTree,
+    origin: Vec3,
+    direction: Vec3,
+    solid: impl Fn(usize) -> bool,
+) -> Option<(usize, f32)> {
     let direction = direction.normalize_or_zero();
     if direction == Vec3::ZERO {
         return None;
@@ -28,9 +40,7 @@ pub fn pick_link(
         let Some(g) = &link.geometry else {
             continue;
         };
-        if g.visual.triangles.is_empty()
-            || see_through.contains(&link.class.as_deref().unwrap_or(""))
-        {
+        if g.visual.triangles.is_empty() || !solid(i) {
             continue;
         }
         // The ray in the link's frame: the mesh stays as it is.

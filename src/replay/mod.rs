@@ -292,45 +292,36 @@ mod tests {
 
     use super::*;
 
-    #[test]
-    fn triangles_are_revealed_in_the_order_their_corners_were_seen() {
+    /// Two triangles over the unit square, ordered as `reveal_order` got them for `seen`.
+    fn square_revealed(seen: &[Option<u32>], aligned_from_world: &Affine3A) -> ReplaySegment {
         let mesh = TriMesh {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE],
             triangles: vec![[0, 1, 2], [1, 3, 2]],
         };
-        // Vertex 3 is seen at frame 1, the others at frame 4; nothing is never seen.
-        let seen = [Some(4), Some(4), Some(4), Some(1)];
+        reveal_order(
+            "a".into(),
+            "box".into(),
+            1,
+            mesh,
+            seen,
+            10,
+            aligned_from_world,
+        )
+    }
+
+    #[test]
+    fn triangles_are_revealed_in_the_order_their_corners_were_seen() {
+        // Vertex 3 is seen at frame 1, the others at frame 4.
         let up = Affine3A::from_translation(Vec3::Z);
-        let s = reveal_order("a".into(), "box".into(), 1, mesh.clone(), &seen, 10, &up);
+        let s = square_revealed(&[Some(4), Some(4), Some(4), Some(1)], &up);
         assert_eq!(s.revealed_at, [4, 4]);
         assert_eq!(s.mesh.positions[0], Vec3::Z);
         assert_eq!((s.revealed_by(3), s.revealed_by(4)), (0, 2));
-        // Triangle [1, 3, 2] waits for its latest corner; a never-seen corner waits for the end.
-        let seen = [Some(6), None, Some(0), Some(2)];
-        let s = reveal_order(
-            "a".into(),
-            "box".into(),
-            1,
-            mesh,
-            &seen,
-            10,
-            &Affine3A::IDENTITY,
-        );
+        // A never-seen corner waits for the last frame (9 of 10).
+        let s = square_revealed(&[Some(6), None, Some(0), Some(2)], &Affine3A::IDENTITY);
         assert_eq!(s.revealed_at, [9, 9]);
-        let seen = [Some(6), Some(0), Some(0), Some(2)];
-        let mesh = TriMesh {
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE],
-            triangles: vec![[0, 1, 2], [1, 3, 2]],
-        };
-        let s = reveal_order(
-            "a".into(),
-            "box".into(),
-            1,
-            mesh,
-            &seen,
-            10,
-            &Affine3A::IDENTITY,
-        );
+        // Each triangle waits for its latest corner, and the mesh is sorted by reveal.
+        let s = square_revealed(&[Some(6), Some(0), Some(0), Some(2)], &Affine3A::IDENTITY);
         assert_eq!(s.revealed_at, [2, 6]);
         assert_eq!(s.mesh.triangles, [[1, 3, 2], [0, 1, 2]]);
     }

@@ -1,7 +1,8 @@
 //! Clicking the scene: a left click (press and release without dragging) casts a ray from the
 //! camera through the pointer; the door or drawer hit (or the main one of the object hit) opens
 //! when closed and closes when open. The joint moves in the transform hierarchy, and the rest
-//! test runs on the scene as it now stands; the panel shows what happened.
+//! test runs on the scene as it now stands; the panel shows what happened. A left drag is left
+//! to `drag_drop`.
 
 use bevy::prelude::*;
 use bevy::window::CursorMoved;
@@ -27,11 +28,12 @@ pub struct SceneRevision(pub u64);
 #[derive(Resource, Clone, Debug, Default)]
 pub struct ViewerStatus(pub Vec<String>);
 
-/// Clicks not yet worked, where the pointer was.
+/// Clicks not yet worked, where the pointer was, and left drags (from, to) not yet dropped.
 #[derive(Resource, Clone, Debug, Default)]
-struct PendingClicks {
+pub(crate) struct PendingClicks {
     pressed_at: Option<Vec2>,
     clicks: Vec<Vec2>,
+    pub(crate) drags: Vec<(Vec2, Vec2)>,
 }
 
 /// A press and release farther apart than this (pixels) is a drag, not a click.
@@ -56,9 +58,12 @@ fn collect_clicks(
     }
     if buttons.just_released(MouseButton::Left)
         && let Some(from) = pending.pressed_at.take()
-        && from.distance(at) <= CLICK_SLOP_PX
     {
-        pending.clicks.push(at);
+        if from.distance(at) <= CLICK_SLOP_PX {
+            pending.clicks.push(at);
+        } else {
+            pending.drags.push((from, at));
+        }
     }
 }
 
@@ -71,13 +76,28 @@ fn work_clicked_joints(world: &mut World) {
     }
 }
 
-/// Opens or closes the joint under the pixel `at`; returns what happened, in words.
-pub fn work_joint_at(world: &mut World, at: Vec2) -> Vec<String> {
-    let ray = world
+/// The ray from the camera through the pixel `at`.
+pub(crate) fn ray_through(world: &mut World, at: Vec2) -> Option<Ray3d> {
+    world
         .query::<(&Camera, &GlobalTransform)>()
         .iter(world)
-        .find_map(|(camera, transform)| camera.viewport_to_world(transform, at).ok());
-    let Some(ray) = ray else {
+        .find_map(|(camera, transform)| camera.viewport_to_world(transform, at).ok())
+}
+
+/// The scene changed from the viewer: the layers that follow it rebuild, and the rest test
+/// reruns on it (the panel shows its verdicts).
+pub(crate) fn scene_changed(world: &mut World) {
+    let revision = {
+        let mut revision = world.resource_mut::<SceneRevision>();
+        revision.0 += 1;
+        revision.0
+    };
+    run_rest_test(world, revision);
+}
+
+/// Opens or closes the joint under the pixel `at`; returns what happened, in words.
+pub fn work_joint_at(world: &mut World, at: Vec2) -> Vec<String> {
+    let Some(ray) = ray_through(world, at) else {
         return vec!["no camera to click through".into()];
     };
     let tree = match read_kinematic_tree(world) {
@@ -109,13 +129,7 @@ pub fn work_joint_at(world: &mut World, at: Vec2) -> Vec<String> {
             to,
         },
     );
-    let revision = {
-        let mut revision = world.resource_mut::<SceneRevision>();
-        revision.0 += 1;
-        revision.0
-    };
-    // The rest test on the changed scene; the panel shows its verdicts.
-    run_rest_test(world, revision);
+    scene_changed(world);
     vec![format!(
         "{} {link} ({:.2} -> {to:.2})",
         if opening { "opened" } else { "closed" },

@@ -115,36 +115,50 @@ fn toggle_layers(keys: Res<ButtonInput<KeyCode>>, mut layers: ResMut<ActiveLayer
     }
 }
 
-/// The panel's look, shared with the replay's: small type on a veil that keeps it legible over
-/// the scene.
-pub const PANEL_FONT_PX: f32 = 12.0;
-pub const PANEL_TEXT: Color = Color::srgb(0.05, 0.05, 0.1);
-pub const PANEL_BACKGROUND: Color = Color::srgba(1.0, 1.0, 1.0, 0.7);
+/// The panels' look (this one's and the replay's).
+const PANEL_FONT_PX: f32 = 12.0;
+const PANEL_TEXT: Color = Color::srgb(0.05, 0.05, 0.1);
+const PANEL_BACKGROUND: Color = Color::srgba(1.0, 1.0, 1.0, 0.7);
 
 /// The panel's text: the layers with their keys, then the last interaction.
 #[derive(Component)]
 struct PanelText;
 
 fn spawn_panel(mut commands: Commands) {
-    commands.spawn((
+    // Bottom left: the camera looks across the room from its -x, -y corner, so the top of the
+    // picture holds the far wall's appliances and the bottom the open floor.
+    commands.spawn((panel(PanelCorner::BottomLeft), PanelText));
+}
+
+/// Which corner of the view a panel sits in.
+pub enum PanelCorner {
+    TopLeft,
+    BottomLeft,
+}
+
+/// An empty panel in `corner`: small type on a veil that keeps it legible over the scene.
+pub fn panel(corner: PanelCorner) -> impl Bundle {
+    let margin = Val::Px(6.0);
+    let mut node = Node {
+        position_type: PositionType::Absolute,
+        left: margin,
+        padding: UiRect::all(Val::Px(4.0)),
+        ..default()
+    };
+    match corner {
+        PanelCorner::TopLeft => node.top = margin,
+        PanelCorner::BottomLeft => node.bottom = margin,
+    }
+    (
         Text::new(""),
         TextFont {
             font_size: FontSize::Px(PANEL_FONT_PX),
             ..default()
         },
         TextColor(PANEL_TEXT),
-        // Bottom left: the camera looks across the room from its -x, -y corner, so the top of
-        // the picture holds the far wall's appliances and the bottom the open floor.
-        Node {
-            position_type: PositionType::Absolute,
-            bottom: Val::Px(6.0),
-            left: Val::Px(6.0),
-            padding: UiRect::all(Val::Px(4.0)),
-            ..default()
-        },
+        node,
         BackgroundColor(PANEL_BACKGROUND),
-        PanelText,
-    ));
+    )
 }
 
 fn update_panel(

@@ -134,15 +134,19 @@ fn show_segment_colours(
 }
 
 /// A sun from above and a little to the side, with shadows off (software rendering).
-fn spawn_light(mut commands: Commands) {
-    commands.spawn((
+pub fn sun() -> impl Bundle {
+    (
         DirectionalLight {
             illuminance: 3000.0,
             shadow_maps_enabled: false,
             ..default()
         },
         Transform::from_xyz(1.0, -2.0, 6.0).looking_at(Vec3::ZERO, Vec3::Z),
-    ));
+    )
+}
+
+fn spawn_light(mut commands: Commands) {
+    commands.spawn(sun());
 }
 
 pub struct LinkMeshesPlugin;

@@ -9,6 +9,7 @@
 
 mod camera;
 mod collision;
+mod drag_drop;
 mod graph_overlays;
 mod interaction;
 mod layers;
@@ -38,6 +39,7 @@ use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::apply_change;
 
 pub use camera::OrbitCamera;
+pub use drag_drop::drop_object;
 pub use interaction::work_joint_at;
 pub use interaction::{PointerPosition, SceneRevision, ViewerStatus};
 pub use layers::{ActiveLayers, Layer};
@@ -94,6 +96,7 @@ impl Plugin for ViewerPlugin {
                 occupancy::OccupancyLayerPlugin,
                 physics_layer::PhysicsLayerPlugin,
                 task_player::TaskPlayerPlugin,
+                drag_drop::DragDropPlugin,
                 camera::OrbitCameraPlugin,
                 interaction::InteractionPlugin,
             ));

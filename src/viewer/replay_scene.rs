@@ -12,7 +12,7 @@ use crate::replay::Replay;
 use crate::viewer::camera::spawn_orbit_camera;
 use crate::viewer::graph_overlays::{draw_box, draw_plane, draw_proximal, draw_support};
 use crate::viewer::layers::{ActiveLayers, Layer};
-use crate::viewer::link_meshes::{HIDDEN_CLASSES, instance_colour};
+use crate::viewer::link_meshes::{HIDDEN_CLASSES, instance_colour, sun};
 use crate::viewer::timeline::{ClockUpdate, ReplayClock, ReplayCounts};
 
 /// The replay being shown.
@@ -105,14 +105,7 @@ fn spawn_replay(
         )
     });
     spawn_orbit_camera(&mut commands, centre, size);
-    commands.spawn((
-        DirectionalLight {
-            illuminance: 3000.0,
-            shadow_maps_enabled: false,
-            ..default()
-        },
-        Transform::from_xyz(1.0, -2.0, 6.0).looking_at(Vec3::ZERO, Vec3::Z),
-    ));
+    commands.spawn(sun());
 }
 
 /// Cuts every segment's mesh to the triangles revealed by the clock's frame.

@@ -49,6 +49,15 @@ impl RenderTiming {
     }
 }
 
+/// Aims `app`'s cameras at a new `size` image, finishes the app and renders its first frame
+/// (the one that compiles the pipelines, left out of the timings).
+fn start_offscreen(app: &mut App, size: (u32, u32)) {
+    render_offscreen(app, size);
+    app.finish();
+    app.cleanup();
+    app.update();
+}
+
 /// Renders `frames` frames of `app` into a `size` image and writes the last one to `path`.
 pub fn take(
     app: &mut App,
@@ -56,11 +65,7 @@ pub fn take(
     frames: u32,
     size: (u32, u32),
 ) -> Result<RenderTiming, IsceneError> {
-    render_offscreen(app, size);
-    app.finish();
-    app.cleanup();
-    // The first frame compiles the pipelines; the rest are timed.
-    app.update();
+    start_offscreen(app, size);
     let started = std::time::Instant::now();
     for _ in 1..frames {
         app.update();
@@ -85,10 +90,7 @@ pub fn take_replay(
     frames: u32,
     size: (u32, u32),
 ) -> Result<RenderTiming, IsceneError> {
-    render_offscreen(app, size);
-    app.finish();
-    app.cleanup();
-    app.update();
+    start_offscreen(app, size);
     let started = std::time::Instant::now();
     let shots = shots.max(1);
     let mut pictures = Vec::with_capacity(shots as usize);

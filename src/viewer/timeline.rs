@@ -4,7 +4,7 @@
 
 use bevy::prelude::*;
 
-use crate::viewer::layers::{ActiveLayers, Layer, PANEL_BACKGROUND, PANEL_FONT_PX, PANEL_TEXT};
+use crate::viewer::layers::{ActiveLayers, Layer, PanelCorner, panel};
 
 /// Where the replay stands: a frame position (fractional while playing) and how it moves.
 #[derive(Resource, Clone, Copy, Debug)]
@@ -140,23 +140,7 @@ struct BarFill;
 struct TimelineText;
 
 fn spawn_timeline(mut commands: Commands) {
-    commands.spawn((
-        Text::new(""),
-        TextFont {
-            font_size: FontSize::Px(PANEL_FONT_PX),
-            ..default()
-        },
-        TextColor(PANEL_TEXT),
-        Node {
-            position_type: PositionType::Absolute,
-            top: Val::Px(6.0),
-            left: Val::Px(6.0),
-            padding: UiRect::all(Val::Px(4.0)),
-            ..default()
-        },
-        BackgroundColor(PANEL_BACKGROUND),
-        TimelineText,
-    ));
+    commands.spawn((panel(PanelCorner::TopLeft), TimelineText));
     commands
         .spawn((
             Node {
