@@ -14,7 +14,9 @@ use bevy::input::mouse::MouseButtonInput;
 use bevy::prelude::*;
 use bevy::window::CursorMoved;
 use iscene::components::Joint;
-use iscene::viewer::{TaskPlayer, ViewOptions, render_offscreen, viewer_app};
+use iscene::viewer::{
+    ActiveLayers, Layer, NodeLabel, TaskPlayer, ViewOptions, render_offscreen, viewer_app,
+};
 
 fn kitchen_truth(dir: &Path) -> PathBuf {
     let seq = dir.join("seq");
@@ -211,12 +213,11 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
     );
 }
 
-#[test]
-fn a_replay_grows_the_map_along_the_camera_path() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let seq = dir.path().join("seq");
-    common::render_scene("kitchen", &seq, 24, true);
-    let out = dir.path().join("out");
+/// The kitchen rendered with `frames` frames and reconstructed into `dir/out`.
+fn reconstructed_kitchen(dir: &Path, frames: usize) -> PathBuf {
+    let seq = dir.join("seq");
+    common::render_scene("kitchen", &seq, frames, true);
+    let out = dir.join("out");
     let (code, stdout, stderr) = common::iscene(
         &[
             "reconstruct",
@@ -227,6 +228,13 @@ fn a_replay_grows_the_map_along_the_camera_path() {
         &common::root(),
     );
     assert_eq!(code, 0, "{stdout}{stderr}");
+    out
+}
+
+#[test]
+fn a_replay_grows_the_map_along_the_camera_path() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = reconstructed_kitchen(dir.path(), 24);
 
     // The timeline: the sensor saw the room bit by bit, not all at the first or last frame.
     let replay = iscene::replay::load_replay(&out).expect("replay");
@@ -480,6 +488,21 @@ fn dragging_a_cup_onto_the_floor_moves_it_there_and_makes_the_floor_its_support(
             .to_string()
     };
     assert_eq!(parent, "floor");
+    // Rapier let it fall the last few millimetres: it rests on the floor, upright.
+    let tree = iscene::systems::kinematic_tree::read_kinematic_tree(app.world_mut()).expect("tree");
+    let view = iscene::sim::scene_view::SceneView::new(&tree);
+    let (lo, _) = view.node_bounds("cup_1").expect("the cup's bounds");
+    assert!(lo.z.abs() < 0.003, "the cup's bottom is at {} m", lo.z);
+    let link = view.node_link("cup_1").expect("the cup's link");
+    let tilt = view.poses[link]
+        .matrix3
+        .z_axis
+        .angle_between(glam::Vec3A::Z);
+    assert!(
+        tilt.to_degrees() < 2.0,
+        "tipped {} degrees",
+        tilt.to_degrees()
+    );
     // The rest test ran on the new scene and the cup stands there.
     let verdicts = app.world().resource::<iscene::viewer::RestVerdicts>();
     assert_eq!(verdicts.revision, Some(1));
@@ -492,5 +515,94 @@ fn dragging_a_cup_onto_the_floor_moves_it_there_and_makes_the_floor_its_support(
         cup.verdict,
         iscene::kinematics::rest_test::Verdict::Stable,
         "{cup:?}"
+    );
+}
+
+#[test]
+fn the_graph_layer_labels_each_node_over_its_box() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let size = (480, 360);
+    let mut app = offscreen_viewer(gt, size, None);
+    let labels = |app: &mut App| {
+        let world = app.world_mut();
+        world
+            .query::<(&NodeLabel, &Text, &Node, &InheritedVisibility)>()
+            .iter(world)
+            .map(|(l, t, n, v)| (l.0, t.0.clone(), n.left, n.top, v.get()))
+            .collect::<Vec<_>>()
+    };
+    for _ in 0..3 {
+        app.update();
+    }
+    // Off with the graph layer.
+    let hidden = labels(&mut app);
+    assert!(hidden.len() > 10, "{} labels", hidden.len());
+    assert!(hidden.iter().all(|l| !l.4), "{hidden:?}");
+
+    app.world_mut()
+        .resource_mut::<ActiveLayers>()
+        .set(Layer::Graph, true);
+    for _ in 0..3 {
+        app.update();
+    }
+    let shown = labels(&mut app);
+    assert!(shown.iter().all(|l| l.4), "{shown:?}");
+    // The fridge's tag sits just above the top of its box as the camera sees it.
+    let (_, _, left, top, _) = shown
+        .iter()
+        .find(|l| l.1 == "fridge_1")
+        .expect("the fridge's label")
+        .clone();
+    let fridge_box = app
+        .world()
+        .get::<iscene::components::OrientedBox>(
+            shown.iter().find(|l| l.1 == "fridge_1").expect("label").0,
+        )
+        .expect("the fridge's box")
+        .0;
+    let top_point = fridge_box.center.with_z(fridge_box.top_z());
+    let at = pixel_of(&mut app, top_point);
+    let (Val::Px(x), Val::Px(y)) = (left, top) else {
+        panic!("label placed at {left:?}, {top:?}");
+    };
+    assert!((x - at.x).abs() < 60.0, "label x {x}, box top {at}");
+    assert!(y < at.y && at.y - y < 40.0, "label y {y}, box top {at}");
+}
+
+#[test]
+fn the_map_layer_shows_the_reconstruction_in_place_of_the_models() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = reconstructed_kitchen(dir.path(), 8);
+    let map = iscene::viewer::read_map(&out).expect("the map");
+    assert!(map.0.len() > 10, "{} segments", map.0.len());
+    // In the aligned frame: the floor's segment lies at z = 0.
+    let floor = map
+        .0
+        .iter()
+        .find(|s| s.class == "floor")
+        .expect("a floor segment");
+    let (lo, hi) = floor.mesh.bounds().expect("floor bounds");
+    assert!(lo.z > -0.05 && hi.z < 0.05, "floor from {lo} to {hi}");
+
+    let models = screenshot(&out, &dir.path().join("models.png"), &[]);
+    let mapped = screenshot(&out, &dir.path().join("map.png"), &["--layer", "map"]);
+    let changed = changed_fraction(&models, &mapped);
+    assert!(
+        changed > 0.05,
+        "the map changed {changed:.4} of the picture"
+    );
+    assert!(
+        coverage(&mapped) > 0.4,
+        "the map covers {:.2}",
+        coverage(&mapped)
+    );
+    // A rendered sequence's truth has no map.
+    let gt = dir.path().join("seq").join("gt");
+    assert!(
+        iscene::viewer::read_map(&gt)
+            .expect("no map, no error")
+            .0
+            .is_empty()
     );
 }

@@ -14,7 +14,8 @@ use ply_rs_bw::writer::Writer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{InputError, IsceneError};
-use crate::io::ply::mesh_ply_bytes;
+use crate::geometry::TriMesh;
+use crate::io::ply::{mesh_ply_bytes, read_mesh_ply};
 use crate::io::write_sequence::write_text;
 use crate::panoptic::PanopticEntity;
 
@@ -103,12 +104,26 @@ fn labelled_points_ply_bytes(points: &[(Vec3, u32)]) -> Result<Vec<u8>, IsceneEr
     Ok(bytes)
 }
 
-/// Reads `entities.json` and `surface_voxels.ply` of a reconstruction's `panoptic/` folder.
-pub fn read_panoptic(dir: &Path) -> Result<(PanopticIndex, Vec<(Vec3, u32)>), InputError> {
+/// Reads `entities.json` of a reconstruction's `panoptic/` folder.
+pub fn read_index(dir: &Path) -> Result<PanopticIndex, InputError> {
     let index_path = dir.join("entities.json");
     let text = std::fs::read_to_string(&index_path).map_err(|e| InputError::io(&index_path, &e))?;
-    let index: PanopticIndex = serde_json::from_str(&text)
-        .map_err(|e| InputError::invalid(&index_path, format!("not a panoptic index: {e}")))?;
+    serde_json::from_str(&text)
+        .map_err(|e| InputError::invalid(&index_path, format!("not a panoptic index: {e}")))
+}
+
+/// Reads every entity's segment mesh (`<id>.ply`) of a `panoptic/` folder, in the index's order.
+pub fn read_segment_meshes(dir: &Path, index: &PanopticIndex) -> Result<Vec<TriMesh>, InputError> {
+    index
+        .entities
+        .iter()
+        .map(|e| read_mesh_ply(&dir.join(format!("{}.ply", e.id))))
+        .collect()
+}
+
+/// Reads `entities.json` and `surface_voxels.ply` of a reconstruction's `panoptic/` folder.
+pub fn read_panoptic(dir: &Path) -> Result<(PanopticIndex, Vec<(Vec3, u32)>), InputError> {
+    let index = read_index(dir)?;
     let path = dir.join("surface_voxels.ply");
     let file = std::fs::File::open(&path).map_err(|e| InputError::io(&path, &e))?;
     let ply = Parser::<DefaultElement>::new()

@@ -14,8 +14,7 @@ use crate::error::{InputError, IsceneError};
 use crate::geometry::{GravityBox, Pinhole, Plane, TriMesh};
 use crate::graph::{ContactGraph, GraphEdge};
 use crate::io::Sequence;
-use crate::io::panoptic_dir::PanopticIndex;
-use crate::io::ply::read_mesh_ply;
+use crate::io::panoptic_dir::{read_index, read_segment_meshes};
 
 pub use first_seen::{first_seen, seen_in_frame};
 
@@ -90,13 +89,13 @@ impl Replay {
 
 /// What the replay needs from report.json: the sequence read, the frames used and the aligned
 /// frame.
-struct ReportFacts {
-    sequence: PathBuf,
-    frames: Option<(usize, Option<usize>, usize)>,
-    aligned_from_world: Affine3A,
+pub(crate) struct ReportFacts {
+    pub sequence: PathBuf,
+    pub frames: Option<(usize, Option<usize>, usize)>,
+    pub aligned_from_world: Affine3A,
 }
 
-fn read_report(path: &Path) -> Result<ReportFacts, InputError> {
+pub(crate) fn read_report(path: &Path) -> Result<ReportFacts, InputError> {
     let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, &e))?;
     let report: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| InputError::invalid(path, format!("not JSON: {e}")))?;
@@ -137,10 +136,7 @@ fn read_report(path: &Path) -> Result<ReportFacts, InputError> {
 pub fn load_replay(dir: &Path) -> Result<Replay, IsceneError> {
     let facts = read_report(&dir.join("report.json"))?;
     let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
-    let index_path = dir.join("panoptic").join("entities.json");
-    let text = std::fs::read_to_string(&index_path).map_err(|e| InputError::io(&index_path, &e))?;
-    let index: PanopticIndex = serde_json::from_str(&text)
-        .map_err(|e| InputError::invalid(&index_path, format!("not a panoptic index: {e}")))?;
+    let index = read_index(&dir.join("panoptic"))?;
     // report.json holds the path as given; a rendered sequence also sits beside the folder.
     let beside = dir
         .parent()
@@ -160,12 +156,7 @@ pub fn load_replay(dir: &Path) -> Result<Replay, IsceneError> {
     let frames = sequence.frames.len() as u32;
 
     // Every segment's mesh, in the sequence's world frame, and when each vertex was first seen.
-    let mut meshes = Vec::with_capacity(index.entities.len());
-    for e in &index.entities {
-        meshes.push(read_mesh_ply(
-            &dir.join("panoptic").join(format!("{}.ply", e.id)),
-        )?);
-    }
+    let meshes = read_segment_meshes(&dir.join("panoptic"), &index)?;
     let vertices: Vec<glam::Vec3> = meshes.iter().flat_map(|m| m.positions.clone()).collect();
     let seen = first_seen(
         &vertices,

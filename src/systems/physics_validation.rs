@@ -181,6 +181,59 @@ pub fn validate_physics(tree: &KinematicTree) -> PhysicsReport {
 pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
     let bodies = rest_bodies(tree);
     let penetrations = start_penetrations(tree, &bodies);
+    let frozen: Vec<bool> = penetrations
+        .iter()
+        .map(|(depth, _)| *depth > MAX_START_PENETRATION_M)
+        .collect();
+    let run = simulate(tree, &bodies, &frozen, REST_SECONDS);
+    let objects: Vec<ObjectVerdict> = bodies
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.dynamic)
+        .map(|(i, b)| judge(tree, b, run.starts[i], run.ends[i], penetrations[i]))
+        .collect();
+    let stable = objects
+        .iter()
+        .filter(|o| o.verdict == Verdict::Stable)
+        .count();
+    PhysicsReport {
+        simulated_s: run.simulated_s,
+        step_s: REST_STEP_S,
+        stable_fraction: if objects.is_empty() {
+            1.0
+        } else {
+            stable as f32 / objects.len() as f32
+        },
+        objects,
+        joints: Vec::new(),
+        rest_wall_s: run.wall_s,
+    }
+}
+
+/// Lets the object whose own link is `link` fall and come to rest under gravity, everything
+/// else held where it stands, for `seconds`; returns its world pose then (`None` when the link
+/// is no object of its own, such as the layout or a door). A dragged object dropped a little
+/// above a surface lands on it, and one dropped over an edge tips off it.
+pub fn settle_object(tree: &KinematicTree, link: usize, seconds: f32) -> Option<Affine3A> {
+    let bodies = rest_bodies(tree);
+    let body = bodies
+        .iter()
+        .position(|b| b.dynamic && b.links.first() == Some(&link))?;
+    let frozen: Vec<bool> = (0..bodies.len()).map(|b| b != body).collect();
+    Some(simulate(tree, &bodies, &frozen, seconds).ends[body])
+}
+
+/// Where the bodies started and ended, and what simulating them cost.
+struct Simulated {
+    starts: Vec<Affine3A>,
+    ends: Vec<Affine3A>,
+    simulated_s: f32,
+    wall_s: f64,
+}
+
+/// Simulates the bodies in rapier for `seconds` at the rest test's fixed step; those in `frozen`
+/// are fixed where they stand.
+fn simulate(tree: &KinematicTree, bodies: &[RestBody], frozen: &[bool], seconds: f32) -> Simulated {
     let mut app = App::new();
     app.add_plugins((
         // Transform propagation asks for the compute pool even on one thread.
@@ -203,18 +256,14 @@ pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
         schedule.set_executor(SingleThreadedExecutor::new());
     }
     app.update();
-    let frozen: Vec<bool> = penetrations
-        .iter()
-        .map(|(depth, _)| *depth > MAX_START_PENETRATION_M)
-        .collect();
-    let starts = spawn_bodies(app.world_mut(), tree, &bodies, &frozen);
+    let starts = spawn_bodies(app.world_mut(), tree, bodies, frozen);
     let started = std::time::Instant::now();
-    let steps = (REST_SECONDS / REST_STEP_S).round() as usize;
+    let steps = (seconds / REST_STEP_S).round() as usize;
     // One update registers the new bodies (and steps once); the rest are the simulated time.
     for _ in 0..steps {
         app.update();
     }
-    let rest_wall_s = started.elapsed().as_secs_f64();
+    let wall_s = started.elapsed().as_secs_f64();
     let mut ends = starts.clone();
     for (index, transform) in app
         .world_mut()
@@ -224,27 +273,11 @@ pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
         ends[index.0] =
             Affine3A::from_rotation_translation(transform.rotation, transform.translation);
     }
-    let objects: Vec<ObjectVerdict> = bodies
-        .iter()
-        .enumerate()
-        .filter(|(_, b)| b.dynamic)
-        .map(|(i, b)| judge(tree, b, starts[i], ends[i], penetrations[i]))
-        .collect();
-    let stable = objects
-        .iter()
-        .filter(|o| o.verdict == Verdict::Stable)
-        .count();
-    PhysicsReport {
+    Simulated {
+        starts,
+        ends,
         simulated_s: steps as f32 * REST_STEP_S,
-        step_s: REST_STEP_S,
-        stable_fraction: if objects.is_empty() {
-            1.0
-        } else {
-            stable as f32 / objects.len() as f32
-        },
-        objects,
-        joints: Vec::new(),
-        rest_wall_s,
+        wall_s,
     }
 }
 
@@ -377,6 +410,38 @@ mod tests {
         assert!(
             (falling.displacement_m - 0.2).abs() < 0.01,
             "lands on the floor: {falling:?}"
+        );
+    }
+
+    #[test]
+    fn a_settled_object_lands_on_what_is_under_it_and_nothing_else_moves() {
+        let tree = scene(0.2);
+        let landed = settle_object(&tree, 3, 1.5).expect("box_2 is an object");
+        let t = landed.translation;
+        assert!(t.z.abs() < 0.003, "box_2 rests on the floor: {t}");
+        assert!(
+            (t.x + 0.5).abs() < 0.003 && t.y.abs() < 0.003,
+            "straight down: {t}"
+        );
+        let tilt = landed
+            .matrix3
+            .z_axis
+            .angle_between(glam::Vec3A::Z)
+            .to_degrees();
+        assert!(tilt < 1.0, "upright: {tilt} degrees");
+        // The floor is no object of its own.
+        assert!(settle_object(&tree, 1, 1.5).is_none());
+    }
+
+    #[test]
+    fn an_object_dropped_over_an_edge_tips_off_it() {
+        // box_2 let go with three quarters of its bottom over the side of box_1 (30 cm tall).
+        let mut tree = scene(0.0);
+        tree.links[3].parent_from_link = Affine3A::from_translation(Vec3::new(0.8, 0.0, 0.301));
+        let landed = settle_object(&tree, 3, 1.5).expect("box_2 is an object");
+        assert!(
+            landed.translation.z < 0.2 || landed.matrix3.z_axis.z < 0.9,
+            "it fell or tipped: {landed:?}"
         );
     }
 }

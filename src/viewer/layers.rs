@@ -28,10 +28,13 @@ pub enum Layer {
     Occupancy,
     /// The rest test's verdicts: stable objects' boxes green, unstable orange, penetrating red.
     Physics,
+    /// The reconstructed map in place of the models: each panoptic segment's mesh in its
+    /// instance colour (a reconstruction's folder only).
+    Map,
 }
 
 impl Layer {
-    pub const ALL: [Layer; 8] = [
+    pub const ALL: [Layer; 9] = [
         Layer::Colour,
         Layer::Segments,
         Layer::Boxes,
@@ -40,11 +43,12 @@ impl Layer {
         Layer::Collision,
         Layer::Occupancy,
         Layer::Physics,
+        Layer::Map,
     ];
 
     /// The number key that switches the layer: its place in `ALL`, from 1.
     fn key(self) -> KeyCode {
-        const KEYS: [KeyCode; 8] = [
+        const KEYS: [KeyCode; 9] = [
             KeyCode::Digit1,
             KeyCode::Digit2,
             KeyCode::Digit3,
@@ -53,6 +57,7 @@ impl Layer {
             KeyCode::Digit6,
             KeyCode::Digit7,
             KeyCode::Digit8,
+            KeyCode::Digit9,
         ];
         KEYS[Self::ALL.iter().position(|l| *l == self).unwrap_or(0)]
     }
@@ -67,6 +72,7 @@ impl Layer {
             Layer::Collision => "collision",
             Layer::Occupancy => "occupancy",
             Layer::Physics => "physics",
+            Layer::Map => "map",
         }
     }
 }
@@ -175,7 +181,7 @@ fn update_panel(
     {
         return;
     }
-    // Two rows of four layers, the ones shown in brackets: short enough to leave the scene be.
+    // Rows of four layers, the ones shown in brackets: short enough to leave the scene be.
     let names: Vec<String> = Layer::ALL
         .iter()
         .enumerate()
@@ -189,7 +195,7 @@ fn update_panel(
         })
         .collect();
     let mut lines: Vec<String> = names.chunks(4).map(|row| row.join(" ")).collect();
-    lines.push("click: open/close; right-drag orbit, wheel zoom, WASD/QE fly".into());
+    lines.push("click: open/close, drag: move; right-drag orbit, wheel zoom, WASD/QE fly".into());
     if !player.actions.is_empty() {
         let done = player.next.min(player.actions.len());
         lines.push(format!(

@@ -9,12 +9,27 @@ use bevy::prelude::*;
 use crate::components::{LinkBody, ModelPart, Panoptic, SceneEntity};
 use crate::geometry::TriMesh;
 use crate::viewer::layers::{ActiveLayers, Layer};
+use crate::viewer::map_layer::MapSegments;
 
-/// A link's two looks.
+/// A link's two looks, and the class of its object (empty for the robot's links).
 #[derive(Component, Clone, Debug)]
 pub struct LinkMaterials {
     pub colour: Handle<StandardMaterial>,
     pub segment: Handle<StandardMaterial>,
+    pub class: String,
+}
+
+impl LinkMaterials {
+    /// Hidden classes never show, and the scene's models hide while the map stands in for
+    /// them; the robot always shows.
+    pub fn visibility(&self, map_shown: bool) -> Visibility {
+        let robot = self.class.is_empty();
+        if HIDDEN_CLASSES.contains(&self.class.as_str()) || (map_shown && !robot) {
+            Visibility::Hidden
+        } else {
+            Visibility::Inherited
+        }
+    }
 }
 
 /// Classes never drawn: the viewer looks into the room from above.
@@ -72,6 +87,7 @@ fn attach_link_meshes(
     links: Query<(Entity, &LinkBody, Option<&ModelPart>), Without<Mesh3d>>,
     panoptic: Query<(&SceneEntity, &Panoptic)>,
     layers: Res<ActiveLayers>,
+    map: Res<MapSegments>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
 ) {
@@ -82,17 +98,15 @@ fn attach_link_meshes(
         let looks = LinkMaterials {
             colour: materials.add(material(Color::linear_rgb(r, g, b))),
             segment: materials.add(material(instance_colour(instance))),
+            class,
         };
         let shown = if layers.is_on(Layer::Segments) {
             looks.segment.clone()
         } else {
             looks.colour.clone()
         };
-        let visibility = if HIDDEN_CLASSES.contains(&class.as_str()) {
-            Visibility::Hidden
-        } else {
-            Visibility::Inherited
-        };
+        // The map layer hides the models once it has a map to show instead (map_layer.rs).
+        let visibility = looks.visibility(layers.is_on(Layer::Map) && !map.0.is_empty());
         commands.entity(entity).insert((
             Mesh3d(meshes.add(bevy_mesh(&geometry.visual))),
             MeshMaterial3d(shown),

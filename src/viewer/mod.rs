@@ -10,10 +10,12 @@
 mod camera;
 mod collision;
 mod drag_drop;
+mod graph_labels;
 mod graph_overlays;
 mod interaction;
 mod layers;
 mod link_meshes;
+mod map_layer;
 mod occupancy;
 mod physics_layer;
 mod replay_scene;
@@ -40,9 +42,11 @@ use crate::systems::simulation::apply_change;
 
 pub use camera::OrbitCamera;
 pub use drag_drop::drop_object;
+pub use graph_labels::NodeLabel;
 pub use interaction::work_joint_at;
 pub use interaction::{PointerPosition, SceneRevision, ViewerStatus};
 pub use layers::{ActiveLayers, Layer};
+pub use map_layer::{MapSegments, read_map};
 pub use physics_layer::RestVerdicts;
 pub use replay_scene::ReplayData;
 pub use screenshot::{RenderTiming, render_offscreen};
@@ -92,6 +96,8 @@ impl Plugin for ViewerPlugin {
                 link_meshes::LinkMeshesPlugin,
                 layers::LayersPlugin,
                 graph_overlays::GraphOverlaysPlugin,
+                graph_labels::GraphLabelsPlugin,
+                map_layer::MapLayerPlugin,
                 collision::CollisionLayerPlugin,
                 occupancy::OccupancyLayerPlugin,
                 physics_layer::PhysicsLayerPlugin,
@@ -116,11 +122,13 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
     };
     open_doors(app.world_mut(), &options.open)
         .map_err(|why| InputError::invalid(&options.dir, why))?;
+    let map = read_map(&options.dir)?;
     add_render_plugins(&mut app, &options.dir, offscreen);
     app.add_plugins(ViewerPlugin {
         layers: options.layers.clone(),
     })
-    .insert_resource(TaskPlayer::new(actions));
+    .insert_resource(TaskPlayer::new(actions))
+    .insert_resource(map);
     Ok(app)
 }
 
