@@ -414,7 +414,7 @@ mod tests {
     }
 
     #[test]
-    fn a_settled_object_lands_on_what_is_under_it_and_nothing_else_moves() {
+    fn a_settled_object_lands_straight_down_on_what_is_under_it() {
         let tree = scene(0.2);
         let landed = settle_object(&tree, 3, 1.5).expect("box_2 is an object");
         let t = landed.translation;
