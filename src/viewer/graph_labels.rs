@@ -18,14 +18,12 @@ const LABEL_LIFT_M: f32 = 0.05;
 #[derive(Component)]
 pub struct NodeLabel(pub Entity);
 
+/// Scene nodes with a box, as they first appear.
+type NewNode<'a> = (Entity, &'a SceneEntity, Option<&'a Panoptic>);
+type NewNodeFilter = (Added<SceneEntity>, With<OrientedBox>);
+
 /// One tag per node that has a box and is not hidden, spawned once the node exists.
-fn spawn_labels(
-    mut commands: Commands,
-    nodes: Query<
-        (Entity, &SceneEntity, Option<&Panoptic>),
-        (Added<SceneEntity>, With<OrientedBox>),
-    >,
-) {
+fn spawn_labels(mut commands: Commands, nodes: Query<NewNode, NewNodeFilter>) {
     for (entity, id, panoptic) in &nodes {
         if panoptic.is_some_and(|p| HIDDEN_CLASSES.contains(&p.class.as_str())) {
             continue;
