@@ -1,7 +1,8 @@
 //! The exports of reconstructed rendered scenes, checked by tools nobody here wrote (issue 6's
 //! bar, ../shared/VALIDATORS.md): check_urdf parses the URDF with nothing on stderr and the link
 //! count of the contact graph plus the CAD models' parts; MuJoCo loads the URDF and the MJCF and
-//! its free bodies rest; PyBullet loads the URDF; the Khronos validator finds no error in the
+//! its free bodies rest; PyBullet loads the URDF, and rests it with each floating object loaded
+//! free as a URDF of its own (tests/external/pybullet_rest.py); the Khronos validator finds no error in the
 //! .glb, whose node names include every contact-graph id. The rapier verdicts name a reason for
 //! every object they do not call stable.
 //!
@@ -19,6 +20,7 @@ use std::path::{Path, PathBuf};
 mod common;
 
 use iscene::cad::ParametricLibrary;
+use iscene::classes::ClassTable;
 use iscene::graph::ContactGraph;
 
 /// Links the URDF must have: the root, one per contact-graph node, one per further part of each
@@ -52,6 +54,7 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
     let python = common::validator(".venv-validators/bin/python");
     let mujoco_rest = common::validator("tests/external/mujoco_rest.py");
     let pybullet_load = common::validator("tests/external/pybullet_load.py");
+    let pybullet_rest = common::validator("tests/external/pybullet_rest.py");
     let gltf_validate = common::validator("tests/external/gltf_validate.js");
     common::validator(".validators/node_modules/gltf-validator/package.json");
     let check_urdf = PathBuf::from("check_urdf");
@@ -181,6 +184,63 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
             failures.push(format!("{name}: PyBullet: {stderr}"));
         } else if common::json_line(&stdout)["links"].as_u64() != Some(links as u64) {
             failures.push(format!("{name}: PyBullet links {stdout}"));
+        }
+        // PyBullet's rest: each floating object a URDF of its own (PyBullet welds floating
+        // joints), every one of them free; it rests within Bullet's contact margin (it sinks
+        // about 2 mm into what holds it) and does not tip.
+        let (code, stdout, stderr) = common::run_tool(&python, &[&pybullet_rest, &urdf]);
+        let floating = std::fs::read_to_string(&urdf)
+            .expect("scene.urdf")
+            .matches("type=\"floating\"")
+            .count();
+        if code != 0 {
+            failures.push(format!("{name}: PyBullet rest: {stderr}"));
+        } else {
+            let result = common::json_line(&stdout);
+            if result["free"].as_u64() != Some(floating as u64) || floating == 0 {
+                failures.push(format!(
+                    "{name}: PyBullet free bodies {stdout}, {floating} floating"
+                ));
+            }
+            let tilts = result["free_tilt_deg"].as_object().expect("free_tilt_deg");
+            // The URDF's friction (PyBullet's <contact> extension) is the class's.
+            for (object, read) in result["free_friction"].as_object().expect("free_friction") {
+                let class = graph.node(object).map_or("", |n| n.class.as_str());
+                let want = ClassTable::builtin().get(class).map(|c| c.friction);
+                let read = read.as_f64().map(|f| f as f32);
+                if want.is_none() || read.is_none_or(|r| (r - want.unwrap_or(0.0)).abs() > 1e-4) {
+                    failures.push(format!(
+                        "{name}: PyBullet read friction {read:?} for {object}, the {class} class has {want:?}"
+                    ));
+                }
+            }
+            let largest = |key: &str| {
+                result[key]
+                    .as_object()
+                    .expect(key)
+                    .values()
+                    .filter_map(serde_json::Value::as_f64)
+                    .fold(0.0, f64::max)
+            };
+            eprintln!(
+                "{name}: PyBullet rest of {floating} free objects: largest move {:.1} mm, tilt {:.2} degrees",
+                1000.0 * largest("free_moved"),
+                largest("free_tilt_deg")
+            );
+            for (object, moved) in result["free_moved"].as_object().expect("free_moved") {
+                let moved = moved.as_f64().expect("metres");
+                let tilt = tilts[object].as_f64().expect("degrees");
+                let excused = not_stable.contains(object.as_str())
+                    || graph
+                        .parent_of(object)
+                        .is_some_and(|p| penetrating.contains(p));
+                if (moved > 0.005 || tilt > 2.0) && !excused {
+                    failures.push(format!(
+                        "{name}: in PyBullet {object} moved {:.1} mm and tipped {tilt:.1} degrees at rest",
+                        moved * 1000.0
+                    ));
+                }
+            }
         }
 
         // The Khronos validator: no errors, every contact-graph id a node name.

@@ -191,6 +191,7 @@ pub fn urdf_robot(tree: &KinematicTree, name: &str) -> urdf_rs::Robot {
 pub fn urdf_files(tree: &KinematicTree, name: &str) -> Result<Vec<ExportFile>, String> {
     let robot = urdf_robot(tree, name);
     let text = urdf_rs::write_to_string(&robot).map_err(|e| format!("writing URDF: {e}"))?;
+    let text = with_friction(&text, tree)?;
     let mut files = vec![ExportFile {
         path: "scene.urdf".into(),
         text,
@@ -209,6 +210,34 @@ pub fn urdf_files(tree: &KinematicTree, name: &str) -> Result<Vec<ExportFile>, S
         }
     }
     Ok(files)
+}
+
+/// `urdf` with each link's friction coefficient as a `<contact><lateral_friction/></contact>`
+/// element at the end of the link. URDF itself has no friction; this is the extension PyBullet
+/// reads (and Gazebo's importer maps), and parsers that do not know it skip it (check_urdf stays
+/// silent, MuJoCo ignores it). urdf-rs cannot write it, so it goes into urdf-rs's text.
+fn with_friction(urdf: &str, tree: &KinematicTree) -> Result<String, String> {
+    let mut out = String::with_capacity(urdf.len() + 80 * tree.links.len());
+    let mut rest = urdf;
+    for link in &tree.links {
+        let Some(g) = &link.geometry else { continue };
+        let open = format!("<link name=\"{}\">", link.name);
+        let start = rest
+            .find(&open)
+            .ok_or_else(|| format!("writing URDF: no element for link {}", link.name))?;
+        let end = start
+            + rest[start..]
+                .find("</link>")
+                .ok_or_else(|| format!("writing URDF: link {} is not closed", link.name))?;
+        out.push_str(&rest[..end]);
+        out.push_str(&format!(
+            "  <contact>\n      <lateral_friction value=\"{}\"/>\n    </contact>\n  ",
+            tidy(g.friction)
+        ));
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    Ok(out)
 }
 
 /// The inverse of `urdf_pose`, for tests and importers.
@@ -327,5 +356,21 @@ mod tests {
             }
         }
         assert_eq!(files.len(), 1 + 2 * 2);
+    }
+
+    #[test]
+    fn each_link_carries_its_friction_as_a_contact_element_inside_it() {
+        let tree = tree();
+        let text = &urdf_files(&tree, "kitchen").expect("writes")[0].text;
+        assert_eq!(text.matches("<contact>").count(), 2, "{text}");
+        for link in &tree.links[1..] {
+            let start = text
+                .find(&format!("<link name=\"{}\">", link.name))
+                .expect("the link");
+            let end = start + text[start..].find("</link>").expect("closed");
+            let friction = link.geometry.as_ref().expect("geometry").friction;
+            let element = format!("<lateral_friction value=\"{}\"/>", tidy(friction));
+            assert!(text[start..end].contains(&element), "{}", &text[start..end]);
+        }
     }
 }
