@@ -340,6 +340,10 @@ fn a_task_runs_step_by_step_and_plays_from_the_keyboard() {
     let gt = kitchen_truth(dir.path());
     let task = common::root().join("scenes/tasks/kitchen_fridge_to_microwave.json");
     let mut app = offscreen_viewer(gt, (320, 240), Some(task));
+    // A tenth of a second per frame, however slow software rendering is.
+    app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
+        std::time::Duration::from_millis(100),
+    ));
     app.update();
     let actions = app.world().resource::<TaskPlayer>().actions.len();
     assert!(actions >= 7, "{actions} actions");
@@ -367,9 +371,50 @@ fn a_task_runs_step_by_step_and_plays_from_the_keyboard() {
         "{status:?}"
     );
 
+    // The drive is shown happening: the robot passes between where it was and where it went,
+    // and stops where the tree has it; the next action waits for the motion.
+    let (from, to) = done[0]
+        .changes
+        .iter()
+        .find_map(|c| match c {
+            iscene::sim::actions::Change::MoveBase { from, to, .. } => Some((*from, *to)),
+            _ => None,
+        })
+        .expect("the first action drives");
+    let robot_at = |app: &mut App| {
+        let world = app.world_mut();
+        world
+            .query::<(&Name, &Transform)>()
+            .iter(world)
+            .find(|(n, _)| n.as_str() == iscene::sim::robot::ROBOT_LINK)
+            .map(|(_, t)| t.translation.truncate())
+            .expect("the robot")
+    };
+    let running = |app: &App| {
+        app.world()
+            .resource::<iscene::viewer::Motion>()
+            .is_running()
+    };
+    assert!(running(&app), "the drive is shown");
+    press(&mut app, KeyCode::KeyN, "n");
+    assert!(running(&app), "the drive and turn take 0.9 s");
+    assert_eq!(trace(&app).len(), 1, "N waits for the motion");
+    let mut passed_between = false;
+    for _ in 0..100 {
+        if !running(&app) {
+            break;
+        }
+        let at = robot_at(&mut app);
+        passed_between |= at.distance(from.position) > 0.05 && at.distance(to.position) > 0.05;
+        app.update();
+    }
+    assert!(!running(&app), "the drive ends");
+    assert!(passed_between, "the robot drove from {from:?} to {to:?}");
+    assert!(robot_at(&mut app).distance(to.position) < 1e-4);
+
     // P: the rest, one a second, until the last.
     press(&mut app, KeyCode::KeyP, "p");
-    for _ in 0..600 {
+    for _ in 0..1000 {
         if trace(&app).len() == actions {
             break;
         }

@@ -1,13 +1,15 @@
 //! Runs a task script in the viewer (`iscene view DIR --task FILE`): N does the next action,
 //! P plays them one after another. Each action goes through the simulation's ECS messages as in
 //! `iscene simulate`, so the kinematic tree (and with it the meshes) follows: the robot drives,
-//! doors turn, a picked object rides in the gripper. The panel shows the step and its outcome.
+//! doors turn, a picked object rides in the gripper. The panel shows the step and its outcome,
+//! and the change is shown happening (motion.rs); the next action waits for it.
 
 use bevy::prelude::*;
 
 use crate::sim::actions::Action;
 use crate::systems::simulation::{ActionRequest, SimulationTrace, StepPhysics};
 use crate::viewer::interaction::{SceneRevision, ViewerStatus};
+use crate::viewer::motion::{Motion, animate, motion_of};
 
 /// The task's actions and how far the viewer has run them.
 #[derive(Resource, Clone, Debug, Default)]
@@ -65,6 +67,7 @@ fn step_task(
     keys: Res<ButtonInput<KeyCode>>,
     time: Res<Time>,
     trace: Res<SimulationTrace>,
+    motion: Res<Motion>,
     mut player: ResMut<TaskPlayer>,
     mut requests: MessageWriter<ActionRequest>,
 ) {
@@ -74,6 +77,10 @@ fn step_task(
     if keys.just_pressed(KeyCode::KeyP) {
         player.playing = !player.playing;
         player.wait_s = 0.0;
+    }
+    // The last action is still being shown, or its record is still to come.
+    if motion.is_running() || player.asked_at.is_some() {
+        return;
     }
     let failed = trace.0.last().is_some_and(|r| !r.success);
     if failed {
@@ -106,6 +113,7 @@ fn step_task(
 /// Once the asked action has its record: the panel says how it went, and the layers that
 /// depend on the scene as it stands rebuild.
 fn report_step(
+    mut commands: Commands,
     trace: Res<SimulationTrace>,
     mut player: ResMut<TaskPlayer>,
     mut status: ResMut<ViewerStatus>,
@@ -131,6 +139,11 @@ fn report_step(
     )];
     if record.success {
         revision.0 += 1;
+        let changes = record.changes.clone();
+        commands.queue(move |world: &mut World| {
+            let motion = motion_of(world, &changes);
+            world.insert_resource(motion);
+        });
     }
 }
 
@@ -153,7 +166,14 @@ impl Plugin for TaskPlayerPlugin {
         app.init_resource::<TaskPlayer>()
             // The request is read by the simulation's Update system, this frame or the next;
             // the report waits for its record.
+            .init_resource::<Motion>()
             .add_systems(Update, step_task)
-            .add_systems(PostUpdate, report_step);
+            // The motion starts at its beginning on the frame the action is reported.
+            .add_systems(
+                PostUpdate,
+                (report_step, animate)
+                    .chain()
+                    .before(bevy::transform::TransformSystems::Propagate),
+            );
     }
 }

@@ -1,0 +1,252 @@
+//! Motion in the task player. The simulation applies an action's changes at once (the kinematic
+//! tree is right the moment the action succeeds); the viewer then shows them happening, one after
+//! another: the base drives along its A* path, turning from its old heading to its new, and a
+//! door or drawer turns or slides from its old value to its new. Only transforms are animated:
+//! the joints keep their new values, and when the motion ends every transform is the tree's.
+//! Attachments (a pick, a place) happen at once, and what the gripper holds rides along.
+
+use bevy::prelude::*;
+use glam::Affine3A;
+
+use crate::components::Joint;
+use crate::kinematics::JointSpec;
+use crate::sim::actions::Change;
+use crate::sim::robot::ROBOT_LINK;
+use crate::systems::scene_graph::transform_of;
+
+/// The base drives at this speed (m/s) and turns at this rate (rad/s), whichever takes longer,
+/// but no leg takes longer than `MAX_DRIVE_S`.
+const DRIVE_SPEED_M_S: f32 = 1.2;
+const TURN_RATE_RAD_S: f32 = 1.5;
+const MAX_DRIVE_S: f32 = 2.5;
+/// Seconds for a door or drawer to move.
+const JOINT_S: f32 = 0.6;
+
+/// How one change moves its entity, at `t` in [0, 1].
+#[derive(Clone, Debug)]
+enum Tween {
+    /// The base along `path` (world xy, start to end), its heading from `from_yaw` to `to_yaw`.
+    Drive {
+        path: Vec<Vec2>,
+        from_yaw: f32,
+        to_yaw: f32,
+    },
+    /// A joint from `from` to `to`; `end` is the link's transform at `to`.
+    Joint {
+        spec: JointSpec,
+        from: f32,
+        to: f32,
+        end: Affine3A,
+    },
+}
+
+impl Tween {
+    fn at(&self, t: f32) -> Transform {
+        match self {
+            Tween::Drive {
+                path,
+                from_yaw,
+                to_yaw,
+            } => {
+                let turn = shortest_turn(*from_yaw, *to_yaw);
+                Transform::from_translation(along(path, t).extend(0.0))
+                    .with_rotation(Quat::from_rotation_z(from_yaw + turn * t))
+            }
+            Tween::Joint {
+                spec,
+                from,
+                to,
+                end,
+            } => transform_of(
+                *end * spec.motion(*to).inverse() * spec.motion(from + (to - from) * t),
+            ),
+        }
+    }
+}
+
+/// The turn from yaw `from` to yaw `to` the short way round, radians.
+fn shortest_turn(from: f32, to: f32) -> f32 {
+    use std::f32::consts::{PI, TAU};
+    (to - from + PI).rem_euclid(TAU) - PI
+}
+
+/// The point a fraction `t` of the way along the polyline `path`, by length.
+fn along(path: &[Vec2], t: f32) -> Vec2 {
+    let length: f32 = path.windows(2).map(|w| w[0].distance(w[1])).sum();
+    let mut left = t.clamp(0.0, 1.0) * length;
+    for w in path.windows(2) {
+        let leg = w[0].distance(w[1]);
+        if left <= leg && leg > 0.0 {
+            return w[0].lerp(w[1], left / leg);
+        }
+        left -= leg;
+    }
+    path.last().copied().unwrap_or_default()
+}
+
+/// One animated change: its entity, when it starts and how long it takes.
+#[derive(Clone, Debug)]
+struct Leg {
+    entity: Entity,
+    tween: Tween,
+    start_s: f32,
+    duration_s: f32,
+}
+
+/// The motion being shown; empty when none.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct Motion {
+    legs: Vec<Leg>,
+    elapsed_s: f32,
+}
+
+impl Motion {
+    pub fn is_running(&self) -> bool {
+        !self.legs.is_empty()
+    }
+
+    fn total_s(&self) -> f32 {
+        self.legs
+            .iter()
+            .map(|l| l.start_s + l.duration_s)
+            .fold(0.0, f32::max)
+    }
+}
+
+/// The motion of `changes`, already applied to the world: each leg from the change's start to the
+/// entity's transform now.
+pub fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
+    let mut named = world.query::<(Entity, &Name, &Transform, Option<&Joint>)>();
+    let mut find = |world: &World, name: &str| {
+        named
+            .iter(world)
+            .find(|(_, n, _, _)| n.as_str() == name)
+            .map(|(e, _, t, j)| (e, *t, j.map(|j| j.spec)))
+    };
+    let mut legs = Vec::new();
+    let mut start_s = 0.0;
+    for change in changes {
+        let leg = match change {
+            Change::MoveBase {
+                from,
+                to,
+                path_length_m,
+                path,
+            } => find(world, ROBOT_LINK).map(|(entity, _, _)| {
+                let mut points = vec![from.position];
+                points.extend(path.iter().copied());
+                points.push(to.position);
+                points.dedup();
+                let tween = Tween::Drive {
+                    path: points,
+                    from_yaw: from.yaw,
+                    to_yaw: to.yaw,
+                };
+                let drive_s = path_length_m / DRIVE_SPEED_M_S;
+                let turn_s = shortest_turn(from.yaw, to.yaw).abs() / TURN_RATE_RAD_S;
+                (entity, tween, drive_s.max(turn_s).clamp(0.3, MAX_DRIVE_S))
+            }),
+            Change::SetJoint { link, from, to } => {
+                find(world, link).and_then(|(entity, end, spec)| {
+                    let end = Affine3A::from_scale_rotation_translation(
+                        end.scale,
+                        end.rotation,
+                        end.translation,
+                    );
+                    let tween = Tween::Joint {
+                        spec: spec?,
+                        from: *from,
+                        to: *to,
+                        end,
+                    };
+                    Some((entity, tween, JOINT_S))
+                })
+            }
+            Change::Attach { .. } => None,
+        };
+        if let Some((entity, tween, duration_s)) = leg {
+            legs.push(Leg {
+                entity,
+                tween,
+                start_s,
+                duration_s,
+            });
+            start_s += duration_s;
+        }
+    }
+    Motion {
+        legs,
+        elapsed_s: 0.0,
+    }
+}
+
+/// Poses every animated entity for the time elapsed: a leg not started stands at its start, a
+/// finished one at its end; once all have finished the motion is over.
+pub fn animate(time: Res<Time>, mut motion: ResMut<Motion>, mut transforms: Query<&mut Transform>) {
+    if !motion.is_running() {
+        return;
+    }
+    motion.elapsed_s += time.delta_secs();
+    let over = motion.elapsed_s >= motion.total_s();
+    // Latest leg last: an entity with two legs shows the one under way.
+    for leg in &motion.legs {
+        let t = if over {
+            1.0
+        } else {
+            ((motion.elapsed_s - leg.start_s) / leg.duration_s).clamp(0.0, 1.0)
+        };
+        let earlier_leg = motion
+            .legs
+            .iter()
+            .any(|l| l.entity == leg.entity && l.start_s < leg.start_s);
+        if !over && t == 0.0 && earlier_leg {
+            continue;
+        }
+        if let Ok(mut transform) = transforms.get_mut(leg.entity) {
+            *transform = leg.tween.at(t);
+        }
+    }
+    if over {
+        motion.legs.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn along_a_path_by_length() {
+        let path = [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::new(1.0, 3.0)];
+        assert_eq!(along(&path, 0.0), Vec2::ZERO);
+        assert!(along(&path, 0.25).abs_diff_eq(Vec2::new(1.0, 0.0), 1e-6));
+        assert!(along(&path, 0.5).abs_diff_eq(Vec2::new(1.0, 1.0), 1e-6));
+        assert_eq!(along(&path, 1.0), Vec2::new(1.0, 3.0));
+        assert_eq!(along(&[Vec2::ONE], 0.5), Vec2::ONE);
+    }
+
+    #[test]
+    fn a_drive_turns_the_short_way_and_a_joint_ends_where_the_tree_has_it() {
+        let drive = Tween::Drive {
+            path: vec![Vec2::ZERO, Vec2::X],
+            from_yaw: 3.0,
+            to_yaw: -3.0,
+        };
+        let half = drive.at(0.5).rotation.to_euler(EulerRot::ZYX).0;
+        assert!((half.abs() - std::f32::consts::PI).abs() < 0.01, "{half}");
+
+        let spec = JointSpec::revolute(Vec3::Z, 0.0, 1.5);
+        let end = Affine3A::from_translation(Vec3::X) * spec.motion(1.2);
+        let joint = Tween::Joint {
+            spec,
+            from: 0.0,
+            to: 1.2,
+            end,
+        };
+        let at_end = joint.at(1.0);
+        assert!(at_end.translation.abs_diff_eq(Vec3::X, 1e-6));
+        assert!(at_end.rotation.angle_between(Quat::from_rotation_z(1.2)) < 1e-5);
+        let at_start = joint.at(0.0);
+        assert!(at_start.rotation.angle_between(Quat::IDENTITY) < 1e-5);
+    }
+}
