@@ -13,6 +13,7 @@ use crate::sim::scene_view::{SceneView, closed_value, open_value};
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::apply_change;
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
+use crate::viewer::motion::show_motion;
 use crate::viewer::physics_layer::run_rest_test;
 
 /// The pointer's last position over the view, in pixels from its top-left corner.
@@ -121,14 +122,13 @@ pub fn work_joint_at(world: &mut World, at: Vec2) -> Vec<String> {
     let opening = (value - closed).abs() <= (value - open).abs();
     let to = if opening { open } else { closed };
     let link = tree.links[part].name.clone();
-    apply_change(
-        world,
-        &Change::SetJoint {
-            link: link.clone(),
-            from: tree.links[part].value,
-            to,
-        },
-    );
+    let change = Change::SetJoint {
+        link: link.clone(),
+        from: tree.links[part].value,
+        to,
+    };
+    apply_change(world, &change);
+    show_motion(world, &[change]);
     scene_changed(world);
     vec![format!(
         "{} {link} ({:.2} -> {to:.2})",

@@ -104,6 +104,7 @@ impl Plugin for ViewerPlugin {
                 occupancy::OccupancyLayerPlugin,
                 physics_layer::PhysicsLayerPlugin,
                 task_player::TaskPlayerPlugin,
+                motion::MotionPlugin,
                 drag_drop::DragDropPlugin,
                 camera::OrbitCameraPlugin,
                 interaction::InteractionPlugin,

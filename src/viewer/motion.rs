@@ -115,7 +115,7 @@ impl Motion {
 
 /// The motion of `changes`, already applied to the world: each leg from the change's start to the
 /// entity's transform now.
-pub fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
+fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
     let mut named = world.query::<(Entity, &Name, &Transform, Option<&Joint>)>();
     let mut find = |world: &World, name: &str| {
         named
@@ -180,9 +180,26 @@ pub fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
     }
 }
 
+/// Shows `changes`, already applied to the world, happening; a motion still under way first
+/// jumps to its end, so nothing is left halfway.
+pub fn show_motion(world: &mut World, changes: &[Change]) {
+    let running = std::mem::take(&mut *world.resource_mut::<Motion>());
+    for leg in &running.legs {
+        if let Some(mut transform) = world.get_mut::<Transform>(leg.entity) {
+            *transform = leg.tween.at(1.0);
+        }
+    }
+    let motion = motion_of(world, changes);
+    world.insert_resource(motion);
+}
+
 /// Poses every animated entity for the time elapsed: a leg not started stands at its start, a
 /// finished one at its end; once all have finished the motion is over.
-pub fn animate(time: Res<Time>, mut motion: ResMut<Motion>, mut transforms: Query<&mut Transform>) {
+pub(crate) fn animate(
+    time: Res<Time>,
+    mut motion: ResMut<Motion>,
+    mut transforms: Query<&mut Transform>,
+) {
     if !motion.is_running() {
         return;
     }
@@ -208,6 +225,17 @@ pub fn animate(time: Res<Time>, mut motion: ResMut<Motion>, mut transforms: Quer
     }
     if over {
         motion.legs.clear();
+    }
+}
+
+pub struct MotionPlugin;
+
+impl Plugin for MotionPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<Motion>().add_systems(
+            PostUpdate,
+            animate.before(bevy::transform::TransformSystems::Propagate),
+        );
     }
 }
 

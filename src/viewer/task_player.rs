@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use crate::sim::actions::Action;
 use crate::systems::simulation::{ActionRequest, SimulationTrace, StepPhysics};
 use crate::viewer::interaction::{SceneRevision, ViewerStatus};
-use crate::viewer::motion::{Motion, animate, motion_of};
+use crate::viewer::motion::{Motion, animate, show_motion};
 
 /// The task's actions and how far the viewer has run them.
 #[derive(Resource, Clone, Debug, Default)]
@@ -140,10 +140,7 @@ fn report_step(
     if record.success {
         revision.0 += 1;
         let changes = record.changes.clone();
-        commands.queue(move |world: &mut World| {
-            let motion = motion_of(world, &changes);
-            world.insert_resource(motion);
-        });
+        commands.queue(move |world: &mut World| show_motion(world, &changes));
     }
 }
 
@@ -166,14 +163,8 @@ impl Plugin for TaskPlayerPlugin {
         app.init_resource::<TaskPlayer>()
             // The request is read by the simulation's Update system, this frame or the next;
             // the report waits for its record.
-            .init_resource::<Motion>()
             .add_systems(Update, step_task)
             // The motion starts at its beginning on the frame the action is reported.
-            .add_systems(
-                PostUpdate,
-                (report_step, animate)
-                    .chain()
-                    .before(bevy::transform::TransformSystems::Propagate),
-            );
+            .add_systems(PostUpdate, report_step.before(animate));
     }
 }
