@@ -435,15 +435,21 @@ fn a_task_runs_step_by_step_and_plays_from_the_keyboard() {
     assert!(!app.world().resource::<TaskPlayer>().playing);
 }
 
-/// The pixel where `point` shows.
-fn pixel_of(app: &mut App, point: Vec3) -> Vec2 {
+/// The viewer's camera and where it is.
+fn camera(app: &mut App) -> (Camera, GlobalTransform) {
     let world = app.world_mut();
-    let (camera, at) = world
+    world
         .query::<(&Camera, &GlobalTransform)>()
         .iter(world)
         .next()
-        .expect("camera");
-    camera.world_to_viewport(at, point).expect("in view")
+        .map(|(c, t)| (c.clone(), *t))
+        .expect("camera")
+}
+
+/// The pixel where `point` shows.
+fn pixel_of(app: &mut App, point: Vec3) -> Vec2 {
+    let (camera, at) = camera(app);
+    camera.world_to_viewport(&at, point).expect("in view")
 }
 
 #[test]
@@ -470,13 +476,8 @@ fn dragging_a_cup_onto_the_floor_moves_it_there_and_makes_the_floor_its_support(
     // its neighbours' rays 12 px away all meet the floor first.
     let tree = iscene::systems::kinematic_tree::read_kinematic_tree(app.world_mut()).expect("tree");
     let hits_floor = |app: &mut App, px: Vec2| {
-        let world = app.world_mut();
-        let (camera, at) = world
-            .query::<(&Camera, &GlobalTransform)>()
-            .iter(world)
-            .next()
-            .expect("camera");
-        let ray = camera.viewport_to_world(at, px).expect("ray");
+        let (camera, at) = camera(app);
+        let ray = camera.viewport_to_world(&at, px).expect("ray");
         iscene::kinematics::ray_pick::pick_link(&tree, ray.origin, *ray.direction, &["ceiling"])
             .is_some_and(|(l, _)| tree.links[l].class.as_deref() == Some("floor"))
     };
