@@ -61,8 +61,8 @@ enum Command {
         /// Render off screen into this PNG and exit.
         #[arg(long)]
         screenshot: Option<PathBuf>,
-        /// Layers shown: colour, segments, boxes, graph, planes, collision, occupancy, physics
-        /// (repeat or separate with commas).
+        /// Layers shown: colour, segments, boxes, graph, planes, collision, occupancy, physics,
+        /// map (repeat or separate with commas).
         #[arg(long, value_delimiter = ',')]
         layer: Vec<String>,
         /// Frames rendered before the screenshot.

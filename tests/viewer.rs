@@ -616,23 +616,47 @@ fn the_graph_layer_labels_each_node_over_its_box() {
     assert!(y < at.y && at.y - y < 40.0, "label y {y}, box top {at}");
 }
 
+/// Mean absolute difference of two pictures, per channel, in 8-bit steps.
+fn mean_difference(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let total: u64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| u64::from(x.abs_diff(*y)))
+        .sum();
+    total as f64 / a.as_raw().len() as f64
+}
+
 #[test]
 fn the_map_layer_shows_the_reconstruction_in_place_of_the_models() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = reconstructed_kitchen(dir.path(), 8);
     let map = iscene::viewer::read_map(&out).expect("the map");
-    assert!(map.0.len() > 10, "{} segments", map.0.len());
+    assert!(map.segments.len() > 10, "{} segments", map.segments.len());
     // In the aligned frame: the floor's segment lies at z = 0.
     let floor = map
-        .0
+        .segments
         .iter()
         .find(|s| s.class == "floor")
         .expect("a floor segment");
     let (lo, hi) = floor.mesh.bounds().expect("floor bounds");
     assert!(lo.z > -0.05 && hi.z < 0.05, "floor from {lo} to {hi}");
+    // Coloured from the sequence: nearly every vertex was seen by one of its frames.
+    assert_eq!(map.uncoloured_because, None);
+    let colours: Vec<&Option<[u8; 3]>> = map.segments.iter().flat_map(|s| &s.colours).collect();
+    let vertices: usize = map.segments.iter().map(|s| s.mesh.positions.len()).sum();
+    assert_eq!(colours.len(), vertices);
+    let coloured = colours.iter().filter(|c| c.is_some()).count() as f64 / vertices as f64;
+    assert!(coloured > 0.9, "{coloured:.3} of the vertices coloured");
 
     let models = screenshot(&out, &dir.path().join("models.png"), &[]);
     let mapped = screenshot(&out, &dir.path().join("map.png"), &["--layer", "map"]);
+    let by_instance = screenshot(
+        &out,
+        &dir.path().join("map_segments.png"),
+        &["--layer", "map,segments"],
+    );
     let changed = changed_fraction(&models, &mapped);
     assert!(
         changed > 0.05,
@@ -643,12 +667,27 @@ fn the_map_layer_shows_the_reconstruction_in_place_of_the_models() {
         "the map covers {:.2}",
         coverage(&mapped)
     );
+    // In the sensor's colours the map looks like the scene's own models, more than it does in
+    // instance colours.
+    let (sensor, instance) = (
+        mean_difference(&models, &mapped),
+        mean_difference(&models, &by_instance),
+    );
+    assert!(
+        sensor < 0.8 * instance,
+        "differs from the models by {sensor:.1} in colour, {instance:.1} by instance"
+    );
     // A rendered sequence's truth has no map.
     let gt = dir.path().join("seq").join("gt");
     assert!(
         iscene::viewer::read_map(&gt)
             .expect("no map, no error")
-            .0
+            .segments
             .is_empty()
     );
+    // Without its sequence the map still shows, by instance, and says why.
+    std::fs::rename(dir.path().join("seq"), dir.path().join("moved")).expect("move");
+    let map = iscene::viewer::read_map(&out).expect("the map");
+    assert!(map.segments.len() > 10 && map.segments.iter().all(|s| s.colours.is_empty()));
+    assert!(map.uncoloured_because.is_some());
 }

@@ -22,23 +22,34 @@ pub fn seen_in_frame(
     let camera_from_world = world_from_camera.inverse();
     points_in_world
         .iter()
-        .map(|p| {
-            let c = camera_from_world.transform_point3(*p);
-            if c.z <= 0.05 {
-                return false;
-            }
-            let px = camera.project(c).round();
-            if px.x < 0.0 || px.y < 0.0 {
-                return false;
-            }
-            let (u, v) = (px.x as usize, px.y as usize);
-            if u >= camera.width as usize || v >= camera.height as usize {
-                return false;
-            }
-            let measured = depth[v * camera.width as usize + u];
-            measured > 0.0 && measured.is_finite() && (measured - c.z).abs() <= tolerance_m
-        })
+        .map(|p| pixel_seen(*p, camera, &camera_from_world, depth, tolerance_m).is_some())
         .collect()
+}
+
+/// The pixel (column, row) where a depth image sees `point_in_world`, if it does (see
+/// `seen_in_frame`).
+pub fn pixel_seen(
+    point_in_world: Vec3,
+    camera: &Pinhole,
+    camera_from_world: &Affine3A,
+    depth: &[f32],
+    tolerance_m: f32,
+) -> Option<(usize, usize)> {
+    let c = camera_from_world.transform_point3(point_in_world);
+    if c.z <= 0.05 {
+        return None;
+    }
+    let px = camera.project(c).round();
+    if px.x < 0.0 || px.y < 0.0 {
+        return None;
+    }
+    let (u, v) = (px.x as usize, px.y as usize);
+    if u >= camera.width as usize || v >= camera.height as usize {
+        return None;
+    }
+    let measured = depth[v * camera.width as usize + u];
+    (measured > 0.0 && measured.is_finite() && (measured - c.z).abs() <= tolerance_m)
+        .then_some((u, v))
 }
 
 /// For each point, the position in `sequence.frames` of the first frame that sees it (see
@@ -106,6 +117,9 @@ mod tests {
         ];
         let seen = seen_in_frame(&points, &camera, &pose, &depth, 0.05);
         assert_eq!(seen, [true, false, false, false, false]);
+        // Where it is seen: its projection, rounded (50 * 0.1 / 2.01 + 31.5, 50 * -0.2 / 2.01 + 23.5).
+        let at = pixel_seen(points[0], &camera, &pose.inverse(), &depth, 0.05);
+        assert_eq!(at, Some((34, 19)));
         // A turned and moved camera sees the same wall point through its own pose.
         let moved = Affine3A::from_translation(Vec3::new(0.0, 0.0, -1.0));
         let seen = seen_in_frame(&points[..1], &camera, &moved, &vec![3.01; 64 * 48], 0.05);

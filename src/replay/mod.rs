@@ -5,6 +5,7 @@
 //! (report.json names it); bevy-free, so it is tested without a renderer.
 
 pub mod first_seen;
+pub mod vertex_colours;
 
 use std::path::{Path, PathBuf};
 
@@ -17,6 +18,7 @@ use crate::io::Sequence;
 use crate::io::panoptic_dir::{read_index, read_segment_meshes};
 
 pub use first_seen::{first_seen, seen_in_frame};
+pub use vertex_colours::vertex_colours;
 
 /// A node appears once this share of its segment's triangles has been seen.
 const NODE_SEEN_SHARE: f32 = 0.5;
@@ -131,13 +133,12 @@ pub(crate) fn read_report(path: &Path) -> Result<ReportFacts, InputError> {
     })
 }
 
-/// The replay of the reconstruction in `dir` (report.json, contact_graph.json, panoptic/),
-/// reading the depth frames of the sequence it was made from.
-pub fn load_replay(dir: &Path) -> Result<Replay, IsceneError> {
-    let facts = read_report(&dir.join("report.json"))?;
-    let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
-    let index = read_index(&dir.join("panoptic"))?;
-    // report.json holds the path as given; a rendered sequence also sits beside the folder.
+/// The sequence the reconstruction in `dir` read, with the frames it used (report.json says
+/// which). report.json holds the path as given; a rendered sequence also sits beside the folder.
+pub(crate) fn reconstruction_sequence(
+    dir: &Path,
+    facts: &ReportFacts,
+) -> Result<Sequence, IsceneError> {
     let beside = dir
         .parent()
         .zip(facts.sequence.file_name())
@@ -153,6 +154,16 @@ pub fn load_replay(dir: &Path) -> Result<Replay, IsceneError> {
     if sequence.frames.is_empty() {
         return Err(InputError::invalid(&sequence_dir, "no frames to replay").into());
     }
+    Ok(sequence)
+}
+
+/// The replay of the reconstruction in `dir` (report.json, contact_graph.json, panoptic/),
+/// reading the depth frames of the sequence it was made from.
+pub fn load_replay(dir: &Path) -> Result<Replay, IsceneError> {
+    let facts = read_report(&dir.join("report.json"))?;
+    let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
+    let index = read_index(&dir.join("panoptic"))?;
+    let sequence = reconstruction_sequence(dir, &facts)?;
     let frames = sequence.frames.len() as u32;
 
     // Every segment's mesh, in the sequence's world frame, and when each vertex was first seen.

@@ -37,6 +37,11 @@ pub const HIDDEN_CLASSES: [&str; 1] = ["ceiling"];
 
 /// A Bevy mesh of `mesh`, one normal per face (the CAD models are boxy).
 pub fn bevy_mesh(mesh: &TriMesh) -> Mesh {
+    coloured_bevy_mesh(mesh, None)
+}
+
+/// A Bevy mesh of `mesh`, one normal per face, with a linear RGBA colour per vertex when given.
+pub fn coloured_bevy_mesh(mesh: &TriMesh, colours: Option<Vec<[f32; 4]>>) -> Mesh {
     let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
     let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
     let mut out = Mesh::new(
@@ -45,6 +50,9 @@ pub fn bevy_mesh(mesh: &TriMesh) -> Mesh {
     )
     .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, positions)
     .with_inserted_indices(Indices::U32(indices));
+    if let Some(colours) = colours {
+        out.insert_attribute(Mesh::ATTRIBUTE_COLOR, colours);
+    }
     out.duplicate_vertices();
     out.compute_flat_normals();
     out
@@ -56,7 +64,7 @@ pub fn instance_colour(instance: u32) -> Color {
     Color::hsl(hue, 0.65, 0.55)
 }
 
-fn material(colour: Color) -> StandardMaterial {
+pub fn material(colour: Color) -> StandardMaterial {
     StandardMaterial {
         base_color: colour,
         perceptual_roughness: 0.8,
@@ -106,7 +114,7 @@ fn attach_link_meshes(
             looks.colour.clone()
         };
         // The map layer hides the models once it has a map to show instead (map_layer.rs).
-        let visibility = looks.visibility(layers.is_on(Layer::Map) && !map.0.is_empty());
+        let visibility = looks.visibility(layers.is_on(Layer::Map) && !map.segments.is_empty());
         commands.entity(entity).insert((
             Mesh3d(meshes.add(bevy_mesh(&geometry.visual))),
             MeshMaterial3d(shown),
