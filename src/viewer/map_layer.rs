@@ -56,14 +56,14 @@ pub fn read_map(dir: &Path) -> Result<MapSegments, IsceneError> {
     let meshes = read_segment_meshes(&panoptic, &index)?;
     // The colours come from the sequence's frames, in its world frame (before alignment).
     let vertices: Vec<glam::Vec3> = meshes.iter().flat_map(|m| m.positions.clone()).collect();
-    let (mut colours, uncoloured_because) = match reconstruction_sequence(dir, &facts)
-        .and_then(|sequence| {
+    let (mut colours, uncoloured_because) =
+        match reconstruction_sequence(dir, &facts).and_then(|sequence| {
             let tolerance = COLOUR_TOLERANCE_VOXELS * index.voxel_size;
             Ok(vertex_colours(&vertices, &sequence, tolerance)?)
         }) {
-        Ok(colours) => (colours, None),
-        Err(why) => (Vec::new(), Some(why.to_string())),
-    };
+            Ok(colours) => (colours, None),
+            Err(why) => (Vec::new(), Some(why.to_string())),
+        };
     let mut segments = Vec::with_capacity(meshes.len());
     for (e, mut mesh) in index.entities.iter().zip(meshes) {
         let own = if colours.is_empty() {
