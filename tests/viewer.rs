@@ -140,22 +140,27 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
     let dir = tempfile::tempdir().expect("tempdir");
     let gt = kitchen_truth(dir.path());
     let mut app = offscreen_viewer(gt, (480, 360), None);
+    // A twentieth of a second per frame, however slow software rendering is.
+    app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
+        std::time::Duration::from_millis(50),
+    ));
     for _ in 0..3 {
         app.update();
     }
     let door = |app: &mut App| {
         app.world_mut()
-            .query::<(&Name, &Joint)>()
+            .query::<(&Name, &Joint, &Transform)>()
             .iter(app.world())
-            .find(|(n, _)| n.as_str() == "fridge_1_door")
-            .map(|(_, j)| j.value)
+            .find(|(n, _, _)| n.as_str() == "fridge_1_door")
+            .map(|(_, j, t)| (j.value, *t))
             .expect("the fridge door")
     };
-    assert_eq!(door(&mut app), 0.0);
+    let (closed, closed_at) = door(&mut app);
+    assert_eq!(closed, 0.0);
     // Where the door's middle shows on the picture.
-    let middle = {
+    let centre = {
         let world = app.world_mut();
-        let centre = world
+        world
             .query::<(&Name, &GlobalTransform, &iscene::components::LinkBody)>()
             .iter(world)
             .find(|(n, _, _)| n.as_str() == "fridge_1_door")
@@ -165,14 +170,9 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
                 let low = (lo + hi) / 2.0;
                 t.transform_point(low.with_z(lo.z + 0.15 * (hi.z - lo.z)))
             })
-            .expect("door");
-        let (camera, at) = world
-            .query::<(&Camera, &GlobalTransform)>()
-            .iter(world)
-            .next()
-            .expect("camera");
-        camera.world_to_viewport(at, centre).expect("door in view")
+            .expect("door")
     };
+    let middle = pixel_of(&mut app, centre);
     assert!(
         (0.0..480.0).contains(&middle.x) && (0.0..360.0).contains(&middle.y),
         "the door shows at {middle}"
@@ -191,7 +191,7 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
         });
         app.update();
     }
-    let opened = door(&mut app);
+    let (opened, _) = door(&mut app);
     let status = app
         .world()
         .resource::<iscene::viewer::ViewerStatus>()
@@ -210,6 +210,36 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
         report.objects.iter().any(|o| o.object == "fridge_1"),
         "{:?}",
         report.objects
+    );
+
+    // The door is shown swinging open; a second click while it swings closes it. The swing
+    // ends first, so once the closing motion is over the door stands exactly where it started.
+    let running = |app: &App| {
+        app.world()
+            .resource::<iscene::viewer::Motion>()
+            .is_running()
+    };
+    assert!(running(&app), "the door is shown swinging");
+    for state in [ButtonState::Pressed, ButtonState::Released] {
+        app.world_mut().write_message(MouseButtonInput {
+            button: MouseButton::Left,
+            state,
+            window,
+        });
+        app.update();
+    }
+    for _ in 0..100 {
+        if !running(&app) {
+            break;
+        }
+        app.update();
+    }
+    let (value, at) = door(&mut app);
+    assert_eq!(value, closed);
+    assert!(
+        at.translation.distance(closed_at.translation) < 1e-4
+            && at.rotation.angle_between(closed_at.rotation) < 1e-4,
+        "closed again at {at:?}, started at {closed_at:?}"
     );
 }
 

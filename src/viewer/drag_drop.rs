@@ -20,6 +20,7 @@ use crate::systems::physics_validation::settle_object;
 use crate::systems::simulation::apply_change;
 use crate::viewer::interaction::{PendingClicks, ViewerStatus, ray_through, scene_changed};
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
+use crate::viewer::motion::finish_motion;
 
 /// A dropped object may touch what it lands on, not sink into anything deeper than this.
 const DROP_TOLERANCE_M: f32 = 0.01;
@@ -43,6 +44,7 @@ pub fn drop_object(world: &mut World, from: Vec2, to: Vec2) -> Vec<String> {
     let (Some(grab), Some(put)) = (ray_through(world, from), ray_through(world, to)) else {
         return vec!["no camera to drag through".into()];
     };
+    finish_motion(world);
     let tree = match read_kinematic_tree(world) {
         Ok(tree) => tree,
         Err(why) => return vec![why],

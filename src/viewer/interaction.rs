@@ -13,7 +13,7 @@ use crate::sim::scene_view::{SceneView, closed_value, open_value};
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::apply_change;
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
-use crate::viewer::motion::show_motion;
+use crate::viewer::motion::{finish_motion, show_motion};
 use crate::viewer::physics_layer::run_rest_test;
 
 /// The pointer's last position over the view, in pixels from its top-left corner.
@@ -101,6 +101,7 @@ pub fn work_joint_at(world: &mut World, at: Vec2) -> Vec<String> {
     let Some(ray) = ray_through(world, at) else {
         return vec!["no camera to click through".into()];
     };
+    finish_motion(world);
     let tree = match read_kinematic_tree(world) {
         Ok(tree) => tree,
         Err(why) => return vec![why],

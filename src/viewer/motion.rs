@@ -180,15 +180,20 @@ fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
     }
 }
 
-/// Shows `changes`, already applied to the world, happening; a motion still under way first
-/// jumps to its end, so nothing is left halfway.
-pub fn show_motion(world: &mut World, changes: &[Change]) {
+/// Ends the motion under way at once: every transform is the tree's again. Called before the
+/// scene changes from a click or a drag, because a joint's change is applied to its transform
+/// as it stands, which must not be a frame of a motion.
+pub fn finish_motion(world: &mut World) {
     let running = std::mem::take(&mut *world.resource_mut::<Motion>());
     for leg in &running.legs {
         if let Some(mut transform) = world.get_mut::<Transform>(leg.entity) {
             *transform = leg.tween.at(1.0);
         }
     }
+}
+
+/// Shows `changes`, already applied to the world (after `finish_motion`), happening.
+pub fn show_motion(world: &mut World, changes: &[Change]) {
     let motion = motion_of(world, changes);
     world.insert_resource(motion);
 }

@@ -16,6 +16,7 @@ use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::Robot;
 use crate::viewer::interaction::{SceneRevision, ViewerStatus};
 use crate::viewer::layers::{ActiveLayers, Layer};
+use crate::viewer::motion::Motion;
 
 /// Height of the grid above the floor's top (z = 0), metres: above it, below everything else.
 const GRID_Z_M: f32 = 0.004;
@@ -90,7 +91,8 @@ fn update_occupancy(world: &mut World) {
         };
         visibility.set_if_neq(want);
     }
-    if !on || shown == Some(revision) {
+    // Transforms in the middle of a motion are no state of the tree: wait for its end.
+    if !on || shown == Some(revision) || world.resource::<Motion>().is_running() {
         return;
     }
     let radius = world

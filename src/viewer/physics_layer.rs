@@ -10,6 +10,7 @@ use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::physics_validation::{PhysicsReport, rest_physics};
 use crate::viewer::interaction::SceneRevision;
 use crate::viewer::layers::{ActiveLayers, Layer};
+use crate::viewer::motion::Motion;
 
 /// The last rest test and the scene revision it ran on.
 #[derive(Resource, Clone, Debug, Default)]
@@ -54,8 +55,10 @@ pub fn run_rest_test(world: &mut World, revision: u64) {
 /// Reruns the rest test when the layer is on and the scene changed since the last one.
 fn refresh_verdicts(world: &mut World) {
     let revision = world.resource::<SceneRevision>().0;
+    // Transforms in the middle of a motion are no state of the tree: wait for its end.
     if world.resource::<ActiveLayers>().is_on(Layer::Physics)
         && world.resource::<RestVerdicts>().revision != Some(revision)
+        && !world.resource::<Motion>().is_running()
     {
         run_rest_test(world, revision);
     }
