@@ -183,14 +183,17 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
         position: middle,
         delta: None,
     });
-    for state in [ButtonState::Pressed, ButtonState::Released] {
-        app.world_mut().write_message(MouseButtonInput {
-            button: MouseButton::Left,
-            state,
-            window,
-        });
-        app.update();
-    }
+    let click = |app: &mut App| {
+        for state in [ButtonState::Pressed, ButtonState::Released] {
+            app.world_mut().write_message(MouseButtonInput {
+                button: MouseButton::Left,
+                state,
+                window,
+            });
+            app.update();
+        }
+    };
+    click(&mut app);
     let (opened, _) = door(&mut app);
     let status = app
         .world()
@@ -220,14 +223,7 @@ fn a_click_on_the_fridge_door_through_bevy_input_opens_it() {
             .is_running()
     };
     assert!(running(&app), "the door is shown swinging");
-    for state in [ButtonState::Pressed, ButtonState::Released] {
-        app.world_mut().write_message(MouseButtonInput {
-            button: MouseButton::Left,
-            state,
-            window,
-        });
-        app.update();
-    }
+    click(&mut app);
     for _ in 0..100 {
         if !running(&app) {
             break;
