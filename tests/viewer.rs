@@ -15,7 +15,8 @@ use bevy::prelude::*;
 use bevy::window::CursorMoved;
 use iscene::components::Joint;
 use iscene::viewer::{
-    ActiveLayers, Layer, NodeLabel, TaskPlayer, ViewOptions, render_offscreen, viewer_app,
+    ActiveLayers, DragPreview, Layer, Motion, NodeLabel, ReplayClock, ReplayLabel, TaskPlayer,
+    ViewOptions, ViewerStatus, render_offscreen, replay_app, viewer_app,
 };
 
 fn kitchen_truth(dir: &Path) -> PathBuf {
@@ -343,6 +344,37 @@ fn a_replay_grows_the_map_along_the_camera_path() {
     ))
     .expect("a GIF");
     assert_eq!(decoder.into_frames().count(), 3);
+
+    // The graph layer's tags: each node's from the frame it appears in.
+    let mut app = replay_app(replay.clone(), true);
+    render_offscreen(&mut app, (320, 240));
+    app.finish();
+    app.cleanup();
+    let mut tagged_at = |frame: u32| {
+        app.world_mut()
+            .resource_mut::<ReplayClock>()
+            .seek(frame as f32);
+        app.update();
+        app.update();
+        let world = app.world_mut();
+        let mut tagged = world
+            .query::<(&ReplayLabel, &InheritedVisibility)>()
+            .iter(world)
+            .filter(|(_, v)| v.get())
+            .map(|(l, _)| l.0)
+            .collect::<Vec<_>>();
+        tagged.sort();
+        tagged
+    };
+    let appeared_by = |frame: u32| {
+        (0..replay.nodes.len())
+            .filter(|&i| replay.nodes[i].appears_at <= frame && replay.nodes[i].class != "ceiling")
+            .collect::<Vec<_>>()
+    };
+    let (first, last) = (tagged_at(0), tagged_at(23));
+    assert_eq!(first, appeared_by(0));
+    assert_eq!(last, appeared_by(23));
+    assert!(first.len() < last.len(), "{first:?} then {last:?}");
 }
 
 /// A key pressed and released through Bevy's input, one update each.
@@ -520,24 +552,51 @@ fn dragging_a_cup_onto_the_floor_moves_it_there_and_makes_the_floor_its_support(
     }
     let to = to.expect("a floor pixel");
     let window = Entity::PLACEHOLDER;
-    for (at, state) in [(from, ButtonState::Pressed), (to, ButtonState::Released)] {
+    let pointer = |app: &mut App, at: Vec2, state: Option<ButtonState>| {
         app.world_mut().write_message(CursorMoved {
             window,
             position: at,
             delta: None,
         });
-        app.world_mut().write_message(MouseButtonInput {
-            button: MouseButton::Left,
-            state,
-            window,
-        });
+        if let Some(state) = state {
+            app.world_mut().write_message(MouseButtonInput {
+                button: MouseButton::Left,
+                state,
+                window,
+            });
+        }
+        app.update();
+    };
+    pointer(&mut app, from, Some(ButtonState::Pressed));
+    // Held over the floor: a box shows where the cup would land, on the floor, and the panel
+    // says so; nothing has moved yet.
+    pointer(&mut app, to, None);
+    let ghost = app
+        .world()
+        .resource::<DragPreview>()
+        .ghost
+        .clone()
+        .expect("a landing box while dragging");
+    assert_eq!(ghost.object, "cup_1");
+    assert!(!ghost.refused);
+    let ghost_bottom = ghost.world_from_cube.translation.z - ghost.world_from_cube.scale.z / 2.0;
+    assert!(
+        ghost_bottom.abs() < 0.005,
+        "the box's bottom at {ghost_bottom}"
+    );
+    let status = app.world().resource::<ViewerStatus>().0.clone();
+    assert_eq!(status, ["drop cup_1 onto floor"]);
+    assert!(cup_at(&mut app).abs_diff_eq(start, 1e-6));
+    pointer(&mut app, to, Some(ButtonState::Released));
+    assert!(app.world().resource::<DragPreview>().ghost.is_none());
+    // The last few millimetres of the fall are shown, then the cup is where the tree has it.
+    let mut frames = 0;
+    while app.world().resource::<Motion>().is_running() {
+        frames += 1;
+        assert!(frames < 100, "the fall never ended");
         app.update();
     }
-    let status = app
-        .world()
-        .resource::<iscene::viewer::ViewerStatus>()
-        .0
-        .clone();
+    let status = app.world().resource::<ViewerStatus>().0.clone();
     assert!(
         status[0].starts_with("moved cup_1 onto floor (it was on table_1)"),
         "{status:?}"
@@ -716,4 +775,15 @@ fn the_map_layer_shows_the_reconstruction_in_place_of_the_models() {
     let map = iscene::viewer::read_map(&out).expect("the map");
     assert!(map.segments.len() > 10 && map.segments.iter().all(|s| s.colours.is_empty()));
     assert!(map.uncoloured_because.is_some());
+    // The panel says why when the map layer comes on.
+    let mut app = offscreen_viewer(out, (160, 120), None);
+    app.world_mut()
+        .resource_mut::<ActiveLayers>()
+        .set(Layer::Map, true);
+    app.update();
+    let status = app.world().resource::<ViewerStatus>().0.clone();
+    assert!(
+        status[0].contains("instance colours") && status[1] == map.uncoloured_because.expect("why"),
+        "{status:?}"
+    );
 }

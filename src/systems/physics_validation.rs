@@ -34,6 +34,11 @@ pub struct PhysicsReport {
     pub rest_wall_s: f64,
 }
 
+/// The pose of a simulated body.
+fn pose_of(transform: &Transform) -> Affine3A {
+    Affine3A::from_rotation_translation(transform.rotation, transform.translation)
+}
+
 /// A rapier pose is rigid: drop the rounding-level scale a composed affine carries.
 fn rigid(a: &Affine3A) -> Transform {
     let (_, rotation, translation) = a.to_scale_rotation_translation();
@@ -185,7 +190,7 @@ pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
         .iter()
         .map(|(depth, _)| *depth > MAX_START_PENETRATION_M)
         .collect();
-    let run = simulate(tree, &bodies, &frozen, REST_SECONDS);
+    let run = simulate(tree, &bodies, &frozen, REST_SECONDS, None);
     let objects: Vec<ObjectVerdict> = bodies
         .iter()
         .enumerate()
@@ -211,16 +216,17 @@ pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
 }
 
 /// Lets the object whose own link is `link` fall and come to rest under gravity, everything
-/// else held where it stands, for `seconds`; returns its world pose then (`None` when the link
-/// is no object of its own, such as the layout or a door). A dragged object dropped a little
-/// above a surface lands on it, and one dropped over an edge tips off it.
-pub fn settle_object(tree: &KinematicTree, link: usize, seconds: f32) -> Option<Affine3A> {
+/// else held where it stands, for `seconds`; returns its world pose at the start and after every
+/// step of `REST_STEP_S`, the last where it came to rest (`None` when the link is no object of
+/// its own, such as the layout or a door). A dragged object dropped a little above a surface
+/// lands on it, and one dropped over an edge tips off it; the viewer plays the path back.
+pub fn settle_object(tree: &KinematicTree, link: usize, seconds: f32) -> Option<Vec<Affine3A>> {
     let bodies = rest_bodies(tree);
     let body = bodies
         .iter()
         .position(|b| b.dynamic && b.links.first() == Some(&link))?;
     let frozen: Vec<bool> = (0..bodies.len()).map(|b| b != body).collect();
-    Some(simulate(tree, &bodies, &frozen, seconds).ends[body])
+    Some(simulate(tree, &bodies, &frozen, seconds, Some(body)).path)
 }
 
 /// Where the bodies started and ended, and what simulating them cost.
@@ -229,11 +235,19 @@ struct Simulated {
     ends: Vec<Affine3A>,
     simulated_s: f32,
     wall_s: f64,
+    /// The pose of the body asked to be followed, at the start and after every step.
+    path: Vec<Affine3A>,
 }
 
 /// Simulates the bodies in rapier for `seconds` at the rest test's fixed step; those in `frozen`
-/// are fixed where they stand.
-fn simulate(tree: &KinematicTree, bodies: &[RestBody], frozen: &[bool], seconds: f32) -> Simulated {
+/// are fixed where they stand. The body `follow` has its pose recorded after every step.
+fn simulate(
+    tree: &KinematicTree,
+    bodies: &[RestBody],
+    frozen: &[bool],
+    seconds: f32,
+    follow: Option<usize>,
+) -> Simulated {
     let mut app = App::new();
     app.add_plugins((
         // Transform propagation asks for the compute pool even on one thread.
@@ -259,25 +273,30 @@ fn simulate(tree: &KinematicTree, bodies: &[RestBody], frozen: &[bool], seconds:
     let starts = spawn_bodies(app.world_mut(), tree, bodies, frozen);
     let started = std::time::Instant::now();
     let steps = (seconds / REST_STEP_S).round() as usize;
+    let mut poses = app.world_mut().query::<(&RestBodyIndex, &Transform)>();
+    let mut ends = starts.clone();
+    let mut path = follow.map(|b| vec![starts[b]]).unwrap_or_default();
     // One update registers the new bodies (and steps once); the rest are the simulated time.
     for _ in 0..steps {
         app.update();
+        if let Some(followed) = follow {
+            for (index, transform) in poses.iter(app.world()) {
+                if index.0 == followed {
+                    path.push(pose_of(transform));
+                }
+            }
+        }
     }
     let wall_s = started.elapsed().as_secs_f64();
-    let mut ends = starts.clone();
-    for (index, transform) in app
-        .world_mut()
-        .query::<(&RestBodyIndex, &Transform)>()
-        .iter(app.world())
-    {
-        ends[index.0] =
-            Affine3A::from_rotation_translation(transform.rotation, transform.translation);
+    for (index, transform) in poses.iter(app.world()) {
+        ends[index.0] = pose_of(transform);
     }
     Simulated {
         starts,
         ends,
         simulated_s: steps as f32 * REST_STEP_S,
         wall_s,
+        path,
     }
 }
 
@@ -416,7 +435,15 @@ mod tests {
     #[test]
     fn a_settled_object_lands_straight_down_on_what_is_under_it() {
         let tree = scene(0.2);
-        let landed = settle_object(&tree, 3, 1.5).expect("box_2 is an object");
+        let path = settle_object(&tree, 3, 1.5).expect("box_2 is an object");
+        // The start, then one pose per step, falling all the way.
+        assert_eq!(path.len(), 1 + (1.5 / REST_STEP_S).round() as usize);
+        assert!((path[0].translation.z - 0.2).abs() < 1e-5);
+        assert!(
+            path.windows(2)
+                .all(|w| w[1].translation.z <= w[0].translation.z + 1e-3)
+        );
+        let landed = *path.last().expect("a path");
         let t = landed.translation;
         assert!(t.z.abs() < 0.003, "box_2 rests on the floor: {t}");
         assert!(
@@ -438,7 +465,8 @@ mod tests {
         // box_2 let go with three quarters of its bottom over the side of box_1 (30 cm tall).
         let mut tree = scene(0.0);
         tree.links[3].parent_from_link = Affine3A::from_translation(Vec3::new(0.8, 0.0, 0.301));
-        let landed = settle_object(&tree, 3, 1.5).expect("box_2 is an object");
+        let path = settle_object(&tree, 3, 1.5).expect("box_2 is an object");
+        let landed = *path.last().expect("a path");
         assert!(
             landed.translation.z < 0.2 || landed.matrix3.z_axis.z < 0.9,
             "it fell or tipped: {landed:?}"

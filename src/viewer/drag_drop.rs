@@ -3,7 +3,8 @@
 //! pointer; rapier lets it fall and settle, everything else held still, so it lands flat on the
 //! surface, or tips off an edge it was dropped over. It then hangs from the link it rests on: the
 //! support edge of the contact graph and the kinematic tree change (a cup dragged from the table
-//! to the counter is the counter's child). A drop that would sink it into something is refused
+//! to the counter is the counter's child). While the button is held, a box shows where the object
+//! would land (red where it would be refused). A drop that would sink it into something is refused
 //! and changes nothing; otherwise the rest test runs on the new scene, and the panel (and the
 //! physics layer) say whether it stands.
 
@@ -12,15 +13,19 @@ use glam::Affine3A;
 
 use crate::components::{OrientedBox, SceneEntity};
 use crate::kinematics::ray_pick::{pick_link, pick_link_where};
+use crate::kinematics::rest_test::REST_STEP_S;
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::Change;
 use crate::sim::scene_view::SceneView;
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::physics_validation::settle_object;
+use crate::systems::scene_graph::transform_of;
 use crate::systems::simulation::apply_change;
-use crate::viewer::interaction::{PendingClicks, ViewerStatus, ray_through, scene_changed};
+use crate::viewer::interaction::{
+    CLICK_SLOP_PX, PendingClicks, PointerPosition, ViewerStatus, ray_through, scene_changed,
+};
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
-use crate::viewer::motion::finish_motion;
+use crate::viewer::motion::{finish_motion, show_fall};
 
 /// A dropped object may touch what it lands on, not sink into anything deeper than this.
 const DROP_TOLERANCE_M: f32 = 0.01;
@@ -38,8 +43,76 @@ fn work_drags(world: &mut World) {
     }
 }
 
-/// Moves the object under the pixel `from` onto the surface under the pixel `to`; returns what
-/// happened, in words.
+/// Where a drag from one pixel to another would put an object.
+struct DropPlan {
+    object: String,
+    /// The object's own link.
+    link: usize,
+    /// The link under the pointer.
+    target: usize,
+    /// The link's world pose put down on the point under the pointer, keeping its turn.
+    moved: Affine3A,
+    /// How deep it would sit there inside what is around it, metres.
+    sunk: f32,
+}
+
+impl DropPlan {
+    fn refused(&self) -> Option<String> {
+        (self.sunk > DROP_TOLERANCE_M).then(|| {
+            format!(
+                "refused: {} would sit {:.1} cm inside what is there",
+                self.object,
+                100.0 * self.sunk
+            )
+        })
+    }
+}
+
+/// The drop of the object hit by the ray `grab` onto the surface hit by the ray `put`, or why
+/// there is none.
+fn plan_drop(
+    tree: &KinematicTree,
+    view: &SceneView,
+    grab: Ray3d,
+    put: Ray3d,
+) -> Result<DropPlan, String> {
+    let Some((hit, _)) = pick_link(tree, grab.origin, *grab.direction, &HIDDEN_CLASSES) else {
+        return Err("nothing there to drag".into());
+    };
+    let object = tree.links[hit].node.clone().unwrap_or_default();
+    if !view.is_movable(&object) {
+        return Err(format!(
+            "{object} stays where it is (its class is not movable)"
+        ));
+    }
+    let Some(link) = view.node_link(&object) else {
+        return Err(format!("{object} has no link to move"));
+    };
+    // The surface under the pointer, seen through the object itself and what it carries.
+    let Some((target, distance)) = pick_link_where(tree, put.origin, *put.direction, |i| {
+        !view.descends_from(i, link)
+            && !HIDDEN_CLASSES.contains(&tree.links[i].class.as_deref().unwrap_or(""))
+    }) else {
+        return Err(format!("nothing under the pointer to put {object} on"));
+    };
+    let Some((lo, hi)) = view.local_bounds(link) else {
+        return Err(format!("{object} has no mesh"));
+    };
+    let point = put.origin + *put.direction * distance;
+    let bottom = view.poses[link].transform_point3(((lo + hi) / 2.0).with_z(lo.z));
+    let moved = Affine3A::from_translation(point - bottom) * view.poses[link];
+    let sunk = view.overlap_at(link, moved, &[]);
+    Ok(DropPlan {
+        object,
+        link,
+        target,
+        moved,
+        sunk,
+    })
+}
+
+/// Moves the object under the pixel `from` onto the surface under the pixel `to`, and shows it
+/// falling the last bit and settling there; returns what happened, in words.
 pub fn drop_object(world: &mut World, from: Vec2, to: Vec2) -> Vec<String> {
     let (Some(grab), Some(put)) = (ray_through(world, from), ray_through(world, to)) else {
         return vec!["no camera to drag through".into()];
@@ -50,42 +123,25 @@ pub fn drop_object(world: &mut World, from: Vec2, to: Vec2) -> Vec<String> {
         Err(why) => return vec![why],
     };
     let view = SceneView::new(&tree);
-    let Some((hit, _)) = pick_link(&tree, grab.origin, *grab.direction, &HIDDEN_CLASSES) else {
-        return vec!["nothing there to drag".into()];
+    let plan = match plan_drop(&tree, &view, grab, put) {
+        Ok(plan) => plan,
+        Err(why) => return vec![why],
     };
-    let object = tree.links[hit].node.clone().unwrap_or_default();
-    if !view.is_movable(&object) {
-        return vec![format!(
-            "{object} stays where it is (its class is not movable)"
-        )];
+    if let Some(why) = plan.refused() {
+        return vec![why];
     }
-    let Some(link) = view.node_link(&object) else {
-        return vec![format!("{object} has no link to move")];
-    };
-    // The surface under the pointer, seen through the object itself and what it carries.
-    let Some((target, distance)) = pick_link_where(&tree, put.origin, *put.direction, |i| {
-        !view.descends_from(i, link)
-            && !HIDDEN_CLASSES.contains(&tree.links[i].class.as_deref().unwrap_or(""))
-    }) else {
-        return vec![format!("nothing under the pointer to put {object} on")];
-    };
-    let Some((lo, hi)) = view.local_bounds(link) else {
-        return vec![format!("{object} has no mesh")];
-    };
-    let point = put.origin + *put.direction * distance;
-    let bottom = view.poses[link].transform_point3(((lo + hi) / 2.0).with_z(lo.z));
-    let shift = point - bottom;
-    let moved = Affine3A::from_translation(shift) * view.poses[link];
-    let sunk = view.overlap_at(link, moved, &[]);
-    if sunk > DROP_TOLERANCE_M {
-        return vec![format!(
-            "refused: {object} would sit {:.1} cm inside what is there",
-            100.0 * sunk
-        )];
-    }
+    let DropPlan {
+        object,
+        link,
+        target,
+        moved,
+        ..
+    } = plan;
     let was = view.support_of(&object).unwrap_or("nothing").to_string();
     let let_go = Affine3A::from_translation(Vec3::Z * DROP_HEIGHT_M) * moved;
-    let settled = settle_object(&posed(&tree, link, let_go), link, SETTLE_SECONDS).unwrap_or(moved);
+    let fall = settle_object(&posed(&tree, link, let_go), link, SETTLE_SECONDS)
+        .unwrap_or_else(|| vec![moved]);
+    let settled = fall.last().copied().unwrap_or(moved);
     // It may have slid or tipped off what it was dropped on: it hangs from what it rests on.
     let support = support_under(&tree, &view, link, settled).unwrap_or(target);
     let change = Change::Attach {
@@ -97,6 +153,7 @@ pub fn drop_object(world: &mut World, from: Vec2, to: Vec2) -> Vec<String> {
         parent_from_link: view.poses[support].inverse() * settled,
     };
     apply_change(world, &change);
+    show_fall(world, &tree.links[link].name, &fall, REST_STEP_S);
     // The node's box goes with it (the boxes and graph layers draw it).
     let motion = settled * view.poses[link].inverse();
     let turn = crate::sim::scene_view::yaw_of(&motion);
@@ -111,6 +168,7 @@ pub fn drop_object(world: &mut World, from: Vec2, to: Vec2) -> Vec<String> {
         b.0.yaw += turn;
     }
     scene_changed(world);
+    // The transforms are the tree's until the fall's first frame is drawn.
     let now = read_kinematic_tree(world)
         .ok()
         .and_then(|t| SceneView::new(&t).support_of(&object).map(str::to_string))
@@ -164,10 +222,112 @@ fn support_under(
     .map(|(hit, _)| hit)
 }
 
+/// A drag under way: where it began, the scene as it stood then (it does not change while the
+/// button is held), and the box where the object would land if let go now.
+#[derive(Resource, Default)]
+pub struct DragPreview {
+    from: Option<Vec2>,
+    at: Option<Vec2>,
+    tree: Option<KinematicTree>,
+    /// The object and its box at the drop pose (a unit cube's transform), `refused` when the
+    /// drop would sink it into something.
+    pub ghost: Option<DropGhost>,
+}
+
+#[derive(Clone, Debug)]
+pub struct DropGhost {
+    pub object: String,
+    pub world_from_cube: Transform,
+    pub refused: bool,
+}
+
+const GHOST_COLOUR: Color = Color::srgb(0.1, 0.75, 0.3);
+const REFUSED_GHOST_COLOUR: Color = Color::srgb(0.9, 0.1, 0.1);
+
+/// While a left drag is held, works out where the object under its start would land under the
+/// pointer, and says so in the panel.
+fn preview_drag(world: &mut World) {
+    let from = world.resource::<PendingClicks>().pressed_at;
+    let held = world
+        .resource::<ButtonInput<MouseButton>>()
+        .pressed(MouseButton::Left);
+    let pointer = world.resource::<PointerPosition>().0;
+    let (Some(from), Some(at), true) = (from, pointer, held) else {
+        if world.resource::<DragPreview>().from.is_some() {
+            *world.resource_mut::<DragPreview>() = DragPreview::default();
+        }
+        return;
+    };
+    if from.distance(at) <= CLICK_SLOP_PX || world.resource::<DragPreview>().at == Some(at) {
+        return;
+    }
+    if world.resource::<DragPreview>().from != Some(from) {
+        finish_motion(world);
+        let tree = read_kinematic_tree(world).ok();
+        *world.resource_mut::<DragPreview>() = DragPreview {
+            from: Some(from),
+            tree,
+            ..default()
+        };
+    }
+    let (Some(grab), Some(put)) = (ray_through(world, from), ray_through(world, at)) else {
+        return;
+    };
+    let mut preview = world.resource_mut::<DragPreview>();
+    preview.at = Some(at);
+    let Some(tree) = &preview.tree else {
+        return;
+    };
+    let view = SceneView::new(tree);
+    let (ghost, line) = match plan_drop(tree, &view, grab, put) {
+        Ok(plan) => {
+            let onto = tree.links[plan.target]
+                .node
+                .clone()
+                .unwrap_or_else(|| tree.links[plan.target].name.clone());
+            let line = plan
+                .refused()
+                .unwrap_or_else(|| format!("drop {} onto {onto}", plan.object));
+            let ghost = view.local_bounds(plan.link).map(|(lo, hi)| DropGhost {
+                object: plan.object.clone(),
+                world_from_cube: transform_of(
+                    plan.moved
+                        * Affine3A::from_scale_rotation_translation(
+                            hi - lo,
+                            Quat::IDENTITY,
+                            (lo + hi) / 2.0,
+                        ),
+                ),
+                refused: plan.refused().is_some(),
+            });
+            (ghost, line)
+        }
+        Err(why) => (None, why),
+    };
+    preview.ghost = ghost;
+    let mut status = world.resource_mut::<ViewerStatus>();
+    if status.0 != [line.clone()] {
+        status.0 = vec![line];
+    }
+}
+
+/// The landing box of the drag under way: green, or red where it would be refused.
+fn draw_ghost(preview: Res<DragPreview>, mut gizmos: Gizmos) {
+    if let Some(ghost) = &preview.ghost {
+        let colour = if ghost.refused {
+            REFUSED_GHOST_COLOUR
+        } else {
+            GHOST_COLOUR
+        };
+        gizmos.cube(ghost.world_from_cube, colour);
+    }
+}
+
 pub struct DragDropPlugin;
 
 impl Plugin for DragDropPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(Update, work_drags);
+        app.init_resource::<DragPreview>()
+            .add_systems(Update, (preview_drag, work_drags, draw_ghost).chain());
     }
 }

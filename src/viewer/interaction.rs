@@ -32,13 +32,13 @@ pub struct ViewerStatus(pub Vec<String>);
 /// Clicks not yet worked, where the pointer was, and left drags (from, to) not yet dropped.
 #[derive(Resource, Clone, Debug, Default)]
 pub(crate) struct PendingClicks {
-    pressed_at: Option<Vec2>,
+    pub(crate) pressed_at: Option<Vec2>,
     clicks: Vec<Vec2>,
     pub(crate) drags: Vec<(Vec2, Vec2)>,
 }
 
 /// A press and release farther apart than this (pixels) is a drag, not a click.
-const CLICK_SLOP_PX: f32 = 5.0;
+pub(crate) const CLICK_SLOP_PX: f32 = 5.0;
 
 fn track_pointer(mut moved: MessageReader<CursorMoved>, mut pointer: ResMut<PointerPosition>) {
     if let Some(last) = moved.read().last() {

@@ -163,8 +163,17 @@ fn show_map(
         return;
     }
     let on = layers.is_on(Layer::Map) && !map.segments.is_empty();
-    if layers.is_on(Layer::Map) && map.segments.is_empty() {
-        status.0 = vec!["no map here: only a reconstruction's folder has one".into()];
+    if layers.is_on(Layer::Map) {
+        if map.segments.is_empty() {
+            status.0 = vec!["no map here: only a reconstruction's folder has one".into()];
+        } else if let Some(why) = map.uncoloured_because.as_ref()
+            && !layers.is_on(Layer::Segments)
+        {
+            status.0 = vec![
+                "the map is in instance colours: the sensor's colours could not be read".into(),
+                why.clone(),
+            ];
+        }
     }
     for mut v in &mut map_meshes {
         v.set_if_neq(if on {

@@ -42,8 +42,8 @@ use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::apply_change;
 
 pub use camera::OrbitCamera;
-pub use drag_drop::drop_object;
-pub use graph_labels::NodeLabel;
+pub use drag_drop::{DragPreview, DropGhost, drop_object};
+pub use graph_labels::{NodeLabel, ReplayLabel};
 pub use interaction::work_joint_at;
 pub use interaction::{PointerPosition, SceneRevision, ViewerStatus};
 pub use layers::{ActiveLayers, Layer};
@@ -196,6 +196,7 @@ pub fn replay_app(replay: Replay, offscreen: bool) -> App {
         .add_plugins((
             timeline::TimelinePlugin,
             replay_scene::ReplayScenePlugin,
+            graph_labels::ReplayLabelsPlugin,
             camera::OrbitCameraPlugin,
         ));
     app

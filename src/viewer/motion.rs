@@ -3,7 +3,8 @@
 //! another: the base drives along its A* path, turning from its old heading to its new, and a
 //! door or drawer turns or slides from its old value to its new. Only transforms are animated:
 //! the joints keep their new values, and when the motion ends every transform is the tree's.
-//! Attachments (a pick, a place) happen at once, and what the gripper holds rides along.
+//! Attachments (a pick, a place) happen at once, and what the gripper holds rides along. An
+//! object dropped by dragging follows the path rapier let it fall and settle along.
 
 use bevy::prelude::*;
 use glam::Affine3A;
@@ -21,6 +22,10 @@ const TURN_RATE_RAD_S: f32 = 1.5;
 const MAX_DRIVE_S: f32 = 2.5;
 /// Seconds for a door or drawer to move.
 const JOINT_S: f32 = 0.6;
+/// A fall is over once every later pose is within this distance (metres) and turn (radians) of
+/// where the object came to rest: what is left is too small to see.
+const REST_STILL_M: f32 = 0.0005;
+const REST_STILL_RAD: f32 = 0.005;
 
 /// How one change moves its entity, at `t` in [0, 1].
 #[derive(Clone, Debug)]
@@ -38,6 +43,8 @@ enum Tween {
         to: f32,
         end: Affine3A,
     },
+    /// A link through `poses` (its local transforms, evenly spaced in time).
+    Path { poses: Vec<Transform> },
 }
 
 impl Tween {
@@ -60,8 +67,35 @@ impl Tween {
             } => transform_of(
                 *end * spec.motion(*to).inverse() * spec.motion(from + (to - from) * t),
             ),
+            Tween::Path { poses } => {
+                let at = t.clamp(0.0, 1.0) * poses.len().saturating_sub(1) as f32;
+                let (i, f) = (at.floor() as usize, at.fract());
+                match (poses.get(i), poses.get(i + 1)) {
+                    (Some(a), Some(b)) => {
+                        Transform::from_translation(a.translation.lerp(b.translation, f))
+                            .with_rotation(a.rotation.slerp(b.rotation, f))
+                    }
+                    (Some(a), None) => *a,
+                    _ => Transform::IDENTITY,
+                }
+            }
         }
     }
+}
+
+/// The part of a fall worth showing: `path` up to the last pose that is visibly away from the
+/// last one.
+fn visible_fall(path: &[Affine3A]) -> &[Affine3A] {
+    let Some(rest) = path.last() else {
+        return path;
+    };
+    let away = |p: &Affine3A| {
+        p.translation.distance(rest.translation) > REST_STILL_M
+            || p.matrix3.z_axis.angle_between(rest.matrix3.z_axis) > REST_STILL_RAD
+            || p.matrix3.x_axis.angle_between(rest.matrix3.x_axis) > REST_STILL_RAD
+    };
+    let last_away = path.iter().rposition(away).map_or(0, |i| i + 1);
+    &path[..=last_away.min(path.len() - 1)]
 }
 
 /// The turn from yaw `from` to yaw `to` the short way round, radians.
@@ -198,6 +232,40 @@ pub fn show_motion(world: &mut World, changes: &[Change]) {
     world.insert_resource(motion);
 }
 
+/// Shows the link named `link`, already at rest where `path` (its world poses, `step_s` apart)
+/// ends, falling along it. The transforms are the link's own, relative to its parent, which
+/// holds still while it falls.
+pub fn show_fall(world: &mut World, link: &str, path: &[Affine3A], step_s: f32) {
+    let Some((entity, end)) = world
+        .query::<(Entity, &Name, &Transform)>()
+        .iter(world)
+        .find(|(_, n, _)| n.as_str() == link)
+        .map(|(e, _, t)| (e, *t))
+    else {
+        return;
+    };
+    let fall = visible_fall(path);
+    let Some(rest) = fall.last() else {
+        return;
+    };
+    let end = Affine3A::from_scale_rotation_translation(end.scale, end.rotation, end.translation);
+    // parent_from_link at each pose: the end's, moved by the pose's offset from the rest pose.
+    let poses = fall
+        .iter()
+        .map(|p| transform_of(end * rest.inverse() * *p))
+        .collect::<Vec<_>>();
+    let duration_s = (fall.len().saturating_sub(1) as f32 * step_s).max(step_s);
+    world.insert_resource(Motion {
+        legs: vec![Leg {
+            entity,
+            tween: Tween::Path { poses },
+            start_s: 0.0,
+            duration_s,
+        }],
+        elapsed_s: 0.0,
+    });
+}
+
 /// Poses every animated entity for the time elapsed: a leg not started stands at its start, a
 /// finished one at its end; once all have finished the motion is over.
 pub(crate) fn animate(
@@ -281,5 +349,26 @@ mod tests {
         assert!(at_end.rotation.angle_between(Quat::from_rotation_z(1.2)) < 1e-5);
         let at_start = joint.at(0.0);
         assert!(at_start.rotation.angle_between(Quat::IDENTITY) < 1e-5);
+    }
+
+    #[test]
+    fn a_fall_is_shown_until_it_stops_visibly_moving_and_passes_through_its_poses() {
+        let fall: Vec<Affine3A> = [0.3, 0.2, 0.1, 0.0, 0.0001, 0.0, 0.0]
+            .iter()
+            .map(|&z| Affine3A::from_translation(Vec3::new(0.0, 0.0, z)))
+            .collect();
+        // The 0.1 mm bounce is no motion to show: the fall ends where it first reaches the floor.
+        assert_eq!(visible_fall(&fall).len(), 4);
+        let path = Tween::Path {
+            poses: visible_fall(&fall)
+                .iter()
+                .map(|p| transform_of(*p))
+                .collect(),
+        };
+        assert!((path.at(0.0).translation.z - 0.3).abs() < 1e-6);
+        assert!((path.at(0.5).translation.z - 0.15).abs() < 1e-6);
+        assert_eq!(path.at(1.0).translation.z, 0.0);
+        // Nothing moved: one pose, shown as it is.
+        assert_eq!(visible_fall(&fall[5..]).len(), 1);
     }
 }
