@@ -347,10 +347,11 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 });
                 match &s.failed_precondition {
                     None => println!(
-                        "{:>2} {:<36} ok{physics} ({:.0} ms, physics {:.0} ms)",
+                        "{:>2} {:<36} ok{physics} ({:.0} ms: motion {:.0} ms, rest {:.0} ms)",
                         s.step,
                         s.action.label(),
                         s.wall_ms,
+                        s.motion_ms(),
                         s.physics_ms
                     ),
                     Some(why) => println!("{:>2} {:<36} FAILED: {why}", s.step, s.action.label()),

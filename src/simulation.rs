@@ -210,6 +210,8 @@ pub struct StepTiming {
     pub median_ms: f64,
     pub max_ms: f64,
     pub median_physics_ms: f64,
+    /// Of `median_ms`, the rapier simulation of its motions.
+    pub median_motion_ms: f64,
     pub median_update_ms: f64,
     /// Objects the physics check simulated.
     pub checked: usize,
@@ -261,6 +263,7 @@ pub fn bench_simulation(
                 .map(|(s, _)| s[i].wall_ms)
                 .fold(0.0, f64::max),
             median_physics_ms: median(per_run.iter().map(|(s, _)| s[i].physics_ms).collect()),
+            median_motion_ms: median(per_run.iter().map(|(s, _)| s[i].motion_ms()).collect()),
             median_update_ms: median(per_run.iter().map(|(_, u)| u[i]).collect()),
             checked: per_run[0].0[i]
                 .physics

@@ -70,7 +70,31 @@ fn the_fridge_to_microwave_demonstration_runs_and_the_box_ends_under_the_microwa
         // The whole scene is checked after every step (less the box while the gripper holds it).
         let checked = s["physics"]["checked"].as_array().expect("checked").len();
         assert!(checked >= objects - 1, "{s:#}");
+        // Every drive and every door was simulated in rapier and knocked nothing over.
+        let motion = s["motion"].as_array().expect("motion checks");
+        let action = s["action"]["action"].as_str().unwrap_or("");
+        if ["navigate", "open", "close"].contains(&action) {
+            assert!(!motion.is_empty(), "{s:#}");
+        }
+        for m in motion {
+            assert_eq!(m["knocked"], serde_json::json!([]), "{s:#}");
+            assert!(m["simulated_s"].as_f64().expect("seconds") > 0.5, "{s:#}");
+        }
     }
+    // The fridge door swept past the box on its shelf, and the drive to the microwave passed
+    // the table with the cups on it: those objects were free in the simulation.
+    let near = |step: usize| -> Vec<String> {
+        steps[step]["motion"][0]["near"]
+            .as_array()
+            .expect("near")
+            .iter()
+            .map(|n| n.as_str().expect("id").to_string())
+            .collect()
+    };
+    assert_eq!(steps[1]["motion"][0]["link"], "fridge_1_door");
+    assert!(near(1).contains(&"box_1".to_string()), "{:?}", near(1));
+    assert_eq!(steps[3]["motion"][0]["link"], "robot");
+    assert!(near(3).contains(&"cup_1".to_string()), "{:?}", near(3));
     // The final URDF: the box hangs from the microwave's link; both doors are closed.
     let urdf = urdf_rs::read_file(out.join("scene.urdf")).expect("URDF");
     let joint = urdf

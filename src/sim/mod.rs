@@ -5,6 +5,7 @@
 
 pub mod actions;
 pub mod graph_sync;
+pub mod motion_path;
 pub mod navigation;
 pub mod pddl;
 pub mod planner;

@@ -5,6 +5,7 @@ pub mod cad_replacement;
 pub mod contact_graph;
 pub mod ingest;
 pub mod kinematic_tree;
+pub mod motion_physics;
 pub mod panoptic_mapping;
 pub mod physics_validation;
 pub mod scene_graph;

@@ -35,23 +35,23 @@ pub struct PhysicsReport {
 }
 
 /// The pose of a simulated body.
-fn pose_of(transform: &Transform) -> Affine3A {
+pub(crate) fn pose_of(transform: &Transform) -> Affine3A {
     Affine3A::from_rotation_translation(transform.rotation, transform.translation)
 }
 
 /// A rapier pose is rigid: drop the rounding-level scale a composed affine carries.
-fn rigid(a: &Affine3A) -> Transform {
+pub(crate) fn rigid(a: &Affine3A) -> Transform {
     let (_, rotation, translation) = a.to_scale_rotation_translation();
     Transform::from_translation(translation).with_rotation(rotation.normalize())
 }
 
 /// Marks a simulated body with its index among the rest test's bodies.
 #[derive(Component)]
-struct RestBodyIndex(usize);
+pub(crate) struct RestBodyIndex(pub usize);
 
 /// The collider of a dynamic body: a compound of the convex pieces of all its links, with the
 /// links' own mass properties summed in the body's frame.
-fn dynamic_collider(
+pub(crate) fn dynamic_collider(
     tree: &KinematicTree,
     body: &RestBody,
     body_from_links: &[Affine3A],
@@ -97,7 +97,7 @@ fn dynamic_collider(
 
 /// Spawns the bodies; those in `frozen` (they start inside another body, already judged
 /// penetrating) stay where they are, so their overlap does not throw their neighbours about.
-fn spawn_bodies(
+pub(crate) fn spawn_bodies(
     world: &mut World,
     tree: &KinematicTree,
     bodies: &[RestBody],
@@ -229,25 +229,9 @@ pub fn settle_object(tree: &KinematicTree, link: usize, seconds: f32) -> Option<
     Some(simulate(tree, &bodies, &frozen, seconds, Some(body)).path)
 }
 
-/// Where the bodies started and ended, and what simulating them cost.
-struct Simulated {
-    starts: Vec<Affine3A>,
-    ends: Vec<Affine3A>,
-    simulated_s: f32,
-    wall_s: f64,
-    /// The pose of the body asked to be followed, at the start and after every step.
-    path: Vec<Affine3A>,
-}
-
-/// Simulates the bodies in rapier for `seconds` at the rest test's fixed step; those in `frozen`
-/// are fixed where they stand. The body `follow` has its pose recorded after every step.
-fn simulate(
-    tree: &KinematicTree,
-    bodies: &[RestBody],
-    frozen: &[bool],
-    seconds: f32,
-    follow: Option<usize>,
-) -> Simulated {
+/// An empty rapier world as the rest test runs it: z up, gravity, a fixed step of
+/// `REST_STEP_S` per update, contacts recomputed every step, on one thread.
+pub(crate) fn rest_world() -> App {
     let mut app = App::new();
     app.add_plugins((
         // Transform propagation asks for the compute pool even on one thread.
@@ -270,6 +254,29 @@ fn simulate(
         schedule.set_executor(SingleThreadedExecutor::new());
     }
     app.update();
+    app
+}
+
+/// Where the bodies started and ended, and what simulating them cost.
+struct Simulated {
+    starts: Vec<Affine3A>,
+    ends: Vec<Affine3A>,
+    simulated_s: f32,
+    wall_s: f64,
+    /// The pose of the body asked to be followed, at the start and after every step.
+    path: Vec<Affine3A>,
+}
+
+/// Simulates the bodies in rapier for `seconds` at the rest test's fixed step; those in `frozen`
+/// are fixed where they stand. The body `follow` has its pose recorded after every step.
+fn simulate(
+    tree: &KinematicTree,
+    bodies: &[RestBody],
+    frozen: &[bool],
+    seconds: f32,
+    follow: Option<usize>,
+) -> Simulated {
+    let mut app = rest_world();
     let starts = spawn_bodies(app.world_mut(), tree, bodies, frozen);
     let started = std::time::Instant::now();
     let steps = (seconds / REST_STEP_S).round() as usize;

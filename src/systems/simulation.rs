@@ -2,7 +2,9 @@
 //! system that performs them. Each action is checked against the kinematic tree as it stands
 //! (`sim::actions`), its changes are applied to the transform hierarchy (pick re-parents to the
 //! gripper, place to the new support, open sets the joint value), and the rest test confirms
-//! the world still stands. A refused action changes nothing.
+//! the world still stands. Before any of that, its motions (the drive, the door's swing) are
+//! simulated in rapier; one that would knock an object refuses the action. A refused action
+//! changes nothing.
 
 use std::time::Instant;
 
@@ -12,10 +14,14 @@ use serde::Serialize;
 use crate::components::{Joint, LinkBody, Panoptic};
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::LinkGeometry;
+use crate::kinematics::rest_test::REST_STEP_S;
 use crate::kinematics::rest_test::{ObjectVerdict, Verdict};
+use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
+use crate::sim::motion_path::{apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::systems::kinematic_tree::read_kinematic_tree;
+use crate::systems::motion_physics::{MotionCheck, simulate_motion};
 use crate::systems::physics_validation::{PhysicsReport, rest_physics};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 
@@ -55,12 +61,25 @@ pub struct StepRecord {
     pub failed_precondition: Option<String>,
     /// The kinematic-tree changes it made.
     pub changes: Vec<Change>,
+    /// Its motions simulated in rapier, in order (a refused action's up to the one that knocked
+    /// something).
+    pub motion: Vec<MotionCheck>,
     /// The rest test after it (absent when refused).
     pub physics: Option<StepPhysics>,
-    /// Wall-clock milliseconds for the action and its physics check.
+    /// Wall-clock milliseconds for the action, its motions' simulation and its physics check.
     pub wall_ms: f64,
     /// Of `wall_ms`, the milliseconds of the physics check.
     pub physics_ms: f64,
+}
+
+impl StepRecord {
+    /// Milliseconds its motions took to simulate.
+    pub fn motion_ms(&self) -> f64 {
+        self.motion
+            .iter()
+            .map(|m| m.wall_ms)
+            .fold(0.0, |a, b| a + b)
+    }
 }
 
 /// Every action performed so far, in order.
@@ -118,9 +137,14 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
     let step = world
         .get_resource::<SimulationTrace>()
         .map_or(0, |t| t.0.len());
+    let mut motion = Vec::new();
     let outcome = read_kinematic_tree(world).and_then(|tree| {
         let spec = robot_spec(world).ok_or("the scene has no robot")?;
         let changes = attempt(&tree, &spec, action)?;
+        motion = simulate_motions(&tree, &changes);
+        if let Some(why) = knocked_reason(&motion) {
+            return Err(why);
+        }
         Ok(changes)
     });
     let record = match outcome {
@@ -130,6 +154,7 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
             success: false,
             failed_precondition: Some(reason),
             changes: Vec::new(),
+            motion,
             physics: None,
             wall_ms: started.elapsed().as_secs_f64() * 1e3,
             physics_ms: 0.0,
@@ -154,6 +179,7 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
                 success: true,
                 failed_precondition: None,
                 changes,
+                motion,
                 physics,
                 wall_ms: started.elapsed().as_secs_f64() * 1e3,
                 physics_ms,
@@ -165,6 +191,50 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
         .0
         .push(record.clone());
     record
+}
+
+/// The motions of `changes` (a drive, a door) simulated in rapier one after another from
+/// `tree`, up to the first attachment (which happens at once) or the first that knocks
+/// something.
+fn simulate_motions(tree: &KinematicTree, changes: &[Change]) -> Vec<MotionCheck> {
+    let mut tree = tree.clone();
+    let mut checks = Vec::new();
+    for change in changes {
+        if let Some(motion) = link_motion(&tree, change, REST_STEP_S) {
+            let check = simulate_motion(&tree, &motion);
+            let knocked = !check.knocked.is_empty();
+            checks.push(check);
+            if knocked {
+                break;
+            }
+        }
+        if !apply_motion(&mut tree, change) {
+            break;
+        }
+    }
+    checks
+}
+
+/// Why the action is refused when one of its motions knocked something.
+fn knocked_reason(checks: &[MotionCheck]) -> Option<String> {
+    let check = checks.iter().find(|c| !c.knocked.is_empty())?;
+    let what = check
+        .knocked
+        .iter()
+        .map(|k| {
+            format!(
+                "{} ({:.1} cm, {:.0} degrees)",
+                k.object,
+                100.0 * k.moved_m,
+                k.turned_deg
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    Some(format!(
+        "moving {} would knock {what} (simulated in rapier)",
+        check.link
+    ))
 }
 
 fn robot_spec(world: &mut World) -> Option<RobotSpec> {

@@ -12,16 +12,12 @@ use glam::Affine3A;
 use crate::components::Joint;
 use crate::kinematics::JointSpec;
 use crate::sim::actions::Change;
+use crate::sim::motion_path::{along, drive_path, drive_seconds, joint_seconds, shortest_turn};
 use crate::sim::robot::ROBOT_LINK;
 use crate::systems::scene_graph::transform_of;
 
-/// The base drives at this speed (m/s) and turns at this rate (rad/s), whichever takes longer,
-/// but no leg takes longer than `MAX_DRIVE_S`.
-const DRIVE_SPEED_M_S: f32 = 1.2;
-const TURN_RATE_RAD_S: f32 = 1.5;
+/// The viewer shows no drive longer than this (seconds); longer ones play faster.
 const MAX_DRIVE_S: f32 = 2.5;
-/// Seconds for a door or drawer to move.
-const JOINT_S: f32 = 0.6;
 /// A fall is over once every later pose is within this distance (metres) and turn (radians) of
 /// where the object came to rest: what is left is too small to see.
 const REST_STILL_M: f32 = 0.0005;
@@ -98,26 +94,6 @@ fn visible_fall(path: &[Affine3A]) -> &[Affine3A] {
     &path[..=last_away.min(path.len() - 1)]
 }
 
-/// The turn from yaw `from` to yaw `to` the short way round, radians.
-fn shortest_turn(from: f32, to: f32) -> f32 {
-    use std::f32::consts::{PI, TAU};
-    (to - from + PI).rem_euclid(TAU) - PI
-}
-
-/// The point a fraction `t` of the way along the polyline `path`, by length.
-fn along(path: &[Vec2], t: f32) -> Vec2 {
-    let length: f32 = path.windows(2).map(|w| w[0].distance(w[1])).sum();
-    let mut left = t.clamp(0.0, 1.0) * length;
-    for w in path.windows(2) {
-        let leg = w[0].distance(w[1]);
-        if left <= leg && leg > 0.0 {
-            return w[0].lerp(w[1], left / leg);
-        }
-        left -= leg;
-    }
-    path.last().copied().unwrap_or_default()
-}
-
 /// One animated change: its entity, when it starts and how long it takes.
 #[derive(Clone, Debug)]
 struct Leg {
@@ -165,20 +141,15 @@ fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
                 from,
                 to,
                 path_length_m,
-                path,
+                ..
             } => find(world, ROBOT_LINK).map(|(entity, _, _)| {
-                let mut points = vec![from.position];
-                points.extend(path.iter().copied());
-                points.push(to.position);
-                points.dedup();
                 let tween = Tween::Drive {
-                    path: points,
+                    path: drive_path(change).unwrap_or_default(),
                     from_yaw: from.yaw,
                     to_yaw: to.yaw,
                 };
-                let drive_s = path_length_m / DRIVE_SPEED_M_S;
-                let turn_s = shortest_turn(from.yaw, to.yaw).abs() / TURN_RATE_RAD_S;
-                (entity, tween, drive_s.max(turn_s).clamp(0.3, MAX_DRIVE_S))
+                let seconds = drive_seconds(from, to, *path_length_m).min(MAX_DRIVE_S);
+                (entity, tween, seconds)
             }),
             Change::SetJoint { link, from, to } => {
                 find(world, link).and_then(|(entity, end, spec)| {
@@ -187,13 +158,15 @@ fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
                         end.rotation,
                         end.translation,
                     );
+                    let spec = spec?;
+                    let seconds = joint_seconds(spec.kind, *from, *to);
                     let tween = Tween::Joint {
-                        spec: spec?,
+                        spec,
                         from: *from,
                         to: *to,
                         end,
                     };
-                    Some((entity, tween, JOINT_S))
+                    Some((entity, tween, seconds))
                 })
             }
             Change::Attach { .. } => None,
@@ -315,16 +288,6 @@ impl Plugin for MotionPlugin {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn along_a_path_by_length() {
-        let path = [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::new(1.0, 3.0)];
-        assert_eq!(along(&path, 0.0), Vec2::ZERO);
-        assert!(along(&path, 0.25).abs_diff_eq(Vec2::new(1.0, 0.0), 1e-6));
-        assert!(along(&path, 0.5).abs_diff_eq(Vec2::new(1.0, 1.0), 1e-6));
-        assert_eq!(along(&path, 1.0), Vec2::new(1.0, 3.0));
-        assert_eq!(along(&[Vec2::ONE], 0.5), Vec2::ONE);
-    }
 
     #[test]
     fn a_drive_turns_the_short_way_and_a_joint_ends_where_the_tree_has_it() {
