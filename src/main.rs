@@ -547,6 +547,19 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                         format!("still in conflict: {}", cad.conflicted.join(", "))
                     }
                 );
+                // Pulled apart by more than a voxel or two: the map's segmentation at fault.
+                let parted: Vec<String> = cad
+                    .replaced
+                    .iter()
+                    .filter(|o| o.check.separated_m > 0.03)
+                    .map(|o| format!("{} {:.0} cm", o.id, 100.0 * o.check.separated_m))
+                    .collect();
+                if !parted.is_empty() {
+                    println!(
+                        "           pulled apart from overlapping neighbours: {}",
+                        parted.join(", ")
+                    );
+                }
             }
             for (stage, seconds) in &r.timings {
                 println!("  {stage:<20} {seconds:>8.3} s");

@@ -210,6 +210,10 @@ pub struct PlacementCheck {
     pub support_area: Option<f32>,
     /// Conflicts left: penetrations over 1 cm (layout or object), failed support tests.
     pub conflicts: usize,
+    /// How far it was pulled apart from its neighbours (metres): moved, for a movable object,
+    /// or taken off its width, for a fixed one. Over a few centimetres this is the map's
+    /// segmentation at fault (one label bled over the neighbour), fixed here, not hidden.
+    pub separated_m: f32,
 }
 
 /// The min-conflict choice of every object's placement, snapped onto its support.
@@ -300,7 +304,7 @@ pub fn check_placements(
     let models: Vec<Option<&DatabaseModel>> = (0..n)
         .map(|i| choice[i].map(|k| alignments[i][k].0))
         .collect();
-    separate_neighbours(&models, holders, movable, &mut poses);
+    let separated_m = separate_neighbours(&models, holders, movable, &mut poses);
     // Snap parents before children: a child rests on its parent's final surface.
     let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
     for i in support_order(holders) {
@@ -356,6 +360,7 @@ pub fn check_placements(
                 layout_penetration_m,
                 support_area: held_area,
                 conflicts,
+                separated_m: separated_m[i],
             })
         })
         .collect();
@@ -366,27 +371,33 @@ pub fn check_placements(
     }
 }
 
-/// Side by side, neighbours overlapping by at most this much (metres) are pulled apart; more is
-/// a segmentation fault (one object's label over its neighbour) that shrinking would hide.
+/// Side by side, neighbours overlapping by at most this much (metres) are pulled apart when one
+/// of them is movable; more is a segmentation fault (a cup's label over its neighbour) that
+/// moving it would hide. Two fixed neighbours (cabinets in a row) are shrunk apart however deep
+/// they overlap, as long as each keeps over half its width: flush fronts fuse in a 2 cm map, and
+/// one label can bleed over most of its neighbour's shared top. Both were widened by the same
+/// bleeding across their shared boundary, so the middle of the overlap is the best guess of it,
+/// and two models sharing a third of a metre stand in no simulator. `separated_m` records it.
 const MAX_SEPARATED_M: f32 = 0.1;
 /// Rounds of pulling apart (a pair's separation can push one into a third).
 const SEPARATION_ROUNDS: usize = 10;
 /// Pulled-apart neighbours end this far apart (metres).
 const SEPARATION_GAP_M: f32 = 0.002;
 
-/// Neighbours that interpenetrate side by side by no more than `MAX_SEPARATED_M` are pulled
-/// apart horizontally: along the contact normal when it is horizontal, else (two objects on the
+/// Neighbours that interpenetrate side by side (by no more than `MAX_SEPARATED_M` when one is
+/// movable) are pulled apart horizontally: along the contact normal when it is horizontal, else (two objects on the
 /// same support, which cannot part vertically) along the line between their centres. A movable
 /// object (a cup) is moved; a fixed one (a cabinet) is shrunk with its far side kept: two fixed
 /// neighbours were widened by the same bleeding across their shared boundary, so the truth lies
-/// in the middle.
+/// in the middle. Returns how far each object was moved or shrunk, metres.
 fn separate_neighbours(
     models: &[Option<&DatabaseModel>],
     holders: &[Holder],
     movable: &[bool],
     poses: &mut [Option<Affine3A>],
-) {
+) -> Vec<f32> {
     let n = models.len();
+    let mut separated = vec![0.0f32; n];
     for _ in 0..SEPARATION_ROUNDS {
         let solids: Vec<Option<PlacedSolid>> = (0..n)
             .map(|i| Some(PlacedSolid::new(models[i]?, &poses[i]?)))
@@ -400,7 +411,8 @@ fn separate_neighbours(
                 let Some((depth, normal)) = deepest_contact(a, b) else {
                     continue;
                 };
-                if depth <= 0.5 * MAX_PENETRATION_M || depth > MAX_SEPARATED_M {
+                let movable_pair = movable[i] || movable[j];
+                if depth <= 0.5 * MAX_PENETRATION_M || (movable_pair && depth > MAX_SEPARATED_M) {
                     continue;
                 }
                 let horizontal = normal.with_z(0.0);
@@ -427,25 +439,31 @@ fn separate_neighbours(
                         continue;
                     }
                     if let (Some(pose), Some(solid)) = (poses[k], &solids[k]) {
-                        poses[k] = Some(if movable[k] {
-                            Affine3A::from_translation(away * part * push) * pose
+                        let parted = if movable[k] {
+                            Some(Affine3A::from_translation(away * part * push) * pose)
                         } else {
                             shrink_from(pose, solid, away, part * push)
-                        });
+                        };
+                        if let Some(parted) = parted {
+                            poses[k] = Some(parted);
+                            separated[k] += part * push;
+                            moved = true;
+                        }
                     }
                 }
-                moved = true;
             }
         }
         if !moved {
             break;
         }
     }
+    separated
 }
 
 /// `pose` with the model shrunk by `amount` metres along the model axis nearest to `away`, its
-/// side towards `away` kept where it is (the other side retreats).
-fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> Affine3A {
+/// side towards `away` kept where it is (the other side retreats); `None` when that would take
+/// half its width or more.
+fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> Option<Affine3A> {
     let axes = [
         pose.matrix3.x_axis,
         pose.matrix3.y_axis,
@@ -455,7 +473,7 @@ fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> 
         let along = |v: glam::Vec3A| Vec3::from(v).normalize_or_zero().dot(away).abs();
         along(axes[a]).total_cmp(&along(axes[b]))
     }) else {
-        return pose;
+        return None;
     };
     let extent = solid
         .pieces
@@ -465,7 +483,7 @@ fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> 
         .fold((f32::MAX, f32::MIN), |(lo, hi), d| (lo.min(d), hi.max(d)));
     let width = extent.1 - extent.0;
     if width <= 2.0 * amount {
-        return pose;
+        return None;
     }
     let mut scale = Vec3::ONE;
     scale[k] = 1.0 - amount / width;
@@ -481,7 +499,7 @@ fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> 
             shrunk.transform_point3(model_point).dot(away)
         })
         .fold(f32::MIN, f32::max);
-    Affine3A::from_translation(away * (kept_before - kept_after)) * shrunk
+    Some(Affine3A::from_translation(away * (kept_before - kept_after)) * shrunk)
 }
 
 /// Object indices with every holder before what it holds (objects in a support cycle, which
@@ -581,5 +599,57 @@ mod tests {
         let check = checked.checks[1].as_ref().expect("cup check");
         assert_eq!(check.conflicts, 0, "{check:?}");
         assert!(check.support_area.expect("held by the table") > 0.99);
+    }
+
+    #[test]
+    fn two_cabinets_overlapping_deep_are_shrunk_to_the_middle_but_a_movable_object_is_not_moved() {
+        let db = CadDatabase::parametric();
+        let model = |id: &str| {
+            db.models()
+                .iter()
+                .find(|m| m.model.id == id)
+                .expect("model")
+        };
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let cabinet = model("cabinet_01");
+        let width = cabinet.model.size.x;
+        // Side by side along x, 30 cm inside each other.
+        let overlap = 0.3;
+        let at = |x: f32| vec![(cabinet, Affine3A::from_translation(Vec3::X * x))];
+        let alignments = vec![at(0.0), at(width - overlap)];
+        let holders = [Holder::Floor(floor), Holder::Floor(floor)];
+        let checked = check_placements(&alignments, &holders, &[false, false], &[floor]);
+        let solids: Vec<PlacedSolid> = (0..2)
+            .map(|i| PlacedSolid::new(cabinet, &checked.chosen[i].expect("placed").1))
+            .collect();
+        assert!(penetration_depth(&solids[0], &solids[1]) < 0.005);
+        // Each gave up half the overlap; their far sides stayed.
+        let middle = width - overlap / 2.0 - cabinet.model.size.x / 2.0;
+        assert!(
+            (solids[0].hi.x - middle).abs() < 0.01,
+            "{} vs {middle}",
+            solids[0].hi.x
+        );
+        assert!(
+            (solids[1].lo.x - middle).abs() < 0.01,
+            "{} vs {middle}",
+            solids[1].lo.x
+        );
+        assert!((solids[0].lo.x + width / 2.0).abs() < 1e-3);
+        for check in checked.checks.iter().flatten() {
+            assert_eq!(check.conflicts, 0, "{check:?}");
+            assert!(
+                (check.separated_m - overlap / 2.0).abs() < 0.01,
+                "{check:?}"
+            );
+        }
+
+        // The same overlap with a movable object (as if the second were a chair) is a
+        // segmentation fault too deep to move it over: it stays, reported.
+        let alignments = vec![at(0.0), at(width - overlap)];
+        let checked = check_placements(&alignments, &holders, &[false, true], &[floor]);
+        let check = checked.checks[1].as_ref().expect("second check");
+        assert_eq!(check.separated_m, 0.0);
+        assert!(check.conflicts > 0, "{check:?}");
     }
 }
