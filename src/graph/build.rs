@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::classes::{ClassTable, EntityKind};
@@ -130,12 +130,38 @@ pub fn build_contact_graph_with_surfaces(
         .filter(|(i, _)| matches!(entities[*i].class, "wall" | "floor"))
         .filter_map(|(_, s)| s.planes.first().copied())
         .collect();
+    // Counters (found from the map's unclaimed surface, graph/counters.rs) are solid from the
+    // floor to their top: an object's points inside one are the counter's front or top, bled
+    // onto by the object's label (a monitor's mask running down the counter to the floor).
+    let is_counter = |e: &GraphEntity| e.class == COUNTER_CLASS;
+    let counters: Vec<(usize, Shape)> = entities
+        .par_iter()
+        .enumerate()
+        .filter(|(_, e)| !is_layout(e) && is_counter(e))
+        .filter_map(|(i, e)| object_shape(e, &claiming, &[], false, params).map(|s| (i, s)))
+        .map(|(i, mut shape)| {
+            // Its top is where things stand on it: the median height of its points, not the
+            // highest (noise and the rims of what stands on it reach above).
+            let mut heights: Vec<f32> = shape.points.iter().map(|p| p.z).collect();
+            heights.sort_by(f32::total_cmp);
+            let top = heights[heights.len() / 2];
+            let bottom = shape.bbox.bottom_z().min(top);
+            shape.bbox.center.z = (top + bottom) / 2.0;
+            shape.bbox.size.z = top - bottom;
+            (i, shape)
+        })
+        .collect();
+    let solids: Vec<GravityBox> = counters
+        .iter()
+        .map(|(_, s)| counter_solid(&s.bbox))
+        .collect();
+    shaped.extend(counters);
     shaped.par_extend(
         entities
             .par_iter()
             .enumerate()
-            .filter(|(_, e)| !is_layout(e))
-            .filter_map(|(i, e)| object_shape(e, &claiming, params).map(|s| (i, s))),
+            .filter(|(_, e)| !is_layout(e) && !is_counter(e))
+            .filter_map(|(i, e)| object_shape(e, &claiming, &solids, true, params).map(|s| (i, s))),
     );
     // Entity order, as given: the graph's nodes and edges come out in it.
     shaped.sort_by_key(|(i, _)| *i);
@@ -157,7 +183,25 @@ pub fn build_contact_graph_with_surfaces(
             vertices: &s.points,
         })
         .collect();
-    let supports = infer_supports(&support_input, &params.support);
+    let mut supports = infer_supports(&support_input, &params.support);
+    // A counter stands on the floor, whatever share of the floor around it was seen.
+    let floor = shaped
+        .iter()
+        .position(|(i, _)| entities[*i].class == "floor");
+    if let Some(floor) = floor
+        && let Some(&plane) = shaped[floor].1.planes.first()
+    {
+        for (k, (i, _)) in shaped.iter().enumerate() {
+            if entities[*i].class == COUNTER_CLASS && supports[k].is_none() {
+                supports[k] = Some(SupportChoice::Below {
+                    parent: floor,
+                    plane,
+                    score: 0.0,
+                    registered: false,
+                });
+            }
+        }
+    }
 
     let mut boxes: Vec<GravityBox> = shaped.iter().map(|(_, s)| s.bbox).collect();
     let mut planes: Vec<Vec<Plane>> = shaped.iter().map(|(_, s)| s.planes.clone()).collect();
@@ -282,6 +326,25 @@ fn square_with_room(
     }
 }
 
+/// The class of the counters found from geometry (graph/counters.rs).
+pub const COUNTER_CLASS: &str = "counter";
+/// A counter claims the points of other objects within this distance (metres) of its solid:
+/// a voxel and a half, the reach of a label bleeding onto its front.
+const COUNTER_CLAIM_M: f32 = 0.03;
+
+/// The solid a counter with the box `top` (its top surface) stands for: from the floor to just
+/// under its top, grown by `COUNTER_CLAIM_M` at the sides.
+fn counter_solid(top: &GravityBox) -> GravityBox {
+    let bottom = 0.0;
+    let ceiling = top.top_z() - COUNTER_CLAIM_M;
+    GravityBox {
+        center: top.center.with_z((bottom + ceiling) / 2.0),
+        size: (top.size.truncate() + Vec2::splat(2.0 * COUNTER_CLAIM_M))
+            .extend((ceiling - bottom).max(0.0)),
+        yaw: top.yaw,
+    }
+}
+
 /// The middle of the room: the centre of the floor if there is one, else of everything.
 fn room_center(entities: &[GraphEntity]) -> Vec3 {
     let mean = |meshes: &mut dyn Iterator<Item = &TriMesh>| {
@@ -347,6 +410,8 @@ fn layout_shape(
 fn object_shape(
     entity: &GraphEntity,
     claiming: &[Plane],
+    solids: &[GravityBox],
+    largest_piece: bool,
     params: &ContactGraphParams,
 ) -> Option<Shape> {
     let surface = surface_points(entity.mesh, params.sample_spacing);
@@ -354,6 +419,7 @@ fn object_shape(
         claiming
             .iter()
             .any(|l| lies_on(l, p, n, params.layout_band))
+            || solids.iter().any(|s| s.contains(p, 0.0))
     };
     let (points, normals): (Vec<Vec3>, Vec<Vec3>) = surface
         .points
@@ -361,8 +427,13 @@ fn object_shape(
         .zip(&surface.normals)
         .filter(|(p, n)| !on_layout(**p, **n))
         .unzip();
-    // Stray pieces (label bleeding onto a neighbour) would stretch the box.
-    let keep = in_largest_cluster(&points, params.cluster_cell);
+    // Stray pieces (label bleeding onto a neighbour) would stretch the box. A counter's top is
+    // one piece already, seen in strips between what stands on it.
+    let keep = if largest_piece {
+        in_largest_cluster(&points, params.cluster_cell)
+    } else {
+        vec![true; points.len()]
+    };
     let (points, normals): (Vec<Vec3>, Vec<Vec3>) = points
         .into_iter()
         .zip(normals)

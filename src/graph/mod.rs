@@ -2,6 +2,7 @@
 
 pub mod build;
 pub mod contact_graph;
+pub mod counters;
 pub mod gravity;
 pub mod proximal;
 pub mod support;

@@ -270,6 +270,38 @@ fn support_of(
     if let Some((parent, _)) = wall {
         return Some(SupportChoice::Wall { parent });
     }
+    // A movable object high over the floor and nothing near under it: the highest furniture top
+    // under it holds it, however far below (a monitor whose stand was never seen stands on the
+    // counter, not on the floor 1.2 m down).
+    let floating = match best {
+        Some(SupportChoice::Below { parent, plane, .. }) => {
+            entities[parent].class == "floor"
+                && bottom - plane_height(&plane, c.bbox.center.truncate()) > params.max_gap
+        }
+        _ => true,
+    };
+    if c.movable && floating {
+        let under = entities
+            .iter()
+            .enumerate()
+            .filter(|(p, parent)| {
+                *p != child
+                    && parent.kind != EntityKind::Layout
+                    && parent.bbox.top_z() < bottom + params.above_tolerance
+                    && footprint.overlap_with_box(&parent.bbox) >= params.min_area
+            })
+            .max_by(|a, b| a.1.bbox.top_z().total_cmp(&b.1.bbox.top_z()));
+        if let Some((parent, holder)) = under {
+            let top = holder.bbox.top_z();
+            return Some(SupportChoice::Below {
+                parent,
+                plane: Plane::from_point_normal(Vec3::new(0.0, 0.0, top), Vec3::Z),
+                score: (1.0 - (bottom - top).abs().min(1.0))
+                    * footprint.overlap_with_box(&holder.bbox),
+                registered: true,
+            });
+        }
+    }
     // Nothing better: the floor, however far below (legs that were never seen).
     best
 }
@@ -473,6 +505,55 @@ mod tests {
             ),
             "{:?}",
             supports[7]
+        );
+    }
+
+    #[test]
+    fn a_monitor_whose_stand_was_not_seen_stands_on_the_counter_under_it() {
+        let floor = slab(Vec3::new(2.0, 2.0, -0.05), Vec3::new(4.0, 4.0, 0.1));
+        let counter = slab(Vec3::new(1.0, 3.5, 0.45), Vec3::new(2.0, 0.6, 0.9));
+        // The screen alone, 30 cm above the counter top.
+        let monitor = slab(Vec3::new(1.0, 3.5, 1.4), Vec3::new(0.6, 0.15, 0.4));
+        let up = |b: &GravityBox| Plane::from_point_normal(Vec3::new(0.0, 0.0, b.top_z()), Vec3::Z);
+        let planes = [vec![up(&floor)], vec![up(&counter)], vec![]];
+        let vertices = [vec![], top_vertices(&counter), vec![]];
+        let boxes = [floor, counter, monitor];
+        let classes = ["floor", "counter", "monitor"];
+        let entities: Vec<SupportEntity> = (0..3)
+            .map(|i| SupportEntity {
+                class: classes[i],
+                kind: if i == 0 {
+                    EntityKind::Layout
+                } else {
+                    EntityKind::Rigid
+                },
+                movable: i == 2,
+                bbox: boxes[i],
+                planes: &planes[i],
+                vertices: &vertices[i],
+            })
+            .collect();
+        let supports = infer_supports(&entities, &SupportParams::default());
+        match supports[2] {
+            Some(SupportChoice::Below { parent, plane, .. }) => {
+                assert_eq!(parent, 1, "on the counter, not the floor");
+                assert!((plane_height(&plane, Vec2::ZERO) - 0.9).abs() < 1e-4);
+            }
+            other => panic!("{other:?}"),
+        }
+        // Not movable (a wall cabinet with no wall near): the floor, as before.
+        let fixed: Vec<SupportEntity> = entities
+            .into_iter()
+            .map(|e| SupportEntity {
+                movable: false,
+                ..e
+            })
+            .collect();
+        let supports = infer_supports(&fixed, &SupportParams::default());
+        assert!(
+            matches!(supports[2], Some(SupportChoice::Below { parent: 0, .. })),
+            "{:?}",
+            supports[2]
         );
     }
 

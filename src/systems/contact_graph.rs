@@ -8,11 +8,14 @@ use glam::Affine3A;
 
 use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh};
 use crate::graph::ContactGraph;
-use crate::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces};
+use crate::graph::build::{
+    COUNTER_CLASS, ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces,
+};
+use crate::graph::counters::{CounterParams, find_counter_tops};
 use crate::graph::gravity::{GravityReport, camera_up_hint, resolve_gravity};
 use crate::map::extract_mesh;
 use crate::systems::ingest::{InputSequence, StageError};
-use crate::systems::panoptic_mapping::PanopticMap;
+use crate::systems::panoptic_mapping::{PanopticMap, PanopticSurface};
 use crate::systems::scene_graph::attach_contact_graph;
 
 /// How the stage finds gravity.
@@ -35,7 +38,7 @@ fn contact_graph_stage(world: &mut World) {
         return;
     }
     let mut query = world.query::<(Entity, &SceneEntity, &Panoptic, &SegmentMesh)>();
-    let entities: Vec<(Entity, String, Panoptic, crate::geometry::TriMesh)> = query
+    let mut entities: Vec<(Entity, String, Panoptic, crate::geometry::TriMesh)> = query
         .iter(world)
         .map(|(e, id, p, m)| (e, id.0.clone(), p.clone(), m.0.clone()))
         .collect();
@@ -60,6 +63,8 @@ fn contact_graph_stage(world: &mut World) {
     );
     let aligned_from_world =
         Affine3A::from_mat4(glam::Mat4::from_cols_array(&gravity.aligned_from_world));
+    let voxel_size = map.0.tsdf.voxel_size;
+    entities.extend(spawn_counters(world, aligned_from_world, &entities));
     let aligned: Vec<crate::geometry::TriMesh> = entities
         .iter()
         .map(|(_, _, _, m)| m.transformed(&aligned_from_world))
@@ -76,7 +81,7 @@ fn contact_graph_stage(world: &mut World) {
         .collect();
     let built = build_contact_graph_with_surfaces(
         &graph_entities,
-        &ContactGraphParams::for_voxel(map.0.tsdf.voxel_size),
+        &ContactGraphParams::for_voxel(voxel_size),
     );
     let graph = built.graph;
     let by_id: HashMap<String, Entity> = entities
@@ -100,6 +105,63 @@ fn contact_graph_stage(world: &mut World) {
     }
     world.insert_resource(SceneContactGraph { graph, gravity });
 }
+
+/// Finds the counter tops among the map's surface no entity claims (graph/counters.rs) and
+/// spawns a `counter` entity for each, its mesh the top's points (world frame, no triangles: the
+/// map saw a surface, not a solid; the contact graph stretches its box down to the floor).
+fn spawn_counters(
+    world: &mut World,
+    aligned_from_world: Affine3A,
+    entities: &[(Entity, String, Panoptic, crate::geometry::TriMesh)],
+) -> Vec<(Entity, String, Panoptic, crate::geometry::TriMesh)> {
+    let Some(surface) = world.get_resource::<PanopticSurface>() else {
+        return Vec::new();
+    };
+    let unclaimed: Vec<glam::Vec3> = surface
+        .voxels
+        .iter()
+        .filter(|(_, entity)| *entity == 0)
+        .map(|(p, _)| aligned_from_world.transform_point3(*p))
+        .collect();
+    let world_from_aligned = aligned_from_world.inverse();
+    let tops = find_counter_tops(&unclaimed, &CounterParams::default());
+    let mut spawned = Vec::new();
+    let mut k = 0;
+    for top in tops {
+        // The next free id (a segmenter never names a counter, but stay safe).
+        let id = loop {
+            k += 1;
+            let id = format!("counter_{k}");
+            if !entities.iter().any(|(_, other, _, _)| *other == id) {
+                break id;
+            }
+        };
+        let panoptic = Panoptic {
+            instance: COUNTER_INSTANCE_BASE + k,
+            class: COUNTER_CLASS.into(),
+            kind: crate::classes::EntityKind::Rigid,
+        };
+        let mesh = crate::geometry::TriMesh {
+            positions: top
+                .iter()
+                .map(|p| world_from_aligned.transform_point3(*p))
+                .collect(),
+            triangles: Vec::new(),
+        };
+        let entity = world
+            .spawn((
+                SceneEntity(id.clone()),
+                panoptic.clone(),
+                SegmentMesh(mesh.clone()),
+            ))
+            .id();
+        spawned.push((entity, id, panoptic, mesh));
+    }
+    spawned
+}
+
+/// Counters' instance numbers start here, clear of the map's instances.
+const COUNTER_INSTANCE_BASE: u32 = 100_000;
 
 /// Adds the ContactGraph stage.
 pub struct ContactGraphPlugin;
