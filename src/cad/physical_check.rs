@@ -469,12 +469,10 @@ fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> 
         pose.matrix3.y_axis,
         pose.matrix3.z_axis,
     ];
-    let Some(k) = (0..3).max_by(|&a, &b| {
+    let k = (0..3).max_by(|&a, &b| {
         let along = |v: glam::Vec3A| Vec3::from(v).normalize_or_zero().dot(away).abs();
         along(axes[a]).total_cmp(&along(axes[b]))
-    }) else {
-        return None;
-    };
+    })?;
     let extent = solid
         .pieces
         .iter()
