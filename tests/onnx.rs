@@ -110,8 +110,8 @@ fn the_survey_estimates_gravity_within_2_degrees_and_finds_the_floor() {
 }
 
 #[test]
-fn the_kitchen_reconstructs_with_the_table_on_the_floor_chairs_and_two_cups_on_it_and_exports_load()
-{
+fn the_kitchen_reconstructs_with_table_chairs_cups_and_a_counter_holding_the_monitors_and_exports_load()
+ {
     let out = tempfile::tempdir().expect("tempdir");
     let input = common::shared_data("rgbd/7scenes-redkitchen");
     let (code, _, stderr) = common::iscene(
@@ -170,6 +170,33 @@ fn the_kitchen_reconstructs_with_the_table_on_the_floor_chairs_and_two_cups_on_i
     // The table has two mugs; the second is seen by the detector in under half the frames and
     // only stays apart from the table because cut-out segments vote twice (MapperParams).
     assert!(cups_on_table >= 2, "{cups_on_table} cups on the table");
+    // The counter, found from geometry (no segmenter here has the class): on the floor, its top
+    // at counter height, at least 1.5 m long, and the monitors whose stands were never seen on it.
+    let counters: Vec<&str> = of_class("counter")
+        .into_iter()
+        .filter(|c| parent(c["id"].as_str().unwrap_or("")).as_deref() == Some("floor"))
+        .filter(|c| {
+            let b = &c["box"];
+            let top = b["center"][2].as_f64().unwrap_or(0.0) + height(c) / 2.0;
+            let long = b["size"][0]
+                .as_f64()
+                .unwrap_or(0.0)
+                .max(b["size"][1].as_f64().unwrap_or(0.0));
+            (0.8..1.0).contains(&top) && long >= 1.5
+        })
+        .filter_map(|c| c["id"].as_str())
+        .collect();
+    assert!(!counters.is_empty(), "{:?}", of_class("counter"));
+    let monitors_on_counter = of_class("monitor")
+        .into_iter()
+        .filter(|m| {
+            parent(m["id"].as_str().unwrap_or("")).is_some_and(|p| counters.contains(&p.as_str()))
+        })
+        .count();
+    assert!(
+        monitors_on_counter >= 2,
+        "{monitors_on_counter} monitors on the counter"
+    );
     for export in ["scene.urdf", "scene.xml", "scene.glb", "occupancy.pgm"] {
         assert!(out.path().join(export).is_file(), "{export} written");
     }
@@ -181,7 +208,7 @@ fn the_kitchen_reconstructs_with_the_table_on_the_floor_chairs_and_two_cups_on_i
 
 /// Issue 6's loaders on the real kitchen's exports: check_urdf silent with every link, MuJoCo
 /// loads the URDF and the MJCF, PyBullet every link, the Khronos validator no error. (Whether the
-/// scene rests is not asserted: objects on the counter, which is no entity, do not.)
+/// scene rests is not asserted: it does not yet, see the README.)
 fn exports_load_in_the_validators(out: &Path, links: usize) {
     let python = common::validator(".venv-validators/bin/python");
     let urdf = out.join("scene.urdf");

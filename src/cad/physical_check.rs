@@ -524,13 +524,15 @@ mod tests {
     use super::*;
     use crate::cad::database::CadDatabase;
 
-    fn placed(db: &CadDatabase, id: &str, at: Vec3) -> PlacedSolid {
-        let m = db
-            .models()
+    fn model_of<'a>(db: &'a CadDatabase, id: &str) -> &'a DatabaseModel {
+        db.models()
             .iter()
             .find(|m| m.model.id == id)
-            .expect("model");
-        PlacedSolid::new(m, &Affine3A::from_translation(at))
+            .expect("model")
+    }
+
+    fn placed(db: &CadDatabase, id: &str, at: Vec3) -> PlacedSolid {
+        PlacedSolid::new(model_of(db, id), &Affine3A::from_translation(at))
     }
 
     #[test]
@@ -559,12 +561,7 @@ mod tests {
     #[test]
     fn the_search_moves_a_sunk_cup_to_a_candidate_that_rests_on_the_table_and_snaps_it() {
         let db = CadDatabase::parametric();
-        let model = |id: &str| {
-            db.models()
-                .iter()
-                .find(|m| m.model.id == id)
-                .expect("model")
-        };
+        let model = |id: &str| model_of(&db, id);
         let table = model("table_01");
         let top = table.model.size.z;
         let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
@@ -602,12 +599,7 @@ mod tests {
     #[test]
     fn two_cabinets_overlapping_deep_are_shrunk_to_the_middle_but_a_movable_object_is_not_moved() {
         let db = CadDatabase::parametric();
-        let model = |id: &str| {
-            db.models()
-                .iter()
-                .find(|m| m.model.id == id)
-                .expect("model")
-        };
+        let model = |id: &str| model_of(&db, id);
         let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
         let cabinet = model("cabinet_01");
         let width = cabinet.model.size.x;

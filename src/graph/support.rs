@@ -422,6 +422,29 @@ mod tests {
         v
     }
 
+    /// The floor (layout), a fixed parent and a movable child, in that order.
+    fn floor_parent_child<'a>(
+        classes: &[&'a str; 3],
+        boxes: &[GravityBox; 3],
+        planes: &'a [Vec<Plane>; 3],
+        vertices: &'a [Vec<Vec3>; 3],
+    ) -> Vec<SupportEntity<'a>> {
+        (0..3)
+            .map(|i| SupportEntity {
+                class: classes[i],
+                kind: if i == 0 {
+                    EntityKind::Layout
+                } else {
+                    EntityKind::Rigid
+                },
+                movable: i == 2,
+                bbox: boxes[i],
+                planes: &planes[i],
+                vertices: &vertices[i],
+            })
+            .collect()
+    }
+
     #[test]
     fn a_cup_rests_on_the_table_a_wall_cabinet_hangs_and_an_occluded_top_is_registered() {
         let floor = slab(Vec3::new(2.0, 2.0, -0.05), Vec3::new(4.0, 4.0, 0.1));
@@ -519,20 +542,7 @@ mod tests {
         let vertices = [vec![], top_vertices(&counter), vec![]];
         let boxes = [floor, counter, monitor];
         let classes = ["floor", "counter", "monitor"];
-        let entities: Vec<SupportEntity> = (0..3)
-            .map(|i| SupportEntity {
-                class: classes[i],
-                kind: if i == 0 {
-                    EntityKind::Layout
-                } else {
-                    EntityKind::Rigid
-                },
-                movable: i == 2,
-                bbox: boxes[i],
-                planes: &planes[i],
-                vertices: &vertices[i],
-            })
-            .collect();
+        let entities = floor_parent_child(&classes, &boxes, &planes, &vertices);
         let supports = infer_supports(&entities, &SupportParams::default());
         match supports[2] {
             Some(SupportChoice::Below { parent, plane, .. }) => {
@@ -580,20 +590,7 @@ mod tests {
         let vertices = [vec![], table_vertices, top_vertices(&book)];
         let boxes = [floor, table, book];
         let classes = ["floor", "table", "book"];
-        let entities: Vec<SupportEntity> = (0..3)
-            .map(|i| SupportEntity {
-                class: classes[i],
-                kind: if i == 0 {
-                    EntityKind::Layout
-                } else {
-                    EntityKind::Rigid
-                },
-                movable: i == 2,
-                bbox: boxes[i],
-                planes: &planes[i],
-                vertices: &vertices[i],
-            })
-            .collect();
+        let entities = floor_parent_child(&classes, &boxes, &planes, &vertices);
         let supports = infer_supports(&entities, &SupportParams::default());
         let Some(SupportChoice::Below {
             parent,

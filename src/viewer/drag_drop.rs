@@ -1,7 +1,8 @@
 //! Moving objects with the mouse: a left drag from a movable object (a cup, a chair, a box) to a
 //! surface puts it there. It keeps its turn and is let go just above the point under the
 //! pointer; rapier lets it fall and settle, everything else held still, so it lands flat on the
-//! surface, or tips off an edge it was dropped over. It then hangs from the link it rests on: the
+//! surface, or tips off an edge it was dropped over, and the viewer plays that fall back. It
+//! then hangs from the link it rests on: the
 //! support edge of the contact graph and the kinematic tree change (a cup dragged from the table
 //! to the counter is the counter's child). While the button is held, a box shows where the object
 //! would land (red where it would be refused). A drop that would sink it into something is refused
