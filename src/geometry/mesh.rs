@@ -125,14 +125,7 @@ impl TriMesh {
 
     /// A closed box spanning `min..max`.
     pub fn cuboid(min: Vec3, max: Vec3) -> TriMesh {
-        let corner = |i: usize| {
-            Vec3::new(
-                if i & 1 == 0 { min.x } else { max.x },
-                if i & 2 == 0 { min.y } else { max.y },
-                if i & 4 == 0 { min.z } else { max.z },
-            )
-        };
-        let positions = (0..8).map(corner).collect();
+        let positions = box_corners(min, max).to_vec();
         // Quads as corner indices, each counter-clockwise seen from outside.
         const QUADS: [[u32; 4]; 6] = [
             [0, 2, 3, 1], // -z
@@ -236,6 +229,17 @@ impl TriMesh {
         let rotation = glam::Quat::from_rotation_arc(Vec3::Z, axis / length.max(f32::EPSILON));
         upright.transformed(&Affine3A::from_rotation_translation(rotation, from))
     }
+}
+
+/// The 8 corners of the box `min..max`; corner `i` takes max on x, y, z for bits 1, 2, 4 of `i`.
+pub fn box_corners(min: Vec3, max: Vec3) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { min.x } else { max.x },
+            if i & 2 == 0 { min.y } else { max.y },
+            if i & 4 == 0 { min.z } else { max.z },
+        )
+    })
 }
 
 #[cfg(test)]

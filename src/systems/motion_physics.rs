@@ -12,6 +12,7 @@ use bevy_rapier3d::prelude::*;
 use glam::Affine3A;
 use serde::Serialize;
 
+use crate::geometry::mesh::box_corners;
 use crate::kinematics::rest_test::{
     MAX_START_PENETRATION_M, REST_STEP_S, rest_bodies, start_penetrations,
 };
@@ -231,14 +232,9 @@ fn link_bounds(tree: &KinematicTree, link: usize) -> Option<(Vec3, Vec3)> {
 
 /// The world box of the local box `lo..hi` at `world_from_local`.
 fn world_box(world_from_local: Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
-    (0..8)
-        .map(|i| {
-            world_from_local.transform_point3(Vec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            ))
-        })
+    box_corners(lo, hi)
+        .iter()
+        .map(|c| world_from_local.transform_point3(*c))
         .fold((Vec3::MAX, Vec3::MIN), |(a, b), c| (a.min(c), b.max(c)))
 }
 

@@ -13,6 +13,7 @@ use bevy::prelude::*;
 use glam::Affine3A;
 
 use crate::components::{OrientedBox, SceneEntity};
+use crate::geometry::mesh::box_corners;
 use crate::kinematics::ray_pick::{pick_link, pick_link_where};
 use crate::kinematics::rest_test::REST_STEP_S;
 use crate::kinematics::tree::KinematicTree;
@@ -206,15 +207,10 @@ fn support_under(
     world_from_link: Affine3A,
 ) -> Option<usize> {
     let (lo, hi) = view.local_bounds(link)?;
-    let corners = (0..8).map(|i| {
-        let pick = |bit: usize, a: f32, b: f32| if i & bit == 0 { a } else { b };
-        world_from_link.transform_point3(Vec3::new(
-            pick(1, lo.x, hi.x),
-            pick(2, lo.y, hi.y),
-            pick(4, lo.z, hi.z),
-        ))
-    });
-    let (min, max) = corners.fold((Vec3::MAX, Vec3::MIN), |(a, b), c| (a.min(c), b.max(c)));
+    let corners = box_corners(lo, hi).map(|c| world_from_link.transform_point3(c));
+    let (min, max) = corners
+        .into_iter()
+        .fold((Vec3::MAX, Vec3::MIN), |(a, b), c| (a.min(c), b.max(c)));
     let centre = ((min + max) / 2.0).with_z(min.z + 0.02);
     pick_link_where(tree, centre, Vec3::NEG_Z, |i| {
         !view.descends_from(i, link)
