@@ -25,6 +25,9 @@ echo "== ONNX Runtime for the onnx segmentation backend (from the PyPI wheel)"
 echo "== validators (check_urdf, MuJoCo, PyBullet, Khronos glTF validator)"
 ./scripts/setup-validators.sh
 
+echo "== Sweet Home 3D furniture catalogues (Debian packages, unpacked into .sh3d)"
+./scripts/setup-sh3d.sh
+
 echo "== viewer runtime: Mesa's software Vulkan driver and Xvfb"
 ./scripts/setup-viewer.sh
 

@@ -126,6 +126,11 @@ struct ReconstructArgs {
     /// only compared with, in report.json).
     #[arg(long)]
     estimate_gravity: bool,
+    /// CAD database folder to replace objects from, instead of the built-in parametric library
+    /// (`iscene cad import` writes one; `iscene cad generate --into DB` adds the parametric
+    /// models to it). The models used are copied into OUT/cad.
+    #[arg(long, value_name = "DB")]
+    cad: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -194,6 +199,21 @@ enum CadCommand {
         #[arg(long, default_value = "assets/cad")]
         into: PathBuf,
     },
+    /// Import third-party models into a database folder (added to what it holds), for
+    /// `reconstruct --cad DB`.
+    Import {
+        /// The catalogue format. sh3d: Sweet Home 3D furniture (a *.sh3f catalogue, sweethome3d.jar,
+        /// or a folder of them such as /usr/share/sweethome3d/furniture).
+        format: ImportFormat,
+        path: PathBuf,
+        #[arg(long)]
+        into: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum ImportFormat {
+    Sh3d,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -266,6 +286,7 @@ fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<Pat
         models: None,
         fusion: InstanceFusion::Joint,
         estimate_gravity: false,
+        cad: None,
         progress,
     })?;
     eprintln!(
@@ -375,6 +396,17 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 into.display()
             );
         }
+        Some(Command::Cad {
+            command:
+                CadCommand::Import {
+                    format: ImportFormat::Sh3d,
+                    path,
+                    into,
+                },
+        }) => {
+            let summary = iscene::cad::import::import_sh3d(&path, &into)?;
+            println!("{summary}");
+        }
         Some(Command::Bench {
             command:
                 BenchCommand::Tsdf {
@@ -481,6 +513,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     models: None,
                     baseline: None,
                     estimate_gravity: false,
+                    cad: None,
                 },
             };
             let out = args.out.unwrap_or_else(|| {
@@ -509,6 +542,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     Some(Baseline::VoxbloxPlusPlus) => InstanceFusion::Voxblox,
                 },
                 estimate_gravity: args.estimate_gravity,
+                cad: args.cad,
                 progress: interactive,
             };
             let r = reconstruct(&options)?;

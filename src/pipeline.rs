@@ -7,6 +7,8 @@ use std::time::Instant;
 use bevy::prelude::*;
 use serde::Serialize;
 
+use crate::cad::database::CadDatabase;
+use crate::cad::export::write_scene_models;
 use crate::error::{InputError, IsceneError};
 use crate::export::{write_occupancy, write_tree_exports};
 use crate::graph::gravity::GravityReport;
@@ -18,7 +20,7 @@ use crate::io::write_sequence::write_text;
 use crate::panoptic::{InstanceFusion, MapperParams};
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
-use crate::systems::cad_replacement::CadReport;
+use crate::systems::cad_replacement::{CadLibrary, CadReport};
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::kinematic_tree::SceneKinematicTree;
@@ -46,6 +48,9 @@ pub struct ReconstructOptions {
     pub fusion: InstanceFusion,
     /// Ignore the sequence's gravity file and estimate gravity from the map.
     pub estimate_gravity: bool,
+    /// A CAD database folder (`iscene cad generate` / `iscene cad import`) that replacement
+    /// matches against, instead of the built-in parametric library.
+    pub cad: Option<PathBuf>,
     pub progress: bool,
 }
 
@@ -180,6 +185,12 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         }
         Some(p) => (p.clone(), false),
     };
+    // Read before the long stages, so a broken database fails at once.
+    let cad_library = options
+        .cad
+        .as_deref()
+        .map(|dir| CadDatabase::from_folder(dir).map(std::sync::Arc::new))
+        .transpose()?;
     let mut sequence = Sequence::open(&sequence_dir)?;
     if let Some((start, end, step)) = options.frames {
         sequence.select(start, end, step);
@@ -215,6 +226,9 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     app.insert_resource(GravityConfig {
         estimate: options.estimate_gravity,
     });
+    if let Some(db) = &cad_library {
+        app.insert_resource(CadLibrary(db.clone()));
+    }
     app.world_mut().run_schedule(Reconstruct);
     if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
         return Err(err);
@@ -273,6 +287,9 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             &scene.graph.to_json(),
         )?;
         outputs.push("contact_graph.json".into());
+        if let Some(db) = &cad_library {
+            outputs.extend(write_scene_models(staged.path(), &scene.graph, db)?);
+        }
     }
     let tree = app
         .world()

@@ -59,12 +59,12 @@ pub struct SimulationSummary {
 
 /// The live world of `graph`: its entities, their links (CAD models from the parametric
 /// library) and the robot at `start` (default: the most open spot of the floor).
-pub fn simulation_app(graph: &ContactGraph, task: &Task) -> Result<App, String> {
+pub fn simulation_app(graph: &ContactGraph, task: &Task, db: &CadDatabase) -> Result<App, String> {
     let mut app = App::new();
     app.add_plugins(SimulationPlugin);
     let world = app.world_mut();
     spawn_contact_graph(world, graph)?;
-    spawn_node_links(world, graph, Some(&CadDatabase::parametric()));
+    spawn_node_links(world, graph, Some(db));
     let pose = match task.start {
         Some(s) => BasePose {
             position: Vec2::from(s.position),
@@ -97,13 +97,16 @@ struct PreparedTask {
     goals: Vec<Fact>,
     plan: Option<Vec<String>>,
     actions: Vec<Action>,
+    /// The models the scene's links come from.
+    db: CadDatabase,
 }
 
 /// The task on the scene in `dir`, and the world built to read its start state (ready to run).
 fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneError> {
     let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
     let task = Task::load(task_path)?;
-    let mut app = simulation_app(&graph, &task).map_err(IsceneError::Internal)?;
+    let db = CadDatabase::for_scene(dir)?;
+    let mut app = simulation_app(&graph, &task, &db).map_err(IsceneError::Internal)?;
     let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
     let scene = symbolic_scene(&SceneView::new(&before), &place, holding.as_deref());
@@ -131,6 +134,7 @@ fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneEr
         goals,
         plan,
         actions,
+        db,
     };
     Ok((prepared, app))
 }
@@ -235,9 +239,8 @@ pub fn bench_simulation(
     for _ in 0..runs {
         let mut app = match first.take() {
             Some(app) => app,
-            None => {
-                simulation_app(&prepared.graph, &prepared.task).map_err(IsceneError::Internal)?
-            }
+            None => simulation_app(&prepared.graph, &prepared.task, &prepared.db)
+                .map_err(IsceneError::Internal)?,
         };
         let update_ms = run_actions(&mut app, &prepared.actions);
         let steps = app.world().resource::<SimulationTrace>().0.clone();

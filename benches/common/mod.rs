@@ -25,6 +25,7 @@ pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<Tri
         models: None,
         fusion: InstanceFusion::Joint,
         estimate_gravity: false,
+        cad: None,
         progress: false,
     })
     .expect("reconstruct");

@@ -1,14 +1,21 @@
 //! The CAD database the replacement stage matches against: every model pre-processed once into
 //! what matching and alignment ask of it (box, dominant planes, a BVH for closest points).
 
+use std::path::Path;
+
 use glam::Vec3;
 use parry3d::query::PointQueryWithLocation;
 use parry3d::shape::TrianglePointLocation;
 use rayon::prelude::*;
 
 use crate::cad::ParametricLibrary;
+use crate::cad::load::read_database;
 use crate::cad::model::CadModel;
+use crate::error::InputError;
 use crate::geometry::{Plane, TriMesh, plane::dominant_planes};
+
+/// The folder of a scene's output that holds the models it uses from a `--cad` database.
+pub const SCENE_MODELS: &str = "cad";
 
 /// At most this many planes describe a model (the object side keeps as many).
 pub const MAX_MODEL_PLANES: usize = 8;
@@ -129,12 +136,40 @@ impl CadDatabase {
         self.models.is_empty()
     }
 
-    /// The models of `class` with their indices.
+    /// The models of the database folder `dir` (`iscene cad import`, `iscene cad generate`).
+    pub fn from_folder(dir: &Path) -> Result<Self, InputError> {
+        let models = read_database(dir)?;
+        if models.is_empty() {
+            return Err(InputError::invalid(
+                dir.join("index.json"),
+                "the database holds no models",
+            ));
+        }
+        Self::from_models(models).map_err(|e| InputError::invalid(dir, e))
+    }
+
+    /// The models a reconstructed scene folder can refer to: the parametric library and the
+    /// models the reconstruction copied into `<dir>/cad` from the database it was given.
+    pub fn for_scene(dir: &Path) -> Result<Self, InputError> {
+        let mut models: Vec<CadModel> = ParametricLibrary::entries()
+            .iter()
+            .map(|e| e.model())
+            .collect();
+        let own = dir.join(SCENE_MODELS);
+        if own.join("index.json").exists() {
+            let copied = read_database(&own)?;
+            models.retain(|m| copied.iter().all(|c| c.id != m.id));
+            models.extend(copied);
+        }
+        Self::from_models(models).map_err(|e| InputError::invalid(&own, e))
+    }
+
     /// The model with id `id`.
     pub fn get(&self, id: &str) -> Option<&DatabaseModel> {
         self.models.iter().find(|m| m.model.id == id)
     }
 
+    /// The models of `class` with their indices.
     pub fn of_class<'a>(
         &'a self,
         class: &'a str,

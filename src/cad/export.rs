@@ -5,9 +5,11 @@ use std::path::Path;
 use glam::{Affine3A, Mat4};
 use serde::{Deserialize, Serialize};
 
+use crate::cad::database::{CadDatabase, SCENE_MODELS};
 use crate::cad::library::ParametricLibrary;
 use crate::cad::model::CadModel;
 use crate::error::IsceneError;
+use crate::graph::ContactGraph;
 use crate::io::atomic::write_file_atomically;
 use crate::io::gltf_write::{GltfNode, glb_bytes, nest};
 use crate::kinematics::JointSpec;
@@ -93,24 +95,71 @@ pub fn model_glb(model: &CadModel) -> Result<Vec<u8>, String> {
 
 /// Writes every model of the library, plus `index.json`, into `dir`.
 pub fn write_library(dir: &Path) -> Result<usize, IsceneError> {
+    let models: Vec<CadModel> = ParametricLibrary::entries()
+        .iter()
+        .map(|e| e.model())
+        .collect();
+    write_models(dir, &models, "iscene cad generate")
+}
+
+/// Writes `models` into the database folder `dir`: `<id>.glb` and `<id>.json` per model and
+/// `index.json` listing them (what [`crate::cad::load::read_database`] reads back).
+pub fn write_models(
+    dir: &Path,
+    models: &[CadModel],
+    generator: &str,
+) -> Result<usize, IsceneError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| IsceneError::io(format!("creating {}", dir.display()), e))?;
     let mut index = Vec::new();
-    for entry in ParametricLibrary::entries() {
-        let model = entry.model();
-        let glb = model_glb(&model)
+    for model in models {
+        let glb = model_glb(model)
             .map_err(|e| IsceneError::Internal(format!("{}: glTF: {e}", model.id)))?;
         write_file_atomically(&dir.join(format!("{}.glb", model.id)), &glb)?;
-        let meta = metadata(&model);
+        let meta = metadata(model);
         let json =
             serde_json::to_vec_pretty(&meta).map_err(|e| IsceneError::Internal(e.to_string()))?;
         write_file_atomically(&dir.join(format!("{}.json", model.id)), &json)?;
         index.push(serde_json::json!({ "id": model.id, "class": model.class, "articulated": model.is_articulated() }));
     }
-    let json = serde_json::to_vec_pretty(
-        &serde_json::json!({ "generator": "iscene cad generate", "models": index }),
-    )
-    .map_err(|e| IsceneError::Internal(e.to_string()))?;
+    let json =
+        serde_json::to_vec_pretty(&serde_json::json!({ "generator": generator, "models": index }))
+            .map_err(|e| IsceneError::Internal(e.to_string()))?;
     write_file_atomically(&dir.join("index.json"), &json)?;
     Ok(index.len())
+}
+
+/// Copies the models `graph` uses from `db` into `<scene_dir>/cad`, so that the scene folder
+/// alone gives its links their meshes (`CadDatabase::for_scene`); returns the files written.
+pub fn write_scene_models(
+    scene_dir: &Path,
+    graph: &ContactGraph,
+    db: &CadDatabase,
+) -> Result<Vec<String>, IsceneError> {
+    let mut used: Vec<CadModel> = Vec::new();
+    for node in &graph.nodes {
+        let Some(model) = node.cad.as_ref().and_then(|c| db.get(&c.model)) else {
+            continue;
+        };
+        if used.iter().all(|m| m.id != model.model.id) {
+            used.push(model.model.clone());
+        }
+    }
+    used.sort_by(|a, b| a.id.cmp(&b.id));
+    write_models(
+        &scene_dir.join(SCENE_MODELS),
+        &used,
+        "iscene reconstruct --cad",
+    )?;
+    let mut files: Vec<String> = used
+        .iter()
+        .flat_map(|m| {
+            [
+                format!("{SCENE_MODELS}/{}.glb", m.id),
+                format!("{SCENE_MODELS}/{}.json", m.id),
+            ]
+        })
+        .collect();
+    files.push(format!("{SCENE_MODELS}/index.json"));
+    Ok(files)
 }

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use glam::{Affine3A, Mat4, Vec3};
 use serde::Serialize;
 
-use crate::cad::database::CadDatabase;
+use crate::cad::database::{CadDatabase, DatabaseModel};
 use crate::cad::physical_check::{
     MIN_SUPPORT_AREA, PlacedSolid, layout_penetration, penetration_depth, support_area,
 };
@@ -32,6 +32,10 @@ pub struct CadObjectScore {
     /// Only for classes whose front matters, with the right class.
     pub yaw_error_deg: Option<f32>,
     pub alignment_error_m: Option<f32>,
+    /// The placed model's box against the true box: the largest relative difference of the
+    /// height and the two horizontal sides (longer with longer). `None` when not replaced or
+    /// the model is not in the database.
+    pub size_error: Option<f32>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -52,6 +56,9 @@ pub struct CadMetrics {
     /// on the parent model, and how many such edges there are.
     pub supports_passing: usize,
     pub supports_tested: usize,
+    /// Of the replaced objects with the right class: the placed model's box within 10% of the
+    /// true box in every side (issue 5's bar for a database of imported models only).
+    pub size_within_10_percent: Option<f64>,
     pub objects: Vec<CadObjectScore>,
 }
 
@@ -74,6 +81,7 @@ pub fn evaluate_cad(
     pred: &ContactGraph,
     truth: &ContactGraph,
     truth_from_pred: &Affine3A,
+    db: &CadDatabase,
 ) -> Option<CadMetrics> {
     if pred.nodes.iter().all(|n| n.cad.is_none()) {
         return None;
@@ -144,6 +152,12 @@ pub fn evaluate_cad(
             class_correct,
             yaw_error_deg,
             alignment_error_m: placement.map(|(_, c)| c.alignment_error),
+            size_error: placement.filter(|_| class_correct).and_then(|(n, c)| {
+                Some(size_error(
+                    placed_size(n, db.get(&c.model)?)?,
+                    Vec3::from(tn.bbox.size),
+                ))
+            }),
         });
     }
     let fraction = |hits: usize, total: usize| {
@@ -154,7 +168,8 @@ pub fn evaluate_cad(
         }
     };
     let yaws: Vec<f32> = scores.iter().filter_map(|s| s.yaw_error_deg).collect();
-    let physical = physical_figures(pred);
+    let physical = physical_figures(pred, db);
+    let sizes: Vec<f32> = scores.iter().filter_map(|s| s.size_error).collect();
     let errors: Vec<f64> = pred_objects
         .iter()
         .filter_map(|n| n.cad.as_ref().map(|c| f64::from(c.alignment_error)))
@@ -183,8 +198,36 @@ pub fn evaluate_cad(
         max_layout_penetration_m: physical.max_layout_penetration_m,
         supports_passing: physical.supports_passing,
         supports_tested: physical.supports_tested,
+        size_within_10_percent: (!sizes.is_empty())
+            .then(|| fraction(sizes.iter().filter(|e| **e <= 0.1).count(), sizes.len())),
         objects: scores,
     })
+}
+
+/// The box of `node`'s placed model in the world: (longer horizontal side, shorter, height).
+fn placed_size(node: &GraphNode, model: &DatabaseModel) -> Option<Vec3> {
+    let frame = placement_frame(node)?;
+    let size = model.model.size;
+    let mut horizontal = Vec::new();
+    let mut height = 0.0;
+    for (axis, length) in [(Vec3::X, size.x), (Vec3::Y, size.y), (Vec3::Z, size.z)] {
+        let edge = frame.transform_vector3(axis * length);
+        if edge.z.abs() > edge.truncate().length() {
+            height += edge.z.abs();
+        } else {
+            horizontal.push(edge.truncate().length());
+        }
+    }
+    let [a, b] = horizontal[..] else {
+        return None;
+    };
+    Some(Vec3::new(a.max(b), a.min(b), height))
+}
+
+/// The largest relative difference between `placed` (as [`placed_size`]) and the true box size.
+fn size_error(placed: Vec3, truth: Vec3) -> f32 {
+    let truth = Vec3::new(truth.x.max(truth.y), truth.x.min(truth.y), truth.z);
+    ((placed - truth).abs() / truth.max(Vec3::splat(1e-3))).max_element()
 }
 
 /// The physical figures of a graph's placements, measured on the models themselves.
@@ -195,11 +238,10 @@ struct PhysicalFigures {
     supports_tested: usize,
 }
 
-/// Places the graph's models (those of the built-in database; others are skipped) and measures
+/// Places the graph's models (those in `db`; others are skipped) and measures
 /// interpenetration, layout penetration and the support-area test of every support edge
 /// between two placed objects.
-fn physical_figures(graph: &ContactGraph) -> PhysicalFigures {
-    let db = CadDatabase::parametric();
+fn physical_figures(graph: &ContactGraph, db: &CadDatabase) -> PhysicalFigures {
     let solids: BTreeMap<&str, PlacedSolid> = graph
         .nodes
         .iter()
@@ -266,7 +308,13 @@ mod tests {
     #[test]
     fn the_truth_scores_perfectly_and_a_turned_chair_misses_its_yaw() {
         let truth = kitchen_truth();
-        let perfect = evaluate_cad(&truth, &truth, &Affine3A::IDENTITY).expect("placements");
+        let perfect = evaluate_cad(
+            &truth,
+            &truth,
+            &Affine3A::IDENTITY,
+            &CadDatabase::parametric(),
+        )
+        .expect("placements");
         assert_eq!(perfect.class_accuracy, 1.0);
         assert_eq!(perfect.model_accuracy, 1.0);
         assert_eq!(perfect.yaw_accuracy, Some(1.0));
@@ -279,6 +327,7 @@ mod tests {
         assert!(perfect.max_layout_penetration_m.expect("placed") < 0.002);
         assert!(perfect.supports_tested >= 4);
         assert_eq!(perfect.supports_passing, perfect.supports_tested);
+        assert_eq!(perfect.size_within_10_percent, Some(1.0));
         let mut turned = truth.clone();
         let chair = turned
             .nodes
@@ -292,7 +341,13 @@ mod tests {
             * Affine3A::from_translation((-frame.translation).into())
             * frame;
         cad.world_from_model = Mat4::from(spun).to_cols_array();
-        let scored = evaluate_cad(&turned, &truth, &Affine3A::IDENTITY).expect("placements");
+        let scored = evaluate_cad(
+            &turned,
+            &truth,
+            &Affine3A::IDENTITY,
+            &CadDatabase::parametric(),
+        )
+        .expect("placements");
         let chair = scored
             .objects
             .iter()

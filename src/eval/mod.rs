@@ -12,6 +12,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use crate::cad::database::CadDatabase;
 use crate::classes::{ClassTable, EntityKind};
 use crate::error::InputError;
 use crate::io::Sequence;
@@ -165,7 +166,8 @@ fn contact_metrics(
         .collect();
     let truth = seen_subgraph(&truth, seen);
     let truth_from_pred = aligned_from_world(&dir.join("report.json"))?.inverse();
-    let cad = evaluate_cad(&pred, &truth, &truth_from_pred);
+    let db = CadDatabase::for_scene(dir)?;
+    let cad = evaluate_cad(&pred, &truth, &truth_from_pred, &db);
     let contact = evaluate_contact_graph(&pred, &truth, &truth_from_pred, scores, unseen);
     Ok(Some((contact, cad)))
 }

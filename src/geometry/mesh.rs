@@ -48,6 +48,51 @@ impl TriMesh {
         out
     }
 
+    /// The mesh simplified by vertex clustering (Rossignac and Borrel): the vertices in each cube
+    /// of a `cell`-sized grid merge into their mean, and triangles that collapse or repeat are
+    /// dropped. The shape moves by at most a cell; a dense mesh keeps a few triangles per cell.
+    pub fn clustered(&self, cell: f32) -> TriMesh {
+        if !(cell.is_finite() && cell > 0.0) {
+            return self.clone();
+        }
+        let mut cluster_of_cell: std::collections::HashMap<glam::IVec3, u32> =
+            std::collections::HashMap::new();
+        let mut sums: Vec<(Vec3, f32)> = Vec::new();
+        let cluster: Vec<u32> = self
+            .positions
+            .iter()
+            .map(|p| {
+                let key = (*p / cell).floor().as_ivec3();
+                let next = sums.len() as u32;
+                let c = *cluster_of_cell.entry(key).or_insert(next);
+                if c == next {
+                    sums.push((Vec3::ZERO, 0.0));
+                }
+                sums[c as usize].0 += *p;
+                sums[c as usize].1 += 1.0;
+                c
+            })
+            .collect();
+        let mut seen = std::collections::HashSet::new();
+        let triangles = self
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| cluster[v as usize]))
+            .filter(|[a, b, c]| a != b && b != c && a != c)
+            .filter(|t| {
+                // The same three clusters in the same turning order are the same triangle.
+                let first = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+                seen.insert([t[first], t[(first + 1) % 3], t[(first + 2) % 3]])
+            })
+            .collect();
+        let clustered = TriMesh {
+            positions: sums.iter().map(|(sum, n)| *sum / *n).collect(),
+            triangles,
+        };
+        // Drop the clusters no remaining triangle uses.
+        clustered.filtered(|_| true)
+    }
+
     /// The mesh with every vertex mapped by `to_from_mesh`.
     pub fn transformed(&self, to_from_mesh: &Affine3A) -> TriMesh {
         TriMesh {
@@ -245,6 +290,39 @@ pub fn box_corners(min: Vec3, max: Vec3) -> [Vec3; 8] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn clustering_a_dense_sphere_keeps_its_shape_with_fewer_triangles() {
+        let profile: Vec<Vec2> = (0..=64)
+            .map(|i| {
+                let a = std::f32::consts::PI * i as f32 / 64.0;
+                Vec2::new(a.sin() * 0.5, 0.5 - a.cos() * 0.5)
+            })
+            .collect();
+        let sphere = TriMesh::lathe(Vec3::ZERO, &profile, 128);
+        let cell = 0.05;
+        let simple = sphere.clustered(cell);
+        assert!(simple.triangles.len() * 4 < sphere.triangles.len());
+        assert!(simple.triangles.len() > 200);
+        // Every vertex stays within a cell of the sphere, and the volume within a few percent.
+        let centre = Vec3::new(0.0, 0.0, 0.5);
+        for p in &simple.positions {
+            assert!(((*p - centre).length() - 0.5).abs() < cell, "{p}");
+        }
+        let (v0, v1) = (sphere.signed_volume(), simple.signed_volume());
+        assert!((v1 / v0 - 1.0).abs() < 0.05, "{v0} {v1}");
+        // No triangle is degenerate or repeated, and every vertex is used.
+        let mut used = vec![false; simple.positions.len()];
+        for t in &simple.triangles {
+            assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
+            t.iter().for_each(|&v| used[v as usize] = true);
+        }
+        assert!(used.iter().all(|u| *u));
+        // A cell as large as the mesh leaves a few triangles at most; a cell of zero changes
+        // nothing.
+        assert!(sphere.clustered(2.0).triangles.len() <= 8);
+        assert_eq!(sphere.clustered(0.0), sphere);
+    }
 
     #[test]
     fn cuboid_is_closed_and_outward() {

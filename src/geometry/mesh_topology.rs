@@ -83,6 +83,34 @@ impl TriMesh {
         (hull.signed_volume() > 1e-12).then_some(hull)
     }
 
+    /// The mesh split into at most `max_pieces` convex pieces by V-HACD (parry's), each the exact
+    /// hull of the mesh inside one part of the voxelised volume (`resolution` voxels along the
+    /// longest side), wound outwards. Works on meshes that are not closed: their surface voxels
+    /// are decomposed. Empty when nothing spans volume.
+    pub fn convex_decomposition(&self, resolution: u32, max_pieces: u32) -> Vec<TriMesh> {
+        use parry3d::transformation::vhacd::{VHACD, VHACDParameters};
+        if self.triangles.is_empty() {
+            return Vec::new();
+        }
+        let params = VHACDParameters {
+            resolution,
+            max_convex_hulls: max_pieces,
+            ..VHACDParameters::default()
+        };
+        let decomposition = VHACD::decompose(&params, &self.positions, &self.triangles, true);
+        decomposition
+            .compute_exact_convex_hulls(&self.positions, &self.triangles)
+            .into_iter()
+            .filter_map(|(positions, _)| {
+                TriMesh {
+                    positions,
+                    triangles: Vec::new(),
+                }
+                .convex_hull()
+            })
+            .collect()
+    }
+
     /// The edges a wireframe should show: borders (one triangle) and creases, where the two
     /// triangles' normals differ by more than `crease_deg`. The diagonals that triangulate a flat
     /// face are not among them. Edges are matched by shared vertex indices.
@@ -120,6 +148,45 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+
+    #[test]
+    fn a_u_shape_decomposes_into_convex_pieces_that_leave_its_gap_empty() {
+        // Two posts and a bridge: the hull of the whole fills the gap between the posts.
+        let mut u = TriMesh::cuboid(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.2, 0.2, 1.0));
+        u.append(&TriMesh::cuboid(
+            Vec3::new(0.8, 0.0, 0.0),
+            Vec3::new(1.0, 0.2, 1.0),
+        ));
+        u.append(&TriMesh::cuboid(
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.2, 1.2),
+        ));
+        let pieces = u.convex_decomposition(64, 16);
+        assert!(pieces.len() >= 2, "{} pieces", pieces.len());
+        let volume: f32 = pieces.iter().map(TriMesh::signed_volume).sum();
+        let solid = 2.0 * 0.2 * 0.2 * 1.0 + 1.0 * 0.2 * 0.2;
+        assert!(
+            volume > 0.8 * solid && volume < 1.5 * solid,
+            "{volume} against {solid}"
+        );
+        for piece in &pieces {
+            assert!(piece.signed_volume() > 0.0, "wound outwards");
+            let hull = piece.convex_hull().expect("volume");
+            assert!(
+                (hull.signed_volume() - piece.signed_volume()).abs() < 1e-4,
+                "convex"
+            );
+        }
+        // The middle of the gap lies in no piece.
+        let gap = Vec3::new(0.5, 0.1, 0.5);
+        for piece in &pieces {
+            let inside = piece.triangles.iter().enumerate().all(|(i, _)| {
+                let [a, _, _] = piece.triangle(i);
+                piece.face_normal(i).dot(gap - a) <= 0.0
+            });
+            assert!(!inside);
+        }
+    }
 
     #[test]
     fn two_boxes_are_two_closed_components() {

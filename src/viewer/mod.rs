@@ -32,6 +32,7 @@ use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
 
+use crate::cad::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
 use crate::graph::ContactGraph;
 use crate::replay::{Replay, load_replay};
@@ -119,7 +120,9 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
         Some(task) => task_world(&options.dir, task)?,
         None => {
             let graph = ContactGraph::load(&options.dir.join("contact_graph.json"))?;
-            let app = simulation_app(&graph, &Task::default()).map_err(IsceneError::Internal)?;
+            let db = CadDatabase::for_scene(&options.dir)?;
+            let app =
+                simulation_app(&graph, &Task::default(), &db).map_err(IsceneError::Internal)?;
             (Vec::new(), app)
         }
     };

@@ -1,7 +1,7 @@
 //! The parametric CAD library on disk: regenerating it gives the committed files byte for byte,
 //! and each .glb is a node tree of the model's parts with their joints.
 
-mod common;
+use crate::common;
 
 use iscene::cad::ParametricLibrary;
 use iscene::cad::export::ModelMetadata;

@@ -4,7 +4,7 @@
 //! shared data (models and 7-Scenes) and ONNX Runtime in .ort/ (scripts/setup-ort.sh, run by
 //! scripts/test.sh).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! Gravity from the map of a real room, without being told: 7-Scenes redkitchen's estimated up
 //! direction agrees with the dataset's gravity file.
 
-mod common;
+use crate::common;
 
 use iscene::graph::gravity::{angle_deg, camera_up_hint, estimate_up};
 use iscene::io::Sequence;

@@ -5,8 +5,9 @@
 
 use std::path::Path;
 
-mod common;
+use crate::common;
 
+use iscene::cad::database::CadDatabase;
 use iscene::graph::ContactGraph;
 use iscene::sim::actions::Action;
 use iscene::sim::task::Task;
@@ -136,7 +137,8 @@ fn placing_into_the_closed_microwave_is_refused_with_the_reason_and_nothing_move
     let gt = kitchen_truth(dir.path());
     let graph = ContactGraph::load(&gt.join("contact_graph.json")).expect("graph");
     let task: Task = serde_json::from_str(r#"{"goals": ["fridge_1 open"]}"#).expect("task");
-    let mut app = simulation_app(&graph, &task).expect("app");
+    let db = CadDatabase::for_scene(&gt).expect("database");
+    let mut app = simulation_app(&graph, &task, &db).expect("app");
     let world = app.world_mut();
     for action in [
         r#"{"action": "navigate", "to": "fridge_1"}"#,

@@ -1,5 +1,8 @@
 //! Helpers shared by the integration tests.
-#![allow(dead_code, reason = "each test binary uses a different subset")]
+#![allow(
+    dead_code,
+    reason = "some helpers serve only the viewer tests, built with the viewer feature"
+)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -103,9 +106,16 @@ pub fn render_and_map_every_second_frame(
     let seq = dir.join("seq");
     render_scene(scene, &seq, 300, no_noise);
     let out = dir.join("out");
+    map_every_second_frame(&seq, &out, None);
+    (seq, out)
+}
+
+/// Reconstructs every second frame of the rendered sequence `seq` into `out` with the oracle
+/// segmentation at 2 cm, replacing objects from the CAD database folder `cad` when given.
+pub fn map_every_second_frame(seq: &Path, out: &Path, cad: Option<PathBuf>) {
     iscene::pipeline::reconstruct(&iscene::pipeline::ReconstructOptions {
-        input: Some(seq.clone()),
-        out: out.clone(),
+        input: Some(seq.to_path_buf()),
+        out: out.to_path_buf(),
         frames: Some((0, None, 2)),
         voxel: 0.02,
         segmentation: iscene::pipeline::SegmentationChoice::Oracle,
@@ -113,10 +123,40 @@ pub fn render_and_map_every_second_frame(
         models: None,
         fusion: iscene::panoptic::InstanceFusion::Joint,
         estimate_gravity: false,
+        cad,
         progress: false,
     })
     .expect("reconstruct");
-    (seq, out)
+}
+
+/// `scene` rendered with realistic noise and reconstructed from every second frame (as
+/// [`render_and_map_every_second_frame`]), once per test run: the contact-graph, CAD and export
+/// tests each assert different things of the same reconstruction, and only read it. The folders
+/// live under Cargo's temporary folder for integration tests and are redone by every run.
+pub fn shared_noisy_map(scene: &str) -> (PathBuf, PathBuf) {
+    use std::collections::BTreeMap;
+    use std::sync::{Arc, Mutex, OnceLock};
+    type Cell = Arc<OnceLock<(PathBuf, PathBuf)>>;
+    static MAPS: Mutex<BTreeMap<String, Cell>> = Mutex::new(BTreeMap::new());
+    let cell = MAPS
+        .lock()
+        .expect("shared maps")
+        .entry(scene.to_string())
+        .or_default()
+        .clone();
+    // The lock is released before the work: other scenes are mapped meanwhile, and a second test
+    // asking for this scene waits in get_or_init.
+    cell.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join("noisy_maps")
+            .join(scene);
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).expect("clear an earlier run's map");
+        }
+        std::fs::create_dir_all(&dir).expect("map folder");
+        render_and_map_every_second_frame(scene, &dir, false)
+    })
+    .clone()
 }
 
 /// A validator installed by scripts/setup-validators.sh, or a panic that says to run it.

@@ -1,7 +1,7 @@
 //! Every kind of bad input gets exit code 2, a message naming the file and the problem, and no
 //! output folder.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

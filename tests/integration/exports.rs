@@ -14,7 +14,7 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 
 use iscene::cad::ParametricLibrary;
 use iscene::classes::ClassTable;
@@ -57,8 +57,7 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
     let check_urdf = PathBuf::from("check_urdf");
     let mut failures = Vec::new();
     for name in ["kitchen", "office", "living_room", "bedroom"] {
-        let dir = tempfile::tempdir().expect("tempdir");
-        let (_, out) = common::render_and_map_every_second_frame(name, dir.path(), false);
+        let (_, out) = common::shared_noisy_map(name);
         let graph = ContactGraph::load(&out.join("contact_graph.json")).expect("graph");
         let report: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(out.join("report.json")).expect("report.json"),

@@ -1,7 +1,7 @@
 //! The panoptic mapping against the ground truth of rendered scenes: quality, the ablation
 //! against the Voxblox++ baseline, determinism, and `iscene eval`'s handling of bad input.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
@@ -20,6 +20,7 @@ fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usiz
         models: None,
         fusion,
         estimate_gravity: false,
+        cad: None,
         progress: false,
     })
     .expect("reconstruct");

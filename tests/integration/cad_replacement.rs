@@ -9,7 +9,7 @@
 
 use std::collections::BTreeMap;
 
-mod common;
+use crate::common;
 
 use iscene::cad::ParametricLibrary;
 use iscene::classes::EntityKind;
@@ -20,8 +20,7 @@ use iscene::graph::ContactGraph;
 fn every_scene_gets_models_of_the_right_class_facing_the_right_way() {
     let mut failures = Vec::new();
     for name in ["kitchen", "office", "living_room", "bedroom"] {
-        let dir = tempfile::tempdir().expect("tempdir");
-        let (seq, out) = common::render_and_map_every_second_frame(name, dir.path(), false);
+        let (seq, out) = common::shared_noisy_map(name);
         let eval = evaluate_reconstruction(&out, &seq).expect("eval");
         let cad = eval.cad.expect("CAD metrics: the stage placed models");
         eprintln!(

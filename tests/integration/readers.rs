@@ -1,6 +1,6 @@
 //! The three real layouts read as they are: 7-Scenes (native), Open3D's trajectory.log, TUM.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

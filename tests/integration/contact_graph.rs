@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-mod common;
+use crate::common;
 
 use iscene::eval::evaluate_reconstruction;
 use iscene::graph::build::{ContactGraphParams, GraphEntity, build_contact_graph};
@@ -80,8 +80,7 @@ fn the_graph_of_ground_truth_meshes_is_the_scenes_graph() {
 /// proximal).
 #[test]
 fn the_kitchens_contact_graph_has_every_support_right() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let (seq, out) = common::render_and_map_every_second_frame("kitchen", dir.path(), false);
+    let (seq, out) = common::shared_noisy_map("kitchen");
     ContactGraph::load(&out.join("contact_graph.json")).expect("a valid contact_graph.json");
     let eval = evaluate_reconstruction(&out, &seq).expect("eval");
     let contact = eval.contact_graph.expect("contact-graph metrics");

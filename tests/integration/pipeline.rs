@@ -1,6 +1,6 @@
 //! The reconstruction app: its stage schedule, and the default run a newcomer starts with.
 
-mod common;
+use crate::common;
 
 use bevy::prelude::*;
 use iscene::systems::{Reconstruct, ReconstructionStage};

@@ -1,7 +1,7 @@
 //! Rendered sequences know their truth: depth back-projects onto the ground-truth meshes, the
 //! default camera path sees every object, noise follows its model, and a seed fixes every byte.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::Path;

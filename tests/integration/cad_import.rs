@@ -1,0 +1,205 @@
+//! Importing Sweet Home 3D's furniture catalogues (Debian packages `sweethome3d-furniture` and
+//! `sweethome3d`, unpacked by scripts/setup-sh3d.sh) into a CAD database, and replacing the
+//! rendered scenes' objects from those models alone (issue 5).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use crate::common;
+
+use iscene::cad::database::{CadDatabase, SCENE_MODELS};
+use iscene::cad::load::{read_database, read_model};
+use iscene::eval::evaluate_reconstruction;
+use iscene::graph::ContactGraph;
+
+/// Sweet Home 3D's shared folder as scripts/setup-sh3d.sh unpacks it.
+fn sweet_home_3d() -> PathBuf {
+    let dir = common::root().join(".sh3d/usr/share/sweethome3d");
+    assert!(
+        dir.join("sweethome3d.jar").is_file(),
+        "{} is missing: run scripts/setup-sh3d.sh (the README's test command does)",
+        dir.display()
+    );
+    dir
+}
+
+/// Imports the five plugin catalogues and the default one into `db` through the CLI.
+fn import_all(db: &Path) {
+    let sh3d = sweet_home_3d();
+    for source in [sh3d.join("furniture"), sh3d.join("sweethome3d.jar")] {
+        let (code, stdout, stderr) = common::iscene(
+            &[
+                "cad",
+                "import",
+                "sh3d",
+                source.to_str().expect("utf8"),
+                "--into",
+                db.to_str().expect("utf8"),
+            ],
+            &common::root(),
+        );
+        assert_eq!(code, 0, "{stdout}{stderr}");
+        eprint!("{stdout}");
+    }
+}
+
+#[test]
+fn sweet_home_3d_catalogues_import_in_the_canonical_frame_at_their_real_sizes() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let db = tmp.path().join("db");
+    import_all(&db);
+    let models = read_database(&db).expect("the imported database reads back");
+    let mut per_class: BTreeMap<&str, usize> = BTreeMap::new();
+    for m in &models {
+        *per_class.entry(m.class.as_str()).or_default() += 1;
+    }
+    eprintln!("{} models: {per_class:?}", models.len());
+    assert!(models.len() >= 250, "{} models", models.len());
+    for (class, at_least) in [
+        ("chair", 40),
+        ("table", 30),
+        ("sofa", 15),
+        ("bed", 15),
+        ("cabinet", 20),
+        ("shelf", 5),
+        ("fridge", 3),
+        ("oven", 3),
+        ("monitor", 3),
+        ("cup", 3),
+        ("bottle", 5),
+    ] {
+        let n = per_class.get(class).copied().unwrap_or(0);
+        assert!(n >= at_least, "{n} {class} models");
+    }
+
+    // The default catalogue's double bed: width 158, depth 208, height 70 cm.
+    let bed = read_model(&db, "sh3d_eteks_bed140x190").expect("the default double bed");
+    assert_eq!(bed.class, "bed");
+    assert!(
+        (bed.size - glam::Vec3::new(1.58, 2.08, 0.70))
+            .abs()
+            .max_element()
+            < 1e-5
+    );
+
+    // Every model stands on z = 0, centred, its mesh exactly filling its catalogue size.
+    for m in &models {
+        let (min, max) = m.parts[0].mesh.bounds().expect("a mesh");
+        assert!(
+            (max - min - m.size).abs().max_element() < 1e-3
+                && min.z.abs() < 1e-4
+                && (min.x + max.x).abs() < 1e-3
+                && (min.y + max.y).abs() < 1e-3,
+            "{}: bounds {min} {max}, size {}",
+            m.id,
+            m.size
+        );
+    }
+
+    // Sweet Home 3D models face +z; in the canonical frame they face -y, so a chair's back is
+    // at +y: the top quarter of almost every chair lies behind its centre (stools excepted).
+    let chairs: Vec<_> = models.iter().filter(|m| m.class == "chair").collect();
+    let backs_behind = chairs
+        .iter()
+        .filter(|m| {
+            let mesh = &m.parts[0].mesh;
+            let top: Vec<_> = mesh
+                .positions
+                .iter()
+                .filter(|p| p.z > 0.75 * m.size.z)
+                .collect();
+            top.iter().map(|p| p.y).sum::<f32>() / top.len() as f32 > 0.0
+        })
+        .count();
+    assert!(
+        backs_behind * 10 >= chairs.len() * 9,
+        "{backs_behind} of {} chairs have their back behind",
+        chairs.len()
+    );
+
+    // Importing again replaces the models rather than adding copies.
+    import_all(&db);
+    assert_eq!(read_database(&db).expect("reads").len(), models.len());
+}
+
+#[test]
+fn a_broken_catalogue_is_refused_with_its_name() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let bad = tmp.path().join("broken.sh3f");
+    std::fs::write(&bad, b"not a zip").expect("write");
+    let db = tmp.path().join("db");
+    let (code, _, stderr) = common::iscene(
+        &[
+            "cad",
+            "import",
+            "sh3d",
+            bad.to_str().expect("utf8"),
+            "--into",
+            db.to_str().expect("utf8"),
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("broken.sh3f"), "{stderr}");
+    assert!(!db.exists(), "nothing written");
+}
+
+/// Every rendered scene reconstructed (every second frame, noise-free depth, ground-truth
+/// segmentation) with a database of imported Sweet Home 3D models only: each object gets a
+/// model of its class, the placed model's box is within 10% of the object's true size for at
+/// least 80% of objects, and the scene folder carries the models it uses.
+#[test]
+fn with_only_sweet_home_3d_models_objects_get_models_of_their_class_and_true_size() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let db = tmp.path().join("db");
+    import_all(&db);
+    let (mut sized, mut scored, mut right_class, mut objects) = (0, 0, 0, 0);
+    for name in ["kitchen", "office", "living_room", "bedroom"] {
+        let (seq, out) = (
+            tmp.path().join(name),
+            tmp.path().join(format!("{name}_out")),
+        );
+        common::render_scene(name, &seq, 300, true);
+        common::map_every_second_frame(&seq, &out, Some(db.clone()));
+        let eval = evaluate_reconstruction(&out, &seq).expect("eval");
+        let cad = eval.cad.expect("CAD metrics");
+        for o in &cad.objects {
+            eprintln!(
+                "{name} {}: {:?} size error {:?}",
+                o.truth, o.model, o.size_error
+            );
+        }
+        objects += cad.objects.len();
+        right_class += cad.objects.iter().filter(|o| o.class_correct).count();
+        scored += cad
+            .objects
+            .iter()
+            .filter(|o| o.size_error.is_some())
+            .count();
+        sized += cad
+            .objects
+            .iter()
+            .filter(|o| o.size_error.is_some_and(|e| e <= 0.1))
+            .count();
+        // Only imported models, all of them copied beside the scene.
+        let graph = ContactGraph::load(&out.join("contact_graph.json")).expect("graph");
+        let scene_db = CadDatabase::for_scene(&out).expect("the scene's models");
+        for node in &graph.nodes {
+            if let Some(c) = &node.cad {
+                assert!(c.model.starts_with("sh3d_"), "{}: {}", node.id, c.model);
+                assert!(
+                    out.join(SCENE_MODELS)
+                        .join(format!("{}.glb", c.model))
+                        .is_file()
+                );
+                assert!(scene_db.get(&c.model).is_some());
+            }
+        }
+    }
+    eprintln!("class right {right_class} of {objects}; size within 10% {sized} of {scored}");
+    assert!(
+        right_class * 100 >= objects * 95,
+        "{right_class} of {objects}"
+    );
+    assert!(sized * 10 >= scored * 8, "{sized} of {scored} within 10%");
+}
