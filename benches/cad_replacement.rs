@@ -3,7 +3,9 @@
 //! build their contact graphs, take 20 of their objects; the database is the parametric library
 //! at several sizes per model (pre-processing it is timed on its own). Timed: ranking every
 //! object's candidates, then aligning the best ten of each; and, apart, the global physical
-//! check of the kitchen's aligned candidates (choice, separation, snapping, verdicts).
+//! check of the kitchen's aligned candidates (choice, separation, snapping, verdicts). With the
+//! Sweet Home 3D catalogues unpacked (scripts/setup-sh3d.sh), the same objects against the
+//! imported models as well.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -86,6 +88,38 @@ fn cad_replacement(c: &mut Criterion) {
             align_scene(&objects, &db, &ranked)
         })
     });
+
+    // The same objects against the imported Sweet Home 3D catalogues (scripts/setup-sh3d.sh),
+    // when they are there: real meshes, as convex pieces, instead of generated boxes.
+    let sh3d = Path::new(env!("CARGO_MANIFEST_DIR")).join(".sh3d/usr/share/sweethome3d");
+    if sh3d.join("sweethome3d.jar").is_file() {
+        let start = Instant::now();
+        let db_dir = dir.path().join("sh3d_db");
+        for source in [sh3d.join("furniture"), sh3d.join("sweethome3d.jar")] {
+            iscene::cad::import::import_sh3d(&source, &db_dir).expect("import");
+        }
+        let imported = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let db = CadDatabase::from_folder(&db_dir).expect("imported database");
+        eprintln!(
+            "importing Sweet Home 3D: {imported:.1} s; reading and pre-processing its {} models: {:.3} s",
+            db.len(),
+            start.elapsed().as_secs_f64()
+        );
+        let name = format!(
+            "cad_replacement_{}_objects_{}_sweet_home_3d_models",
+            objects.len(),
+            db.len()
+        );
+        c.bench_function(&name, |b| {
+            b.iter(|| {
+                let ranked = rank_scene(&objects, &db);
+                align_scene(&objects, &db, &ranked)
+            })
+        });
+    } else {
+        eprintln!("no Sweet Home 3D catalogues in .sh3d: run scripts/setup-sh3d.sh to bench them");
+    }
 
     let (kitchen, points) = &scenes[0];
     let library = CadDatabase::parametric();

@@ -164,6 +164,12 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         )
         .into());
     }
+    // Read before rendering or mapping, so a broken database fails at once.
+    let cad_library = options
+        .cad
+        .as_deref()
+        .map(|dir| CadDatabase::from_folder(dir).map(std::sync::Arc::new))
+        .transpose()?;
     let mut timings = Vec::new();
     let (sequence_dir, rendered) = match &options.input {
         None => (
@@ -185,12 +191,6 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         }
         Some(p) => (p.clone(), false),
     };
-    // Read before the long stages, so a broken database fails at once.
-    let cad_library = options
-        .cad
-        .as_deref()
-        .map(|dir| CadDatabase::from_folder(dir).map(std::sync::Arc::new))
-        .transpose()?;
     let mut sequence = Sequence::open(&sequence_dir)?;
     if let Some((start, end, step)) = options.frames {
         sequence.select(start, end, step);

@@ -33,6 +33,9 @@ const CONTAINMENT_WEIGHT: f64 = 0.1;
 /// a side that was not seen) before it costs: the distance from the object's points to the
 /// model says nothing of model surface that no point is near.
 const OVERHANG_FREE_M: f64 = 0.1;
+/// ... and at most this share of the box's side: a book's or a cup's whole footprint is in
+/// view, and 10 cm around a 20 cm book would leave its size free.
+const OVERHANG_FREE_SHARE: f64 = 0.25;
 const OVERHANG_WEIGHT: f64 = 0.5;
 /// Metres of residual per metre the scaled model leaves its class's size range (a bookshelf is
 /// never 2 m deep): a wall of cost, not a preference.
@@ -373,7 +376,8 @@ impl AlignmentProblem<'_> {
             }
         }
         // The model's floor rectangle not much beyond the object's box, in the box's frame.
-        let half = 0.5 * frame.object_size.truncate() + DVec2::splat(OVERHANG_FREE_M);
+        let side = frame.object_size.truncate();
+        let half = 0.5 * side + (OVERHANG_FREE_SHARE * side).min(DVec2::splat(OVERHANG_FREE_M));
         let to_object_box = DMat3::from_rotation_z(-frame.object_yaw);
         let posed = DMat3::from_rotation_z(x[3]);
         for i in 0..4 {

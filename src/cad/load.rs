@@ -127,7 +127,9 @@ fn part_meshes(bytes: &[u8]) -> Result<Vec<(String, TriMesh)>, String> {
                 .ok_or_else(|| format!("node {name}: no indices"))?
                 .into_u32()
                 .collect();
-            if indices.len() % 3 != 0 || indices.iter().any(|&i| i as usize >= positions.len()) {
+            if !indices.len().is_multiple_of(3)
+                || indices.iter().any(|&i| i as usize >= positions.len())
+            {
                 return Err(format!(
                     "node {name}: indices are not triangles of its vertices"
                 ));

@@ -372,11 +372,14 @@ fn read_bytes<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, name: &str) -> Resul
     Ok(bytes)
 }
 
-/// The OBJ file of `entry` and the material files it names, by name.
+/// An OBJ file's bytes and those of the material files it names, by name.
+type ModelFiles = (Vec<u8>, BTreeMap<String, Vec<u8>>);
+
+/// The OBJ file of `entry` and the material files it names.
 fn model_files<R: Read + Seek>(
     zip: &mut zip::ZipArchive<R>,
     entry: &CatalogueEntry,
-) -> Result<(Vec<u8>, BTreeMap<String, Vec<u8>>), String> {
+) -> Result<ModelFiles, String> {
     let obj_name = entry.model.trim_start_matches('/');
     let obj = read_bytes(zip, obj_name)?;
     let folder = Path::new(obj_name)

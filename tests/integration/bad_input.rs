@@ -288,6 +288,22 @@ fn bad_specifications_and_missing_inputs_are_rejected() {
         stderr.contains("no/such/folder") && stderr.contains("not found"),
         "{stderr}"
     );
+    let broken_db = dir.join("broken_db");
+    std::fs::create_dir_all(&broken_db).expect("mkdir");
+    std::fs::write(broken_db.join("index.json"), "{\"models\": [").expect("write");
+    let (code, _, stderr) = common::iscene(
+        &[
+            "reconstruct",
+            "--cad",
+            broken_db.to_str().expect("utf8"),
+            "--out",
+            "cad-out",
+        ],
+        dir,
+    );
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("broken_db/index.json"), "{stderr}");
+    assert!(!dir.join("cad-out").exists());
     let (code, _, stderr) = common::iscene(&["render", "missing.json", "--out", "x"], dir);
     assert_eq!(code, 2);
     assert!(stderr.contains("missing.json"), "{stderr}");
