@@ -30,9 +30,9 @@ const PLUGIN_CATALOGUE: &str = "PluginFurnitureCatalog.properties";
 /// The default catalogue inside `sweethome3d.jar`.
 const DEFAULT_CATALOGUE: &str = "com/eteks/sweethome3d/io/DefaultFurnitureCatalog.properties";
 
-/// Meshes are simplified to about this many cells along their longest side: enough for
-/// matching, alignment and contact queries, and it keeps a 200k-triangle sofa from costing
-/// seconds in every later stage.
+/// Meshes are simplified to about this many cells along their longest side before they are
+/// decomposed: finer than the decomposition's voxels, and it keeps a 200k-triangle sofa from
+/// costing seconds there.
 const SIMPLIFY_CELLS: f32 = 64.0;
 /// ... but never finer than this (metres, at the catalogue's size): a 12 cm cup needs no
 /// 2 mm detail either.
