@@ -77,17 +77,21 @@ fn cad_replacement(c: &mut Criterion) {
         db.len(),
         start.elapsed().as_secs_f64()
     );
-    let name = format!(
-        "cad_replacement_{}_objects_{}_models",
-        objects.len(),
-        db.len()
-    );
-    c.bench_function(&name, |b| {
-        b.iter(|| {
-            let ranked = rank_scene(&objects, &db);
-            align_scene(&objects, &db, &ranked)
-        })
-    });
+    // Ranking every object's candidates, then aligning the best ten of each.
+    let mut bench_against = |db: &CadDatabase, what: &str| {
+        let name = format!(
+            "cad_replacement_{}_objects_{}_{what}",
+            objects.len(),
+            db.len()
+        );
+        c.bench_function(&name, |b| {
+            b.iter(|| {
+                let ranked = rank_scene(&objects, db);
+                align_scene(&objects, db, &ranked)
+            })
+        });
+    };
+    bench_against(&db, "models");
 
     // The same objects against the imported Sweet Home 3D catalogues (scripts/setup-sh3d.sh),
     // when they are there: real meshes, as convex pieces, instead of generated boxes.
@@ -106,17 +110,7 @@ fn cad_replacement(c: &mut Criterion) {
             db.len(),
             start.elapsed().as_secs_f64()
         );
-        let name = format!(
-            "cad_replacement_{}_objects_{}_sweet_home_3d_models",
-            objects.len(),
-            db.len()
-        );
-        c.bench_function(&name, |b| {
-            b.iter(|| {
-                let ranked = rank_scene(&objects, &db);
-                align_scene(&objects, &db, &ranked)
-            })
-        });
+        bench_against(&db, "sweet_home_3d_models");
     } else {
         eprintln!("no Sweet Home 3D catalogues in .sh3d: run scripts/setup-sh3d.sh to bench them");
     }

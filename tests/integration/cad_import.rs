@@ -24,9 +24,9 @@ fn sweet_home_3d() -> PathBuf {
     dir
 }
 
-/// Imports `source` (a catalogue or a folder of them) into `db` through the CLI.
-fn import(source: &Path, db: &Path) {
-    let (code, stdout, stderr) = common::iscene(
+/// `iscene cad import sh3d SOURCE --into DB`; returns (exit code, stdout, stderr).
+fn run_import(source: &Path, db: &Path) -> (i32, String, String) {
+    common::iscene(
         &[
             "cad",
             "import",
@@ -36,7 +36,12 @@ fn import(source: &Path, db: &Path) {
             db.to_str().expect("utf8"),
         ],
         &common::root(),
-    );
+    )
+}
+
+/// Imports `source` (a catalogue or a folder of them) into `db` through the CLI.
+fn import(source: &Path, db: &Path) {
+    let (code, stdout, stderr) = run_import(source, db);
     assert_eq!(code, 0, "{stdout}{stderr}");
     eprint!("{stdout}");
 }
@@ -145,17 +150,7 @@ fn a_broken_catalogue_is_refused_with_its_name() {
     let bad = tmp.path().join("broken.sh3f");
     std::fs::write(&bad, b"not a zip").expect("write");
     let db = tmp.path().join("db");
-    let (code, _, stderr) = common::iscene(
-        &[
-            "cad",
-            "import",
-            "sh3d",
-            bad.to_str().expect("utf8"),
-            "--into",
-            db.to_str().expect("utf8"),
-        ],
-        tmp.path(),
-    );
+    let (code, _, stderr) = run_import(&bad, &db);
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("broken.sh3f"), "{stderr}");
     assert!(!db.exists(), "nothing written");
