@@ -57,8 +57,9 @@ pub struct SimulationSummary {
     pub output: PathBuf,
 }
 
-/// The live world of `graph`: its entities, their links (CAD models from the parametric
-/// library) and the robot at `start` (default: the most open spot of the floor).
+/// The live world of `graph`: its entities, their links (CAD models from `db`, usually
+/// `CadDatabase::for_scene` of the scene's folder) and the robot at `start` (default: the most
+/// open spot of the floor).
 pub fn simulation_app(graph: &ContactGraph, task: &Task, db: &CadDatabase) -> Result<App, String> {
     let mut app = App::new();
     app.add_plugins(SimulationPlugin);
