@@ -102,6 +102,31 @@ pub fn write_library(dir: &Path) -> Result<usize, IsceneError> {
     write_models(dir, &models, "iscene cad generate")
 }
 
+/// `index.json` of a database folder: the models it holds. Fields in alphabetical order, as
+/// the files have always been written.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct DatabaseIndex {
+    pub generator: String,
+    pub models: Vec<IndexEntry>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct IndexEntry {
+    pub articulated: bool,
+    pub class: String,
+    pub id: String,
+}
+
+impl IndexEntry {
+    pub fn of(model: &CadModel) -> Self {
+        Self {
+            articulated: model.is_articulated(),
+            class: model.class.clone(),
+            id: model.id.clone(),
+        }
+    }
+}
+
 /// Writes `models` into the database folder `dir`: `<id>.glb` and `<id>.json` per model and
 /// `index.json` listing them (what [`crate::cad::load::read_database`] reads back).
 pub fn write_models(
@@ -109,24 +134,41 @@ pub fn write_models(
     models: &[CadModel],
     generator: &str,
 ) -> Result<usize, IsceneError> {
+    for model in models {
+        write_model_files(dir, model)?;
+    }
+    write_index(dir, models.iter().map(IndexEntry::of).collect(), generator)
+}
+
+/// Writes `<id>.glb` and `<id>.json` of `model` into `dir` (created when missing).
+pub fn write_model_files(dir: &Path, model: &CadModel) -> Result<(), IsceneError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| IsceneError::io(format!("creating {}", dir.display()), e))?;
-    let mut index = Vec::new();
-    for model in models {
-        let glb = model_glb(model)
-            .map_err(|e| IsceneError::Internal(format!("{}: glTF: {e}", model.id)))?;
-        write_file_atomically(&dir.join(format!("{}.glb", model.id)), &glb)?;
-        let meta = metadata(model);
-        let json =
-            serde_json::to_vec_pretty(&meta).map_err(|e| IsceneError::Internal(e.to_string()))?;
-        write_file_atomically(&dir.join(format!("{}.json", model.id)), &json)?;
-        index.push(serde_json::json!({ "id": model.id, "class": model.class, "articulated": model.is_articulated() }));
-    }
+    let glb =
+        model_glb(model).map_err(|e| IsceneError::Internal(format!("{}: glTF: {e}", model.id)))?;
+    write_file_atomically(&dir.join(format!("{}.glb", model.id)), &glb)?;
+    let json = serde_json::to_vec_pretty(&metadata(model))
+        .map_err(|e| IsceneError::Internal(e.to_string()))?;
+    write_file_atomically(&dir.join(format!("{}.json", model.id)), &json)
+}
+
+/// Writes `index.json` listing `models` into `dir`; returns how many it lists.
+pub fn write_index(
+    dir: &Path,
+    models: Vec<IndexEntry>,
+    generator: &str,
+) -> Result<usize, IsceneError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| IsceneError::io(format!("creating {}", dir.display()), e))?;
+    let count = models.len();
+    let index = DatabaseIndex {
+        generator: generator.to_string(),
+        models,
+    };
     let json =
-        serde_json::to_vec_pretty(&serde_json::json!({ "generator": generator, "models": index }))
-            .map_err(|e| IsceneError::Internal(e.to_string()))?;
+        serde_json::to_vec_pretty(&index).map_err(|e| IsceneError::Internal(e.to_string()))?;
     write_file_atomically(&dir.join("index.json"), &json)?;
-    Ok(index.len())
+    Ok(count)
 }
 
 /// Copies the models `graph` uses from `db` into `<scene_dir>/cad`, so that the scene folder

@@ -7,8 +7,8 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
-use crate::cad::export::write_models;
-use crate::cad::load::read_database;
+use crate::cad::export::{IndexEntry, write_index, write_model_files};
+use crate::cad::load::read_index;
 use crate::cad::model::CadModel;
 use crate::cad::sh3d;
 use crate::error::{InputError, IsceneError};
@@ -82,17 +82,18 @@ pub fn import_sh3d(path: &Path, into: &Path) -> Result<ImportSummary, IsceneErro
 }
 
 /// Writes `imported` into the database folder `into` beside the models it already holds (an
-/// imported model replaces one with its id); returns how many it holds.
+/// imported model replaces one with its id; the others' files are left as they are); returns
+/// how many it holds.
 fn merge_into(into: &Path, imported: Vec<CadModel>) -> Result<usize, IsceneError> {
-    let mut by_id: BTreeMap<String, CadModel> = BTreeMap::new();
+    let mut index: BTreeMap<String, IndexEntry> = BTreeMap::new();
     if into.join("index.json").exists() {
-        for model in read_database(into)? {
-            by_id.insert(model.id.clone(), model);
+        for entry in read_index(into)?.models {
+            index.insert(entry.id.clone(), entry);
         }
     }
-    for model in imported {
-        by_id.insert(model.id.clone(), model);
+    for model in &imported {
+        write_model_files(into, model)?;
+        index.insert(model.id.clone(), IndexEntry::of(model));
     }
-    let models: Vec<CadModel> = by_id.into_values().collect();
-    write_models(into, &models, "iscene cad import")
+    write_index(into, index.into_values().collect(), "iscene cad import")
 }

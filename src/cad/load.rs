@@ -4,31 +4,23 @@
 
 use std::path::Path;
 
-use glam::{Affine3A, Mat4, Vec3};
-use serde::Deserialize;
-
-use crate::cad::export::ModelMetadata;
+use crate::cad::export::{DatabaseIndex, ModelMetadata};
 use crate::cad::model::{CadModel, CadPart};
 use crate::error::InputError;
 use crate::geometry::TriMesh;
+use glam::{Affine3A, Mat4, Vec3};
 
-#[derive(Deserialize)]
-struct Index {
-    models: Vec<IndexEntry>,
-}
-
-#[derive(Deserialize)]
-struct IndexEntry {
-    id: String,
+/// The index of the database folder `dir`.
+pub fn read_index(dir: &Path) -> Result<DatabaseIndex, InputError> {
+    let index_path = dir.join("index.json");
+    let text = std::fs::read_to_string(&index_path).map_err(|e| InputError::io(&index_path, &e))?;
+    serde_json::from_str(&text)
+        .map_err(|e| InputError::invalid(&index_path, format!("not a CAD database index: {e}")))
 }
 
 /// Every model of the database folder `dir`, in the order of its index.
 pub fn read_database(dir: &Path) -> Result<Vec<CadModel>, InputError> {
-    let index_path = dir.join("index.json");
-    let text = std::fs::read_to_string(&index_path).map_err(|e| InputError::io(&index_path, &e))?;
-    let index: Index = serde_json::from_str(&text)
-        .map_err(|e| InputError::invalid(&index_path, format!("not a CAD database index: {e}")))?;
-    index
+    read_index(dir)?
         .models
         .iter()
         .map(|entry| read_model(dir, &entry.id))
