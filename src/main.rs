@@ -4,6 +4,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use iscene::cad::body_tree::ImportScale;
+use iscene::cad::import::{ModelFormat, import_model_files};
 use iscene::error::IsceneError;
 use iscene::panoptic::InstanceFusion;
 use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
@@ -202,18 +204,38 @@ enum CadCommand {
     /// Import third-party models into a database folder (added to what it holds), for
     /// `reconstruct --cad DB`.
     Import {
-        /// The catalogue format. sh3d: Sweet Home 3D furniture (a *.sh3f catalogue, sweethome3d.jar,
-        /// or a folder of them such as /usr/share/sweethome3d/furniture).
+        /// The format. sh3d: Sweet Home 3D furniture (a *.sh3f catalogue, sweethome3d.jar, or a
+        /// folder of them such as /usr/share/sweethome3d/furniture). mjcf: MuJoCo model files
+        /// (one *.xml file or a folder of them, such as LIBERO's articulated_objects). urdf: URDF
+        /// model files (one *.urdf file or a folder of them).
         format: ImportFormat,
         path: PathBuf,
         #[arg(long)]
         into: PathBuf,
+        /// mjcf and urdf: `class` sizes each model uniformly to its class's typical size; a
+        /// number scales the file's units by it (1: metres). Default: `class` for mjcf (LIBERO's
+        /// objects are made for a tabletop), 1 for urdf (URDF is in metres at real size).
+        #[arg(long, value_parser = parse_import_scale)]
+        scale: Option<ImportScale>,
     },
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 enum ImportFormat {
     Sh3d,
+    Mjcf,
+    Urdf,
+}
+
+fn parse_import_scale(s: &str) -> Result<ImportScale, String> {
+    if s == "class" {
+        return Ok(ImportScale::Class);
+    }
+    s.parse::<f32>()
+        .ok()
+        .filter(|f| f.is_finite() && *f > 0.0)
+        .map(ImportScale::Factor)
+        .ok_or_else(|| format!("{s:?} is neither `class` nor a positive number"))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -399,12 +421,30 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
         Some(Command::Cad {
             command:
                 CadCommand::Import {
-                    format: ImportFormat::Sh3d,
+                    format,
                     path,
                     into,
+                    scale,
                 },
         }) => {
-            let summary = iscene::cad::import::import_sh3d(&path, &into)?;
+            let summary = match format {
+                ImportFormat::Sh3d if scale.is_some() => {
+                    return Err(iscene::error::InputError::invalid(
+                        &path,
+                        "--scale is for mjcf and urdf models: Sweet Home 3D catalogues give real sizes",
+                    )
+                    .into());
+                }
+                ImportFormat::Sh3d => iscene::cad::import::import_sh3d(&path, &into)?,
+                ImportFormat::Mjcf => {
+                    let scale = scale.unwrap_or(ImportScale::Class);
+                    import_model_files(&path, &into, ModelFormat::Mjcf, scale)?
+                }
+                ImportFormat::Urdf => {
+                    let scale = scale.unwrap_or(ImportScale::Factor(1.0));
+                    import_model_files(&path, &into, ModelFormat::Urdf, scale)?
+                }
+            };
             println!("{summary}");
         }
         Some(Command::Bench {

@@ -7,20 +7,25 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
+use crate::cad::body_tree::{BodyTree, ImportScale, ModelFileError, canonical_model};
+use crate::cad::class_words::class_of_name;
 use crate::cad::export::{IndexEntry, write_index, write_model_files};
 use crate::cad::load::read_index;
+use crate::cad::mjcf::read_mjcf;
 use crate::cad::model::CadModel;
 use crate::cad::sh3d;
+use crate::cad::urdf::read_urdf;
 use crate::error::{InputError, IsceneError};
 
 /// What an import did, for the CLI to print.
 #[derive(Debug)]
 pub struct ImportSummary {
     pub into: std::path::PathBuf,
-    pub catalogues: usize,
+    /// Catalogue or model files read.
+    pub files: usize,
     /// Imported models per class.
     pub per_class: BTreeMap<String, usize>,
-    /// Catalogue entries outside the project's classes.
+    /// Catalogue entries or model files outside the project's classes.
     pub skipped: usize,
     /// Entries of a class whose model could not be read, with the reason.
     pub failed: Vec<String>,
@@ -38,8 +43,8 @@ impl fmt::Display for ImportSummary {
             .collect();
         writeln!(
             f,
-            "imported {imported} models from {} catalogues ({}); {} entries of other kinds skipped",
-            self.catalogues,
+            "imported {imported} models from {} files ({}); {} of other kinds skipped",
+            self.files,
             classes.join(", "),
             self.skipped
         )?;
@@ -62,7 +67,7 @@ pub fn import_sh3d(path: &Path, into: &Path) -> Result<ImportSummary, IsceneErro
         .collect::<Result<Vec<_>, _>>()?;
     let mut summary = ImportSummary {
         into: into.to_path_buf(),
-        catalogues: files.len(),
+        files: files.len(),
         per_class: BTreeMap::new(),
         skipped: 0,
         failed: Vec::new(),
@@ -79,6 +84,132 @@ pub fn import_sh3d(path: &Path, into: &Path) -> Result<ImportSummary, IsceneErro
     }
     summary.total = merge_into(into, imported)?;
     Ok(summary)
+}
+
+/// The robot-description formats whose model files `iscene cad import` reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelFormat {
+    /// MuJoCo's MJCF (`*.xml`): LIBERO's articulated objects.
+    Mjcf,
+    /// URDF (`*.urdf`).
+    Urdf,
+}
+
+impl ModelFormat {
+    fn extension(self) -> &'static str {
+        match self {
+            Self::Mjcf => "xml",
+            Self::Urdf => "urdf",
+        }
+    }
+
+    /// Model ids start with it: `mjcf_short_fridge`.
+    fn id_prefix(self) -> &'static str {
+        match self {
+            Self::Mjcf => "mjcf",
+            Self::Urdf => "urdf",
+        }
+    }
+
+    fn read(self, path: &Path) -> Result<BodyTree, ModelFileError> {
+        match self {
+            Self::Mjcf => read_mjcf(path),
+            Self::Urdf => read_urdf(path),
+        }
+    }
+}
+
+/// Imports the model file at `path`, or every file of the format's extension in the folder
+/// `path`, into the database folder `into`; a model's id is the format's prefix and its file's
+/// stem. A broken file fails the import before anything is written; a file naming no class (a
+/// faucet, a window) is skipped, and one using what the reader does not read is listed as not
+/// imported.
+pub fn import_model_files(
+    path: &Path,
+    into: &Path,
+    format: ModelFormat,
+    scale: ImportScale,
+) -> Result<ImportSummary, IsceneError> {
+    let files = model_files(path, format.extension())?;
+    let mut summary = ImportSummary {
+        into: into.to_path_buf(),
+        files: files.len(),
+        per_class: BTreeMap::new(),
+        skipped: 0,
+        failed: Vec::new(),
+        total: 0,
+    };
+    let mut imported = Vec::new();
+    for file in &files {
+        let stem = file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let tree = match format.read(file) {
+            Ok(tree) => tree,
+            Err(ModelFileError::Unsupported(why)) => {
+                summary.failed.push(format!("{}: {why}", file.display()));
+                continue;
+            }
+            Err(ModelFileError::Malformed(why)) => {
+                return Err(InputError::invalid(file, why).into());
+            }
+        };
+        let Some(class) = class_of_name(&tree.name).or_else(|| class_of_name(&stem)) else {
+            summary.skipped += 1;
+            continue;
+        };
+        let id = imported_model_id(format.id_prefix(), &stem);
+        match canonical_model(&tree, &id, class, scale) {
+            Ok(m) => imported.push(m),
+            Err(why) => summary.failed.push(format!("{}: {why}", file.display())),
+        }
+    }
+    for model in &imported {
+        *summary.per_class.entry(model.class.clone()).or_default() += 1;
+    }
+    summary.total = merge_into(into, imported)?;
+    Ok(summary)
+}
+
+/// The file `path`, or the files of the folder `path` with the extension `extension`, sorted.
+fn model_files(path: &Path, extension: &str) -> Result<Vec<std::path::PathBuf>, InputError> {
+    if path.is_file() {
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let entries = std::fs::read_dir(path).map_err(|e| InputError::io(path, &e))?;
+    let mut files: Vec<std::path::PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && p.extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case(extension))
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(InputError::invalid(path, format!("no *.{extension} model files in the folder")));
+    }
+    Ok(files)
+}
+
+/// `prefix` and the source's id in lowercase letters, digits and single underscores: the
+/// model's id and file name in the database.
+pub fn imported_model_id(prefix: &str, source_id: &str) -> String {
+    let mut id = String::from(prefix);
+    let mut gap = true;
+    for c in source_id.chars().flat_map(char::to_lowercase) {
+        if c.is_ascii_alphanumeric() {
+            if gap {
+                id.push('_');
+            }
+            id.push(c);
+            gap = false;
+        } else {
+            gap = true;
+        }
+    }
+    id
 }
 
 /// Writes `imported` into the database folder `into` beside the models it already holds (an

@@ -7,6 +7,7 @@ use pathfinding::matrix::Matrix;
 
 use crate::cad::database::CadDatabase;
 use crate::cad::orientation::axis_rotations;
+use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 
 /// How many candidates go on to alignment (the paper's top 10).
@@ -67,7 +68,9 @@ pub struct Candidate {
 
 /// The `keep` best candidates for `object` among the models of its class, lowest ME first (ties
 /// by model index, then orientation, so the order is deterministic). Empty when the database
-/// has no model of the class.
+/// has no model of the class. An object of an articulated class (a fridge, a cabinet) is
+/// matched against the articulated models of its class only, where the database has any: a
+/// rigid model fitting its box a little better would leave its doors shut for good.
 pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -> Vec<Candidate> {
     let box_from_world = Mat3::from_rotation_z(-object.bbox.yaw);
     let world_from_box = box_from_world.transpose();
@@ -76,7 +79,15 @@ pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -
     let object_shape = relative_size(object.bbox.size);
     let rotations = axis_rotations();
     let mut candidates = Vec::new();
-    for (index, entry) in db.of_class(object.class) {
+    let articulated_class = ClassTable::builtin()
+        .get(object.class)
+        .is_some_and(|c| c.kind == EntityKind::Articulated);
+    let articulated_only =
+        articulated_class && db.of_class(object.class).any(|(_, m)| m.model.is_articulated());
+    let models = db
+        .of_class(object.class)
+        .filter(|(_, m)| !articulated_only || m.model.is_articulated());
+    for (index, entry) in models {
         let model_directions = distinct_directions(entry.planes.iter().map(|p| p.normal));
         for (orientation, rotation) in rotations.iter().enumerate() {
             let model_shape = relative_size((*rotation * entry.model.size).abs());
@@ -181,6 +192,36 @@ mod tests {
             .collect();
         let bbox = GravityBox::minimal(&mesh.positions).expect("box");
         (bbox, planes, mesh.positions)
+    }
+
+    #[test]
+    fn an_articulated_object_gets_only_articulated_candidates_where_there_are_some() {
+        let library = CadDatabase::parametric();
+        let fridge = library.get("fridge_01").expect("fridge").model.clone();
+        assert!(fridge.is_articulated());
+        // The same fridge welded shut: one rigid part, a box that fits exactly as well.
+        let mut rigid = fridge.clone();
+        rigid.id = "fridge_rigid".into();
+        let mesh = rigid.merged_mesh(&[]);
+        rigid.parts.truncate(1);
+        rigid.parts[0].mesh = mesh;
+        let (bbox, planes, points) = observe(&library, "fridge_01", 0.0);
+        let object = ObservedObject {
+            id: "fridge_1",
+            class: "fridge",
+            top_z: bbox.top_z(),
+            bbox,
+            planes,
+            points: &points,
+            facing: None,
+        };
+        let both = CadDatabase::from_models(vec![rigid.clone(), fridge]).expect("db");
+        let ranked = rank_candidates(&object, &both, KEEP_CANDIDATES);
+        assert!(!ranked.is_empty());
+        assert!(ranked.iter().all(|c| both.models()[c.model].model.is_articulated()));
+        // Without an articulated fridge, the rigid one serves.
+        let only_rigid = CadDatabase::from_models(vec![rigid]).expect("db");
+        assert!(!rank_candidates(&object, &only_rigid, KEEP_CANDIDATES).is_empty());
     }
 
     #[test]

@@ -2,13 +2,17 @@
 
 pub mod alignment;
 pub mod appliances;
+pub mod body_tree;
 pub mod builder;
+pub mod class_words;
 pub mod database;
 pub mod export;
 pub mod import;
 pub mod library;
 pub mod load;
 pub mod matching;
+pub mod mesh_files;
+pub mod mjcf;
 pub mod model;
 pub mod orientation;
 pub mod physical_check;
@@ -18,6 +22,7 @@ pub mod sh3d;
 pub mod storage;
 pub mod tables;
 pub mod tabletop;
+pub mod urdf;
 
 pub use library::{ModelBuilder, ParametricLibrary};
 pub use model::{CadModel, CadPart};

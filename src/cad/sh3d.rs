@@ -11,7 +11,7 @@
 //! size of the box after that rotation, which the mesh is scaled to.
 //!
 //! Only entries of a class in assets/classes.json are imported; the class comes from the name
-//! (`class_of`). Doors, windows, lights, people, vehicles and outdoor things are skipped. The
+//! (`class_words`). Doors, windows, lights, people, vehicles and outdoor things are skipped. The
 //! models carry no joints: a Sweet Home 3D fridge is a rigid fridge.
 
 use std::collections::BTreeMap;
@@ -21,6 +21,8 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Mat3, Vec3};
 use rayon::prelude::*;
 
+use crate::cad::class_words::class_of_name;
+use crate::cad::import::imported_model_id;
 use crate::cad::model::{CadModel, CadPart};
 use crate::geometry::TriMesh;
 use crate::kinematics::JointSpec;
@@ -52,83 +54,13 @@ const SKIPPED_CATEGORIES: [&str; 6] = [
     "Staircases",
 ];
 
-/// Names (lowercase word sequences) that would match a class by one of their words but are
-/// something else: a bookcase is a shelf, a bedside table a cabinet, a cup cake no cup.
-const NOT_THEIR_WORDS: [(&str, Option<&str>); 18] = [
-    ("island bath", None),
-    ("intercom", None),
-    ("remote control", None),
-    ("japanese style screen", None),
-    ("bedside table", Some("cabinet")),
-    ("television cabinet", Some("cabinet")),
-    ("tv unit", Some("cabinet")),
-    ("tv stand", Some("cabinet")),
-    ("dressing table", Some("table")),
-    ("desk lamp", None),
-    ("table fan", None),
-    ("table tennis", None),
-    ("cup cake", None),
-    ("bread box", None),
-    ("letters box", None),
-    ("plant box", None),
-    ("flower box", None),
-    ("chest freezer", None),
-];
-
-/// A class for each word that names it, in order of precedence: "microwave" before "oven",
-/// "sofa bed" is a bed, "wine bottle" a bottle.
-const CLASS_WORDS: [(&str, &[&str]); 17] = [
-    ("microwave", &["microwave"]),
-    ("fridge", &["fridge", "refrigerator", "freezer"]),
-    ("dishwasher", &["dishwasher"]),
-    ("oven", &["oven", "cooker"]),
-    ("bed", &["bed", "crib", "futon"]),
-    ("sofa", &["sofa", "couch"]),
-    ("chair", &["chair", "armchair", "stool"]),
-    ("shelf", &["bookcase", "shelves", "shelf"]),
-    (
-        "cabinet",
-        &[
-            "cabinet", "cupboard", "dresser", "wardrobe", "chest", "drawers",
-        ],
-    ),
-    ("table", &["table", "desk"]),
-    ("monitor", &["tv", "monitor", "screen", "imac"]),
-    ("bottle", &["bottle"]),
-    ("cup", &["cup", "mug"]),
-    ("bowl", &["bowl"]),
-    ("book", &["book"]),
-    ("box", &["box", "crate"]),
-    ("counter", &["island"]),
-];
-
 /// The project class of a catalogue entry, from its name and category; `None` for furniture
 /// outside the classes.
 pub fn class_of(name: &str, category: &str) -> Option<&'static str> {
     if SKIPPED_CATEGORIES.contains(&category) {
         return None;
     }
-    let words: Vec<String> = name
-        .to_lowercase()
-        .split(|c: char| !c.is_alphanumeric())
-        .filter(|w| !w.is_empty())
-        .map(str::to_owned)
-        .collect();
-    let phrase = words.join(" ");
-    for (exception, class) in NOT_THEIR_WORDS {
-        if contains_phrase(&phrase, exception) {
-            return class;
-        }
-    }
-    CLASS_WORDS
-        .iter()
-        .find(|(_, names)| names.iter().any(|n| words.iter().any(|w| w == n)))
-        .map(|(class, _)| *class)
-}
-
-/// Whether the word sequence `phrase` holds the word sequence `part`.
-fn contains_phrase(phrase: &str, part: &str) -> bool {
-    format!(" {phrase} ").contains(&format!(" {part} "))
+    class_of_name(name)
 }
 
 /// One furniture entry of a catalogue.
@@ -426,20 +358,7 @@ fn entry_model(
 
 /// `sh3d_` and the catalogue id in lowercase letters, digits and single underscores.
 pub fn model_id(catalogue_id: &str) -> String {
-    let mut id = String::from("sh3d");
-    let mut gap = true;
-    for c in catalogue_id.chars().flat_map(char::to_lowercase) {
-        if c.is_ascii_alphanumeric() {
-            if gap {
-                id.push('_');
-            }
-            id.push(c);
-            gap = false;
-        } else {
-            gap = true;
-        }
-    }
-    id
+    imported_model_id("sh3d", catalogue_id)
 }
 
 /// All groups of an OBJ file as one triangle mesh (in the file's units and frame), and the

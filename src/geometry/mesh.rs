@@ -1,5 +1,7 @@
 //! Indexed triangle meshes and the primitives the parametric CAD library is built from.
 
+use std::f32::consts::FRAC_PI_2;
+
 use glam::{Affine3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -264,6 +266,34 @@ impl TriMesh {
             &[Vec2::new(radius, 0.0), Vec2::new(radius, height)],
             segments,
         )
+    }
+
+    /// A closed ellipsoid with semi-axes `radii`, centred on the origin.
+    pub fn ellipsoid(radii: Vec3, segments: u32) -> TriMesh {
+        let rings = (segments / 2).max(2);
+        let profile: Vec<Vec2> = (0..=rings)
+            .map(|i| {
+                let a = -FRAC_PI_2 + std::f32::consts::PI * i as f32 / rings as f32;
+                Vec2::new(a.cos().max(0.0), a.sin())
+            })
+            .collect();
+        TriMesh::lathe(Vec3::ZERO, &profile, segments).transformed(&Affine3A::from_scale(radii))
+    }
+
+    /// A closed capsule along z centred on the origin: radius `radius`, its cylinder from
+    /// `-half_length` to `half_length`.
+    pub fn capsule(radius: f32, half_length: f32, segments: u32) -> TriMesh {
+        let quarter = (segments / 4).max(1);
+        let mut profile = Vec::new();
+        for i in 0..=quarter {
+            let a = -FRAC_PI_2 * (1.0 - i as f32 / quarter as f32);
+            profile.push(Vec2::new(radius * a.cos().max(0.0), -half_length + radius * a.sin()));
+        }
+        for i in 0..=quarter {
+            let a = FRAC_PI_2 * i as f32 / quarter as f32;
+            profile.push(Vec2::new(radius * a.cos().max(0.0), half_length + radius * a.sin()));
+        }
+        TriMesh::lathe(Vec3::ZERO, &profile, segments)
     }
 
     /// A closed cylinder between two points (legs that splay, a star base's spokes).

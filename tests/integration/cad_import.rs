@@ -48,7 +48,7 @@ fn import(source: &Path, db: &Path) {
 
 /// The five plugin catalogues and the default one imported into a database folder, once per
 /// test run (the convex decomposition of 259 models takes a while in a test build).
-fn imported_database() -> PathBuf {
+pub fn imported_database() -> PathBuf {
     static DB: OnceLock<PathBuf> = OnceLock::new();
     DB.get_or_init(|| {
         let db = Path::new(env!("CARGO_TARGET_TMPDIR")).join("sweet_home_3d_db");
