@@ -147,7 +147,9 @@ pub fn canonical_model(
         let rotation = turn * Mat3::from(d.model_from_part.matrix3);
         let translation = turn * Vec3::from(d.model_from_part.translation) * factor;
         d.model_from_part = Affine3A::from_mat3_translation(rotation, translation);
-        d.mesh = d.mesh.transformed(&Affine3A::from_scale(Vec3::splat(factor)));
+        d.mesh = d
+            .mesh
+            .transformed(&Affine3A::from_scale(Vec3::splat(factor)));
         if d.joint.kind == JointKind::Prismatic {
             d.joint.limits = d.joint.limits.map(|(lo, hi)| (lo * factor, hi * factor));
         }
@@ -190,7 +192,9 @@ fn share_inside(piece: &TriMesh, (min, max): (Vec3, Vec3)) -> f32 {
         return 1.0;
     };
     let volume = (pmax - pmin).element_product();
-    let overlap = (pmax.min(max) - pmin.max(min)).max(Vec3::ZERO).element_product();
+    let overlap = (pmax.min(max) - pmin.max(min))
+        .max(Vec3::ZERO)
+        .element_product();
     if volume > 0.0 { overlap / volume } else { 1.0 }
 }
 
@@ -255,7 +259,9 @@ fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
         part_of_body.push(part);
         let part_from_body = drafts[part].model_from_part.inverse() * frame;
         for piece in &body.pieces {
-            drafts[part].mesh.append(&piece.transformed(&part_from_body));
+            drafts[part]
+                .mesh
+                .append(&piece.transformed(&part_from_body));
         }
         for piece in &body.visual_pieces {
             drafts[part]

@@ -188,7 +188,10 @@ fn model_files(path: &Path, extension: &str) -> Result<Vec<std::path::PathBuf>, 
         .collect();
     files.sort();
     if files.is_empty() {
-        return Err(InputError::invalid(path, format!("no *.{extension} model files in the folder")));
+        return Err(InputError::invalid(
+            path,
+            format!("no *.{extension} model files in the folder"),
+        ));
     }
     Ok(files)
 }

@@ -71,6 +71,7 @@ pub struct Candidate {
 /// has no model of the class. An object of an articulated class (a fridge, a cabinet) is
 /// matched against the articulated models of its class only, where the database has any: a
 /// rigid model fitting its box a little better would leave its doors shut for good.
+/// Articulated models are tried upright only.
 pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -> Vec<Candidate> {
     let box_from_world = Mat3::from_rotation_z(-object.bbox.yaw);
     let world_from_box = box_from_world.transpose();
@@ -82,14 +83,20 @@ pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -
     let articulated_class = ClassTable::builtin()
         .get(object.class)
         .is_some_and(|c| c.kind == EntityKind::Articulated);
-    let articulated_only =
-        articulated_class && db.of_class(object.class).any(|(_, m)| m.model.is_articulated());
+    let articulated_only = articulated_class
+        && db
+            .of_class(object.class)
+            .any(|(_, m)| m.model.is_articulated());
     let models = db
         .of_class(object.class)
         .filter(|(_, m)| !articulated_only || m.model.is_articulated());
     for (index, entry) in models {
         let model_directions = distinct_directions(entry.planes.iter().map(|p| p.normal));
-        for (orientation, rotation) in rotations.iter().enumerate() {
+        // An articulated model stands upright: its hinges and slides are made for gravity
+        // along -z (a cabinet on its side opens its drawers upwards). The first four of the
+        // 24 orientations are the upright ones.
+        let orientations = if entry.model.is_articulated() { 4 } else { 24 };
+        for (orientation, rotation) in rotations.iter().enumerate().take(orientations) {
             let model_shape = relative_size((*rotation * entry.model.size).abs());
             let ds = (object_shape - model_shape).abs().element_sum();
             let rotated: Vec<Vec3> = model_directions.iter().map(|n| *rotation * *n).collect();
@@ -218,7 +225,11 @@ mod tests {
         let both = CadDatabase::from_models(vec![rigid.clone(), fridge]).expect("db");
         let ranked = rank_candidates(&object, &both, KEEP_CANDIDATES);
         assert!(!ranked.is_empty());
-        assert!(ranked.iter().all(|c| both.models()[c.model].model.is_articulated()));
+        assert!(
+            ranked
+                .iter()
+                .all(|c| both.models()[c.model].model.is_articulated())
+        );
         // Without an articulated fridge, the rigid one serves.
         let only_rigid = CadDatabase::from_models(vec![rigid]).expect("db");
         assert!(!rank_candidates(&object, &only_rigid, KEEP_CANDIDATES).is_empty());
@@ -240,10 +251,12 @@ mod tests {
                 facing: None,
             };
             let ranked = rank_candidates(&object, &db, KEEP_CANDIDATES);
-            assert_eq!(
-                ranked.len(),
-                KEEP_CANDIDATES.min(24 * db.of_class(class).count())
-            );
+            // Articulated models are tried in the four upright orientations only.
+            let orientations: usize = db
+                .of_class(class)
+                .map(|(_, m)| if m.model.is_articulated() { 4 } else { 24 })
+                .sum();
+            assert_eq!(ranked.len(), KEEP_CANDIDATES.min(orientations));
             assert!(
                 ranked
                     .iter()

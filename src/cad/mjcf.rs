@@ -49,14 +49,9 @@ pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
     let name = root
         .attribute("model")
         .map(str::to_owned)
-        .or_else(|| {
-            path.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-        })
+        .or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned()))
         .unwrap_or_default();
-    let worldbody = elements(root, "worldbody")
-        .next()
-        .ok_or("no <worldbody>")?;
+    let worldbody = elements(root, "worldbody").next().ok_or("no <worldbody>")?;
     let mut tree = BodyTree {
         name,
         bodies: Vec::new(),
@@ -136,7 +131,10 @@ impl Reader {
             .descendants()
             .find(|n| n.is_element() && n.tag_name().name() == "include")
         {
-            return Err(ModelFileError::Unsupported(format!("{}: <include> is not supported", at(include))));
+            return Err(ModelFileError::Unsupported(format!(
+                "{}: <include> is not supported",
+                at(include)
+            )));
         }
         let mut degrees = true;
         let mut euler = EulerRot::XYZ;
@@ -147,7 +145,12 @@ impl Reader {
                 degrees = match angle {
                     "degree" => true,
                     "radian" => false,
-                    other => return Err(ModelFileError::Malformed(format!("{}: angle {other:?}", at(compiler)))),
+                    other => {
+                        return Err(ModelFileError::Malformed(format!(
+                            "{}: angle {other:?}",
+                            at(compiler)
+                        )));
+                    }
                 };
             }
             if let Some(seq) = compiler.attribute("eulerseq") {
@@ -196,7 +199,12 @@ impl Reader {
         let class = match node.attribute("class") {
             Some(c) => c.to_string(),
             None if parent == "main" => "main".to_string(),
-            None => return Err(ModelFileError::Malformed(format!("{}: a nested default without a class", at(node)))),
+            None => {
+                return Err(ModelFileError::Malformed(format!(
+                    "{}: a nested default without a class",
+                    at(node)
+                )));
+            }
         };
         let mut resolved = self.defaults.get(parent).cloned().unwrap_or_default();
         for child in node.children().filter(|c| c.is_element()) {
@@ -216,7 +224,12 @@ impl Reader {
         Ok(())
     }
 
-    fn read_assets(&mut self, asset: Node, meshdir: &Path, texturedir: &Path) -> Result<(), ModelFileError> {
+    fn read_assets(
+        &mut self,
+        asset: Node,
+        meshdir: &Path,
+        texturedir: &Path,
+    ) -> Result<(), ModelFileError> {
         for node in asset.children().filter(|c| c.is_element()) {
             match node.tag_name().name() {
                 "mesh" => {
@@ -305,7 +318,10 @@ impl Reader {
         tree: &mut BodyTree,
     ) -> Result<(), ModelFileError> {
         if let Some(frame) = elements(node, "frame").next() {
-            return Err(ModelFileError::Unsupported(format!("{}: <frame> is not supported", at(frame))));
+            return Err(ModelFileError::Unsupported(format!(
+                "{}: <frame> is not supported",
+                at(frame)
+            )));
         }
         while self.collision_colors.len() <= body {
             self.collision_colors.push(Vec::new());
@@ -332,7 +348,11 @@ impl Reader {
     }
 
     /// The body's hinge or slide joint, if it has one.
-    fn body_joint(&self, body: Node, childclass: &str) -> Result<Option<BodyJoint>, ModelFileError> {
+    fn body_joint(
+        &self,
+        body: Node,
+        childclass: &str,
+    ) -> Result<Option<BodyJoint>, ModelFileError> {
         let mut joints = Vec::new();
         for node in elements(body, "joint") {
             let class = node.attribute("class").unwrap_or(childclass);
@@ -341,7 +361,12 @@ impl Reader {
                 "hinge" => JointKind::Revolute,
                 "slide" => JointKind::Prismatic,
                 "free" => continue,
-                other => return Err(ModelFileError::Unsupported(format!("{}: {other} joints are not supported", at(node)))),
+                other => {
+                    return Err(ModelFileError::Unsupported(format!(
+                        "{}: {other} joints are not supported",
+                        at(node)
+                    )));
+                }
             };
             let origin = match get("pos") {
                 Some(s) => vec3(node, "pos", &s)?,
@@ -352,7 +377,10 @@ impl Reader {
                 None => Vec3::Z,
             };
             if axis.length() < 1e-6 {
-                return Err(ModelFileError::Malformed(format!("{}: the axis is zero", at(node))));
+                return Err(ModelFileError::Malformed(format!(
+                    "{}: the axis is zero",
+                    at(node)
+                )));
             }
             let limits = match (get("range"), kind) {
                 (Some(s), _) => {
@@ -363,7 +391,10 @@ impl Reader {
                         1.0
                     };
                     if lo > hi {
-                        return Err(ModelFileError::Malformed(format!("{}: range {lo} > {hi}", at(node))));
+                        return Err(ModelFileError::Malformed(format!(
+                            "{}: range {lo} > {hi}",
+                            at(node)
+                        )));
                     }
                     (lo * unit, hi * unit)
                 }
@@ -416,8 +447,8 @@ impl Reader {
             Some(s) => Some(numbers::<6>(node, "fromto", &s)?),
             None => None,
         };
-        let collides = get("contype").as_deref() != Some("0")
-            || get("conaffinity").as_deref() != Some("0");
+        let collides =
+            get("contype").as_deref() != Some("0") || get("conaffinity").as_deref() != Some("0");
         let rgba = match get("rgba") {
             Some(s) => Some(numbers::<4>(node, "rgba", &s)?),
             None => None,
@@ -429,7 +460,10 @@ impl Reader {
                 let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
                 let axis = b - a;
                 if axis.length() < 1e-9 {
-                    return Err(ModelFileError::Malformed(format!("{}: fromto has zero length", at(node))));
+                    return Err(ModelFileError::Malformed(format!(
+                        "{}: fromto has zero length",
+                        at(node)
+                    )));
                 }
                 let rotation = Quat::from_rotation_arc(Vec3::Z, axis.normalize());
                 (
@@ -456,7 +490,12 @@ impl Reader {
             ),
             "cylinder" => {
                 let h = half_length.map_or_else(|| size_at(1), Ok)?;
-                TriMesh::cylinder(Vec3::new(0.0, 0.0, -h), size_at(0)?, 2.0 * h, ROUND_SEGMENTS)
+                TriMesh::cylinder(
+                    Vec3::new(0.0, 0.0, -h),
+                    size_at(0)?,
+                    2.0 * h,
+                    ROUND_SEGMENTS,
+                )
             }
             "mesh" => {
                 let name = get("mesh")
@@ -466,7 +505,12 @@ impl Reader {
             }
             // Planes are infinite and height fields terrain: neither is part of an object.
             "plane" | "hfield" => return Ok(()),
-            other => return Err(ModelFileError::Unsupported(format!("{}: geom type {other:?} is not supported", at(node)))),
+            other => {
+                return Err(ModelFileError::Unsupported(format!(
+                    "{}: geom type {other:?} is not supported",
+                    at(node)
+                )));
+            }
         };
         let mesh = local.transformed(&body_from_geom);
         let color = self
@@ -504,7 +548,11 @@ impl Reader {
 
     /// RGBA of a geom: its material's colour times the material's texture's mean colour, else
     /// its own `rgba`, else MuJoCo's default grey.
-    fn geom_color(&mut self, material: Option<&str>, rgba: Option<[f32; 4]>) -> Result<[f32; 4], String> {
+    fn geom_color(
+        &mut self,
+        material: Option<&str>,
+        rgba: Option<[f32; 4]>,
+    ) -> Result<[f32; 4], String> {
         let Some(name) = material else {
             return Ok(rgba.unwrap_or([0.5, 0.5, 0.5, 1.0]));
         };
@@ -650,13 +698,8 @@ fn parse_numbers(node: Node, name: &str, text: &str) -> Result<Vec<f32>, String>
 
 fn numbers<const N: usize>(node: Node, name: &str, text: &str) -> Result<[f32; N], String> {
     let values = parse_numbers(node, name, text)?;
-    <[f32; N]>::try_from(values.as_slice()).map_err(|_| {
-        format!(
-            "{}: {name} has {} numbers, not {N}",
-            at(node),
-            values.len()
-        )
-    })
+    <[f32; N]>::try_from(values.as_slice())
+        .map_err(|_| format!("{}: {name} has {} numbers, not {N}", at(node), values.len()))
 }
 
 fn vec3(node: Node, name: &str, text: &str) -> Result<Vec3, String> {

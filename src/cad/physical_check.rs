@@ -210,9 +210,10 @@ pub struct PlacementCheck {
     pub support_area: Option<f32>,
     /// Conflicts left: penetrations over 1 cm (layout or object), failed support tests.
     pub conflicts: usize,
-    /// How far it was pulled apart from its neighbours (metres): moved, for a movable object,
-    /// or taken off its width, for a fixed one. Over a few centimetres this is the map's
-    /// segmentation at fault (one label bled over the neighbour), fixed here, not hidden.
+    /// How far it was pulled apart from its neighbours and out of walls (metres): moved, for a
+    /// movable object, or taken off its width or depth, for a fixed one. Over a few centimetres
+    /// this is the map's segmentation at fault (one label bled over the neighbour) or a model
+    /// deeper than the object (big handles), fixed here, not hidden.
     pub separated_m: f32,
 }
 
@@ -304,7 +305,12 @@ pub fn check_placements(
     let models: Vec<Option<&DatabaseModel>> = (0..n)
         .map(|i| choice[i].map(|k| alignments[i][k].0))
         .collect();
-    let separated_m = separate_neighbours(&models, holders, movable, &mut poses);
+    let retreated_m = retreat_from_walls(&models, movable, layout, &mut poses);
+    let separated_m: Vec<f32> = separate_neighbours(&models, holders, movable, &mut poses)
+        .iter()
+        .zip(&retreated_m)
+        .map(|(a, b)| a + b)
+        .collect();
     // Snap parents before children: a child rests on its parent's final surface.
     let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
     for i in support_order(holders) {
@@ -385,8 +391,9 @@ const SEPARATION_ROUNDS: usize = 10;
 const SEPARATION_GAP_M: f32 = 0.002;
 
 /// Neighbours that interpenetrate side by side (by no more than `MAX_SEPARATED_M` when one is
-/// movable) are pulled apart horizontally: along the contact normal when it is horizontal, else (two objects on the
-/// same support, which cannot part vertically) along the line between their centres. A movable
+/// movable) are pulled apart horizontally: along the contact normal when it is horizontal and,
+/// for two objects on one support, roughly along the line between their centres; else, for such
+/// two (which cannot part vertically), along that line. A movable
 /// object (a cup) is moved; a fixed one (a cabinet) is shrunk with its far side kept: two fixed
 /// neighbours were widened by the same bleeding across their shared boundary, so the truth lies
 /// in the middle. Returns how far each object was moved or shrunk, metres.
@@ -417,16 +424,21 @@ fn separate_neighbours(
                 }
                 let horizontal = normal.with_z(0.0);
                 let siblings = holders[i] == holders[j] && holders[i] != Holder::Other;
-                let direction = if horizontal.length() >= 0.9 {
-                    horizontal.normalize()
-                } else if siblings {
-                    let between = (b.centre() - a.centre()).with_z(0.0);
-                    match between.try_normalize() {
-                        Some(d) => d,
-                        None => continue,
+                let between = (b.centre() - a.centre()).with_z(0.0).try_normalize();
+                let direction = match between {
+                    // Neighbours on one support part along the line between them when the
+                    // deepest contact points elsewhere: vertically, or across it where two thin
+                    // panels cross (an imported cabinet's back panel through its neighbour's
+                    // side panel is shallowest to push out front to back).
+                    Some(d)
+                        if siblings
+                            && (horizontal.length() < 0.9
+                                || horizontal.normalize().dot(d).abs() < 0.7) =>
+                    {
+                        d
                     }
-                } else {
-                    continue;
+                    _ if horizontal.length() >= 0.9 => horizontal.normalize(),
+                    _ => continue,
                 };
                 let push = depth + 2.0 * SEPARATION_GAP_M;
                 let share = match (movable[i], movable[j]) {
@@ -458,6 +470,49 @@ fn separate_neighbours(
         }
     }
     separated
+}
+
+/// Objects reaching behind a wall are brought out of it: a fixed one (a cabinet) is shrunk with
+/// its side facing the room kept, where it was seen (an imported cabinet's big handles make its
+/// model deeper than the cabinet), a movable one is moved. The walls are the layout planes that
+/// stand upright. Returns how far each object was shrunk or moved, metres.
+fn retreat_from_walls(
+    models: &[Option<&DatabaseModel>],
+    movable: &[bool],
+    layout: &[Plane],
+    poses: &mut [Option<Affine3A>],
+) -> Vec<f32> {
+    let walls: Vec<Plane> = layout
+        .iter()
+        .filter(|p| p.normal.z.abs() < 0.1)
+        .copied()
+        .collect();
+    let mut retreated = vec![0.0f32; models.len()];
+    for (i, model) in models.iter().enumerate() {
+        let Some(model) = model else { continue };
+        for wall in &walls {
+            let Some(pose) = poses[i] else { continue };
+            let solid = PlacedSolid::new(model, &pose);
+            let depth = layout_penetration(&solid, std::slice::from_ref(wall));
+            if depth <= 0.5 * MAX_PENETRATION_M {
+                continue;
+            }
+            let Some(into_room) = wall.normal.with_z(0.0).try_normalize() else {
+                continue;
+            };
+            let amount = depth + SEPARATION_GAP_M;
+            let out = if movable[i] {
+                Some(Affine3A::from_translation(into_room * amount) * pose)
+            } else {
+                shrink_from(pose, &solid, into_room, amount)
+            };
+            if let Some(out) = out {
+                poses[i] = Some(out);
+                retreated[i] += amount;
+            }
+        }
+    }
+    retreated
 }
 
 /// `pose` with the model shrunk by `amount` metres along the model axis nearest to `away`, its

@@ -163,11 +163,9 @@ fn body_joint(joint: &urdf_rs::Joint) -> Result<Option<BodyJoint>, ModelFileErro
     } else {
         let (lo, hi) = (joint.limit.lower as f32, joint.limit.upper as f32);
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return Err(format!(
-                "joint {:?}: limits {lo}..{hi} are not a range",
-                joint.name
-            )
-            .into());
+            return Err(
+                format!("joint {:?}: limits {lo}..{hi} are not a range", joint.name).into(),
+            );
         }
         (lo, hi)
     };
@@ -211,9 +209,10 @@ fn geometry_mesh(geometry: &urdf_rs::Geometry, folder: &Path) -> Result<TriMesh,
             let h = positive(*length, "capsule length")? / 2.0;
             TriMesh::capsule(r, h, ROUND_SEGMENTS)
         }
-        Geometry::Sphere { radius } => {
-            TriMesh::ellipsoid(Vec3::splat(positive(*radius, "sphere radius")?), ROUND_SEGMENTS)
-        }
+        Geometry::Sphere { radius } => TriMesh::ellipsoid(
+            Vec3::splat(positive(*radius, "sphere radius")?),
+            ROUND_SEGMENTS,
+        ),
         Geometry::Mesh { filename, scale } => {
             let file = mesh_path(filename, folder)?;
             let mesh = read_mesh_file(&file).map_err(|e| {

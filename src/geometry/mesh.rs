@@ -287,11 +287,17 @@ impl TriMesh {
         let mut profile = Vec::new();
         for i in 0..=quarter {
             let a = -FRAC_PI_2 * (1.0 - i as f32 / quarter as f32);
-            profile.push(Vec2::new(radius * a.cos().max(0.0), -half_length + radius * a.sin()));
+            profile.push(Vec2::new(
+                radius * a.cos().max(0.0),
+                -half_length + radius * a.sin(),
+            ));
         }
         for i in 0..=quarter {
             let a = FRAC_PI_2 * i as f32 / quarter as f32;
-            profile.push(Vec2::new(radius * a.cos().max(0.0), half_length + radius * a.sin()));
+            profile.push(Vec2::new(
+                radius * a.cos().max(0.0),
+                half_length + radius * a.sin(),
+            ));
         }
         TriMesh::lathe(Vec3::ZERO, &profile, segments)
     }

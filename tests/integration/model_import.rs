@@ -4,7 +4,6 @@
 
 use std::path::{Path, PathBuf};
 
-
 use crate::common;
 
 use iscene::cad::CadModel;
@@ -56,7 +55,10 @@ fn libero_objects_import_with_their_joints_facing_front_at_furniture_size() {
     assert_eq!(code, 0, "{stdout}{stderr}");
     eprint!("{stdout}");
     // Faucets, the basin faucet, the flat stove and the window name no class of the project.
-    assert!(stdout.contains("imported 6 models from 10 files"), "{stdout}");
+    assert!(
+        stdout.contains("imported 6 models from 10 files"),
+        "{stdout}"
+    );
     assert!(stdout.contains("4 of other kinds skipped"), "{stdout}");
     assert!(!stdout.contains("not imported"), "{stdout}");
 
@@ -140,11 +142,7 @@ fn libero_objects_import_with_their_joints_facing_front_at_furniture_size() {
     let (code, stdout, stderr) = run_import(&fridge_file, &toy, "1");
     assert_eq!(code, 0, "{stdout}{stderr}");
     let toy_fridge = read_database(&toy).expect("reads").remove(0);
-    assert!(
-        toy_fridge.size.max_element() < 0.3,
-        "{}",
-        toy_fridge.size
-    );
+    assert!(toy_fridge.size.max_element() < 0.3, "{}", toy_fridge.size);
     assert!(
         (toy_fridge.size * (fridge.size.x / toy_fridge.size.x) - fridge.size)
             .abs()
@@ -231,7 +229,10 @@ fn articulated_objects_get_articulated_models() {
     );
     assert!(right * 100 >= cad.objects.len() * 95);
     assert!(cad.max_penetration_m.is_some_and(|d| d <= 0.01));
-    assert_eq!(cad.supports_passing, cad.supports_tested, "every support holds");
+    assert_eq!(
+        cad.supports_passing, cad.supports_tested,
+        "every support holds"
+    );
 }
 
 /// PyBullet's data folder (the validators' virtual environment has PyBullet).
@@ -301,16 +302,21 @@ fn urdf_models_import_at_their_real_size_with_their_joints() {
     assert_eq!(code, 0, "{stdout}{stderr}");
     let models = read_database(&db).expect("reads back");
     let model = |id: &str| {
-        models
-            .iter()
-            .find(|m| m.id == id)
-            .unwrap_or_else(|| panic!("{id} among {:?}", models.iter().map(|m| &m.id).collect::<Vec<_>>()))
+        models.iter().find(|m| m.id == id).unwrap_or_else(|| {
+            panic!(
+                "{id} among {:?}",
+                models.iter().map(|m| &m.id).collect::<Vec<_>>()
+            )
+        })
     };
     let table = model("urdf_table");
     assert_eq!(table.class, "table");
     // The top is 1.5 x 1 m at 0.6 m +- 2.5 cm; the legs reach the floor.
     assert!(
-        (table.size - glam::Vec3::new(1.5, 1.0, 0.625)).abs().max_element() < 0.01,
+        (table.size - glam::Vec3::new(1.5, 1.0, 0.625))
+            .abs()
+            .max_element()
+            < 0.01,
         "{}",
         table.size
     );
@@ -321,7 +327,10 @@ fn urdf_models_import_at_their_real_size_with_their_joints() {
     let cabinet = model("urdf_bathroom_cabinet");
     assert_eq!(cabinet.class, "cabinet");
     assert!(
-        (cabinet.size - glam::Vec3::new(0.6, 0.42, 0.8)).abs().max_element() < 0.01,
+        (cabinet.size - glam::Vec3::new(0.6, 0.42, 0.8))
+            .abs()
+            .max_element()
+            < 0.01,
         "legs and door inside the size: {}",
         cabinet.size
     );
@@ -357,12 +366,18 @@ fn urdf_models_import_at_their_real_size_with_their_joints() {
     .expect("write");
     let (code, stdout, stderr) = import_as("urdf", &ball, &fresh, "1");
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("not imported") && stdout.contains("Spherical"), "{stdout}");
+    assert!(
+        stdout.contains("not imported") && stdout.contains("Spherical"),
+        "{stdout}"
+    );
 }
 
 fn copy_folder(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).expect("create");
-    for entry in std::fs::read_dir(from).expect("read").filter_map(Result::ok) {
+    for entry in std::fs::read_dir(from)
+        .expect("read")
+        .filter_map(Result::ok)
+    {
         std::fs::copy(entry.path(), to.join(entry.file_name())).expect("copy");
     }
 }
