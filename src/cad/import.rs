@@ -33,6 +33,28 @@ pub struct ImportSummary {
     pub total: usize,
 }
 
+impl ImportSummary {
+    fn new(into: &Path, files: usize) -> Self {
+        Self {
+            into: into.to_path_buf(),
+            files,
+            per_class: BTreeMap::new(),
+            skipped: 0,
+            failed: Vec::new(),
+            total: 0,
+        }
+    }
+
+    /// Counts `imported` per class and writes them into the database folder.
+    fn write(mut self, imported: Vec<CadModel>) -> Result<Self, IsceneError> {
+        for model in &imported {
+            *self.per_class.entry(model.class.clone()).or_default() += 1;
+        }
+        self.total = merge_into(&self.into, imported)?;
+        Ok(self)
+    }
+}
+
 impl fmt::Display for ImportSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let imported: usize = self.per_class.values().sum();
@@ -65,25 +87,14 @@ pub fn import_sh3d(path: &Path, into: &Path) -> Result<ImportSummary, IsceneErro
         .par_iter()
         .map(|file| sh3d::import_catalogue(file).map_err(|e| InputError::invalid(file, e)))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut summary = ImportSummary {
-        into: into.to_path_buf(),
-        files: files.len(),
-        per_class: BTreeMap::new(),
-        skipped: 0,
-        failed: Vec::new(),
-        total: 0,
-    };
+    let mut summary = ImportSummary::new(into, files.len());
     let mut imported: Vec<CadModel> = Vec::new();
     for catalogue in catalogues {
         summary.skipped += catalogue.skipped;
         summary.failed.extend(catalogue.failed);
         imported.extend(catalogue.models);
     }
-    for model in &imported {
-        *summary.per_class.entry(model.class.clone()).or_default() += 1;
-    }
-    summary.total = merge_into(into, imported)?;
-    Ok(summary)
+    summary.write(imported)
 }
 
 /// The robot-description formats whose model files `iscene cad import` reads.
@@ -131,14 +142,7 @@ pub fn import_model_files(
     scale: ImportScale,
 ) -> Result<ImportSummary, IsceneError> {
     let files = model_files(path, format.extension())?;
-    let mut summary = ImportSummary {
-        into: into.to_path_buf(),
-        files: files.len(),
-        per_class: BTreeMap::new(),
-        skipped: 0,
-        failed: Vec::new(),
-        total: 0,
-    };
+    let mut summary = ImportSummary::new(into, files.len());
     let mut imported = Vec::new();
     for file in &files {
         let stem = file
@@ -165,11 +169,7 @@ pub fn import_model_files(
             Err(why) => summary.failed.push(format!("{}: {why}", file.display())),
         }
     }
-    for model in &imported {
-        *summary.per_class.entry(model.class.clone()).or_default() += 1;
-    }
-    summary.total = merge_into(into, imported)?;
-    Ok(summary)
+    summary.write(imported)
 }
 
 /// The file `path`, or the files of the folder `path` with the extension `extension`, sorted.
