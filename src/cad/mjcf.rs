@@ -21,11 +21,12 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
+use glam::{Affine3A, EulerRot, Quat, Vec3};
 use roxmltree::Node;
 
 use crate::cad::body_tree::{Body, BodyJoint, BodyTree, ModelFileError};
 use crate::cad::mesh_files::read_mesh_file;
+use crate::cad::mjcf_xml::{at, elements, euler_order, numbers, parse_numbers, pose, vec3};
 use crate::geometry::TriMesh;
 use crate::kinematics::JointKind;
 
@@ -74,21 +75,6 @@ pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
         }
     }
     Ok(tree)
-}
-
-/// Child elements of `node` named `tag`.
-fn elements<'a, 'input>(
-    node: Node<'a, 'input>,
-    tag: &'static str,
-) -> impl Iterator<Item = Node<'a, 'input>> {
-    node.children()
-        .filter(move |c| c.is_element() && c.tag_name().name() == tag)
-}
-
-/// `<tag>` at line N, for errors.
-fn at(node: Node) -> String {
-    let pos = node.document().text_pos_at(node.range().start);
-    format!("<{}> at line {}", node.tag_name().name(), pos.row)
 }
 
 /// Attribute values by element kind (`geom`, `joint`, `mesh`, ...) of one default class.
@@ -613,95 +599,4 @@ fn file_stem(file: &str) -> String {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default()
-}
-
-/// The rotation order of a `eulerseq`: lowercase letters turn about the rotating axes
-/// (intrinsic, glam's plain orders), uppercase about the fixed ones (glam's `Ex` orders).
-fn euler_order(seq: &str) -> Option<EulerRot> {
-    use EulerRot::*;
-    Some(match seq {
-        "xyz" => XYZ,
-        "XYZ" => XYZEx,
-        "zyx" => ZYX,
-        "ZYX" => ZYXEx,
-        "zxy" => ZXY,
-        "ZXY" => ZXYEx,
-        "xzy" => XZY,
-        "XZY" => XZYEx,
-        "yxz" => YXZ,
-        "YXZ" => YXZEx,
-        "yzx" => YZX,
-        "YZX" => YZXEx,
-        _ => return None,
-    })
-}
-
-/// An element's pose in its parent's frame: `pos` and one of the orientation attributes.
-fn pose(node: Node, degrees: bool, euler: EulerRot) -> Result<Affine3A, String> {
-    let translation = match node.attribute("pos") {
-        Some(s) => vec3(node, "pos", s)?,
-        None => Vec3::ZERO,
-    };
-    let unit = if degrees {
-        std::f32::consts::PI / 180.0
-    } else {
-        1.0
-    };
-    let rotation = if let Some(s) = node.attribute("quat") {
-        let [w, x, y, z] = numbers::<4>(node, "quat", s)?;
-        let q = Quat::from_xyzw(x, y, z, w);
-        if q.length() < 1e-9 {
-            return Err(format!("{}: quat is zero", at(node)));
-        }
-        q.normalize()
-    } else if let Some(s) = node.attribute("axisangle") {
-        let [x, y, z, a] = numbers::<4>(node, "axisangle", s)?;
-        let axis = Vec3::new(x, y, z);
-        if axis.length() < 1e-9 {
-            return Err(format!("{}: axisangle has a zero axis", at(node)));
-        }
-        Quat::from_axis_angle(axis.normalize(), a * unit)
-    } else if let Some(s) = node.attribute("euler") {
-        let [a, b, c] = numbers::<3>(node, "euler", s)?;
-        Quat::from_euler(euler, a * unit, b * unit, c * unit)
-    } else if let Some(s) = node.attribute("xyaxes") {
-        let v = numbers::<6>(node, "xyaxes", s)?;
-        let x = Vec3::new(v[0], v[1], v[2]).normalize_or_zero();
-        let y = Vec3::new(v[3], v[4], v[5]);
-        let y = (y - x * x.dot(y)).normalize_or_zero();
-        if x == Vec3::ZERO || y == Vec3::ZERO {
-            return Err(format!("{}: xyaxes are not two independent axes", at(node)));
-        }
-        Quat::from_mat3(&Mat3::from_cols(x, y, x.cross(y)))
-    } else if let Some(s) = node.attribute("zaxis") {
-        let z = vec3(node, "zaxis", s)?;
-        if z.length() < 1e-9 {
-            return Err(format!("{}: zaxis is zero", at(node)));
-        }
-        Quat::from_rotation_arc(Vec3::Z, z.normalize())
-    } else {
-        Quat::IDENTITY
-    };
-    Ok(Affine3A::from_rotation_translation(rotation, translation))
-}
-
-fn parse_numbers(node: Node, name: &str, text: &str) -> Result<Vec<f32>, String> {
-    text.split_whitespace()
-        .map(|t| {
-            t.parse::<f32>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("{}: {name}: {t:?} is not a number", at(node)))
-        })
-        .collect()
-}
-
-fn numbers<const N: usize>(node: Node, name: &str, text: &str) -> Result<[f32; N], String> {
-    let values = parse_numbers(node, name, text)?;
-    <[f32; N]>::try_from(values.as_slice())
-        .map_err(|_| format!("{}: {name} has {} numbers, not {N}", at(node), values.len()))
-}
-
-fn vec3(node: Node, name: &str, text: &str) -> Result<Vec3, String> {
-    numbers::<3>(node, name, text).map(Vec3::from)
 }

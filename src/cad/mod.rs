@@ -13,6 +13,7 @@ pub mod load;
 pub mod matching;
 pub mod mesh_files;
 pub mod mjcf;
+pub mod mjcf_xml;
 pub mod model;
 pub mod orientation;
 pub mod physical_check;
