@@ -123,42 +123,69 @@ fn stl_mesh(reader: &mut (impl std::io::Read + std::io::Seek)) -> Result<TriMesh
 
 /// Every group of an OBJ file as one mesh; materials are not read.
 fn obj_mesh(bytes: &[u8]) -> Result<TriMesh, String> {
+    let (groups, _) = obj_groups(bytes, |_| Err(tobj::LoadError::OpenFileFailed))?;
+    let mut mesh = TriMesh::default();
+    for group in groups {
+        mesh.append(&group.mesh);
+    }
+    Ok(mesh)
+}
+
+/// One group of an OBJ file, triangulated.
+pub struct ObjGroup {
+    pub name: String,
+    pub mesh: TriMesh,
+    /// Index into the materials [`obj_groups`] returns.
+    pub material: Option<usize>,
+}
+
+/// The groups of an OBJ file, and the materials of its `mtllib` files, which `material_file`
+/// reads (by the name the OBJ file gives). A face referring to a vertex that is not there is an
+/// error.
+pub fn obj_groups(
+    bytes: &[u8],
+    material_file: impl Fn(&Path) -> tobj::MTLLoadResult,
+) -> Result<(Vec<ObjGroup>, Vec<tobj::Material>), String> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _) = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| format!("not an OBJ file: {e}"))?;
-    let mut mesh = TriMesh::default();
-    for model in models {
-        let positions: Vec<Vec3> = model
-            .mesh
-            .positions
-            .chunks_exact(3)
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect();
-        let n = positions.len();
-        let triangles = model
-            .mesh
-            .indices
-            .chunks_exact(3)
-            .map(|t| {
-                t.iter()
-                    .all(|&i| (i as usize) < n)
-                    .then(|| [t[0], t[1], t[2]])
-                    .ok_or_else(|| format!("group {:?} has a face out of range", model.name))
+    let (models, materials) = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, material_file)
+        .map_err(|e| format!("not an OBJ file: {e}"))?;
+    let groups = models
+        .into_iter()
+        .map(|model| {
+            let positions: Vec<Vec3> = model
+                .mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect();
+            let n = positions.len();
+            let triangles = model
+                .mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| {
+                    t.iter()
+                        .all(|&i| (i as usize) < n)
+                        .then(|| [t[0], t[1], t[2]])
+                        .ok_or_else(|| format!("group {:?} has a face out of range", model.name))
+                })
+                .collect::<Result<_, _>>()?;
+            Ok(ObjGroup {
+                name: model.name,
+                mesh: TriMesh {
+                    positions,
+                    triangles,
+                },
+                material: model.mesh.material_id,
             })
-            .collect::<Result<_, _>>()?;
-        mesh.append(&TriMesh {
-            positions,
-            triangles,
-        });
-    }
-    Ok(mesh)
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok((groups, materials.unwrap_or_default()))
 }
 
 #[cfg(test)]

@@ -23,6 +23,7 @@ use rayon::prelude::*;
 
 use crate::cad::class_words::class_of_name;
 use crate::cad::import::imported_model_id;
+use crate::cad::mesh_files::obj_groups;
 use crate::cad::model::{CadModel, CadPart};
 use crate::geometry::TriMesh;
 use crate::kinematics::JointSpec;
@@ -367,13 +368,7 @@ fn obj_mesh(
     obj: &[u8],
     materials: &BTreeMap<String, Vec<u8>>,
 ) -> Result<(TriMesh, [f32; 3]), String> {
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: false,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let (meshes, loaded) = tobj::load_obj_buf(&mut Cursor::new(obj), &options, |p| {
+    let (groups, loaded) = obj_groups(obj, |p| {
         let name = p.to_string_lossy().into_owned();
         match materials.get(&name) {
             Some(bytes) => tobj::load_mtl_buf(&mut Cursor::new(bytes.as_slice())),
@@ -381,45 +376,26 @@ fn obj_mesh(
         }
     })
     .map_err(|e| format!("OBJ: {e}"))?;
-    let loaded = loaded.unwrap_or_default();
     let mut mesh = TriMesh::default();
     let mut weighted = Vec3::ZERO;
     let mut weight = 0.0;
-    for m in meshes {
-        let positions: Vec<Vec3> = m
-            .mesh
-            .positions
-            .chunks_exact(3)
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect();
-        if positions.iter().any(|p| !p.is_finite()) {
+    for group in groups {
+        if group.mesh.positions.iter().any(|p| !p.is_finite()) {
             return Err(format!(
                 "group {:?} has a vertex that is not a number",
-                m.name
+                group.name
             ));
         }
-        let triangles: Vec<[u32; 3]> = m
-            .mesh
-            .indices
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
-            .filter(|t| t.iter().all(|&i| (i as usize) < positions.len()))
-            .collect();
-        let part = TriMesh {
-            positions,
-            triangles,
-        };
-        if let Some(diffuse) = m
-            .mesh
-            .material_id
+        if let Some(diffuse) = group
+            .material
             .and_then(|i| loaded.get(i))
             .and_then(|mat| mat.diffuse)
         {
-            let area = part.area();
+            let area = group.mesh.area();
             weighted += Vec3::from(diffuse) * area;
             weight += area;
         }
-        mesh.append(&part);
+        mesh.append(&group.mesh);
     }
     if mesh.triangles.is_empty() {
         return Err("no triangles".into());
