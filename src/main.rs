@@ -8,7 +8,7 @@ use iscene::cad::body_tree::ImportScale;
 use iscene::cad::import::{ModelFormat, import_model_files};
 use iscene::error::IsceneError;
 use iscene::panoptic::InstanceFusion;
-use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
+use iscene::pipeline::{AlignMethod, ReconstructOptions, SegmentationChoice, reconstruct};
 use iscene::render::{RenderOptions, render_sequence};
 use iscene::scene::SceneSpec;
 
@@ -133,6 +133,18 @@ struct ReconstructArgs {
     /// models to it). The models used are copied into OUT/cad.
     #[arg(long, value_name = "DB")]
     cad: Option<PathBuf>,
+    /// How CAD candidates are chosen and aligned: `lm` ranks every model of the class in 24
+    /// orientations and aligns the 10 best by Levenberg-Marquardt over per-axis scale, yaw and
+    /// translation (Han et al.); `icp` aligns every upright model of the class by a yaw sweep
+    /// and ICP at one scale (Sivananda et al.).
+    #[arg(long, value_enum, default_value_t = Align::Lm)]
+    align: Align,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Align {
+    Lm,
+    Icp,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -309,6 +321,7 @@ fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<Pat
         fusion: InstanceFusion::Joint,
         estimate_gravity: false,
         cad: None,
+        align: Default::default(),
         progress,
     })?;
     eprintln!(
@@ -554,6 +567,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     baseline: None,
                     estimate_gravity: false,
                     cad: None,
+                    align: Align::Lm,
                 },
             };
             let out = args.out.unwrap_or_else(|| {
@@ -583,6 +597,10 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 },
                 estimate_gravity: args.estimate_gravity,
                 cad: args.cad,
+                align: match args.align {
+                    Align::Lm => AlignMethod::Lm,
+                    Align::Icp => AlignMethod::Icp,
+                },
                 progress: interactive,
             };
             let r = reconstruct(&options)?;

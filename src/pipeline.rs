@@ -20,7 +20,7 @@ use crate::io::write_sequence::write_text;
 use crate::panoptic::{InstanceFusion, MapperParams};
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
-use crate::systems::cad_replacement::{CadLibrary, CadReport};
+use crate::systems::cad_replacement::{CadAlignMethod, CadLibrary, CadReport};
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::kinematic_tree::SceneKinematicTree;
@@ -29,6 +29,7 @@ use crate::systems::physics_validation::PhysicsReport;
 use crate::systems::stages::StageMarks;
 use crate::systems::{Reconstruct, ReconstructionStage};
 
+pub use crate::cad::replacement::AlignMethod;
 pub use crate::segmentation::SegmentationChoice;
 
 #[derive(Clone, Debug)]
@@ -51,6 +52,8 @@ pub struct ReconstructOptions {
     /// A CAD database folder (`iscene cad generate` / `iscene cad import`) that replacement
     /// matches against, instead of the built-in parametric library.
     pub cad: Option<PathBuf>,
+    /// How CAD candidates are chosen and aligned.
+    pub align: AlignMethod,
     pub progress: bool,
 }
 
@@ -229,6 +232,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     if let Some(db) = &cad_library {
         app.insert_resource(CadLibrary(db.clone()));
     }
+    app.insert_resource(CadAlignMethod(options.align));
     app.world_mut().run_schedule(Reconstruct);
     if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
         return Err(err);

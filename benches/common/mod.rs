@@ -26,6 +26,7 @@ pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<Tri
         fusion: InstanceFusion::Joint,
         estimate_gravity: false,
         cad: None,
+        align: Default::default(),
         progress: false,
     })
     .expect("reconstruct");

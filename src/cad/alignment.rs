@@ -60,7 +60,7 @@ pub struct Alignment {
 /// Metres of alignment error that facing the wrong way (df = 1) or lying on a side (db = 1)
 /// weighs as when choosing among aligned candidates: shapes that fit alike are told apart by the
 /// priors of the ranking.
-const PRIOR_AE_WEIGHT: f32 = 0.02;
+pub const PRIOR_AE_WEIGHT: f32 = 0.02;
 
 /// Aligns every candidate; the alignments come best first: lowest alignment error plus prior
 /// penalties (`choice_score`), ties by rank.

@@ -5,7 +5,7 @@ use glam::{Mat3, Vec3};
 use pathfinding::kuhn_munkres::kuhn_munkres_min;
 use pathfinding::matrix::Matrix;
 
-use crate::cad::database::CadDatabase;
+use crate::cad::database::{CadDatabase, DatabaseModel};
 use crate::cad::orientation::axis_rotations;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
@@ -68,10 +68,8 @@ pub struct Candidate {
 
 /// The `keep` best candidates for `object` among the models of its class, lowest ME first (ties
 /// by model index, then orientation, so the order is deterministic). Empty when the database
-/// has no model of the class. An object of an articulated class (a fridge, a cabinet) is
-/// matched against the articulated models of its class only, where the database has any: a
-/// rigid model fitting its box a little better would leave its doors shut for good.
-/// Articulated models are tried upright only.
+/// has no model of the class; the models are [`class_models`]. Articulated models are tried
+/// upright only.
 pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -> Vec<Candidate> {
     let box_from_world = Mat3::from_rotation_z(-object.bbox.yaw);
     let world_from_box = box_from_world.transpose();
@@ -80,17 +78,7 @@ pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -
     let object_shape = relative_size(object.bbox.size);
     let rotations = axis_rotations();
     let mut candidates = Vec::new();
-    let articulated_class = ClassTable::builtin()
-        .get(object.class)
-        .is_some_and(|c| c.kind == EntityKind::Articulated);
-    let articulated_only = articulated_class
-        && db
-            .of_class(object.class)
-            .any(|(_, m)| m.model.is_articulated());
-    let models = db
-        .of_class(object.class)
-        .filter(|(_, m)| !articulated_only || m.model.is_articulated());
-    for (index, entry) in models {
+    for (index, entry) in class_models(object.class, db) {
         let model_directions = distinct_directions(entry.planes.iter().map(|p| p.normal));
         // An articulated model stands upright: its hinges and slides are made for gravity
         // along -z (a cabinet on its side opens its drawers upwards). The first four of the
@@ -124,6 +112,23 @@ pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -
     });
     candidates.truncate(keep);
     candidates
+}
+
+/// The models an object of `class` may be replaced by, with their database indices: the
+/// models of its class, and of an articulated class (a fridge, a cabinet) only the articulated
+/// ones where the database has any, since a rigid model fitting its box a little better would
+/// leave its doors shut for good.
+pub fn class_models<'a>(
+    class: &'a str,
+    db: &'a CadDatabase,
+) -> impl Iterator<Item = (usize, &'a DatabaseModel)> + 'a {
+    let articulated_class = ClassTable::builtin()
+        .get(class)
+        .is_some_and(|c| c.kind == EntityKind::Articulated);
+    let articulated_only =
+        articulated_class && db.of_class(class).any(|(_, m)| m.model.is_articulated());
+    db.of_class(class)
+        .filter(move |(_, m)| !articulated_only || m.model.is_articulated())
 }
 
 /// Box size divided by its length: the shape without the scale.

@@ -10,6 +10,7 @@ use serde::Serialize;
 
 use crate::cad::alignment::{Alignment, align_all, alignment_error, choice_score};
 use crate::cad::database::{CadDatabase, DatabaseModel};
+use crate::cad::icp;
 use crate::cad::matching::{Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates};
 use crate::cad::physical_check::{Holder, PlacementCheck, check_placements};
 use crate::classes::{ClassTable, EntityKind};
@@ -120,11 +121,32 @@ fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Facing> {
         })
 }
 
-/// The ranked candidates of every object (CadMatch).
-pub fn rank_scene(objects: &[ObservedObject], db: &CadDatabase) -> Vec<Vec<Candidate>> {
+/// How candidates are chosen and aligned.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AlignMethod {
+    /// Han et al.: the 10 best of the ranking by matching error, aligned by Levenberg-Marquardt
+    /// over per-axis scale, yaw and translation.
+    #[default]
+    Lm,
+    /// Sivananda et al.: every model of the class, a yaw sweep, then ICP over yaw and
+    /// translation at one scale ([`icp`]).
+    Icp,
+}
+
+/// The candidates of every object (CadMatch): the ranking's best, or for ICP every model of the
+/// class.
+pub fn rank_scene(
+    objects: &[ObservedObject],
+    db: &CadDatabase,
+    method: AlignMethod,
+) -> Vec<Vec<Candidate>> {
     objects
         .par_iter()
-        .map(|o| rank_candidates(o, db, KEEP_CANDIDATES))
+        .map(|o| match method {
+            AlignMethod::Lm => rank_candidates(o, db, KEEP_CANDIDATES),
+            AlignMethod::Icp => icp::class_candidates(o, db),
+        })
         .collect()
 }
 
@@ -133,11 +155,15 @@ pub fn align_scene(
     objects: &[ObservedObject],
     db: &CadDatabase,
     candidates: &[Vec<Candidate>],
+    method: AlignMethod,
 ) -> Vec<Vec<Alignment>> {
     objects
         .par_iter()
         .zip(candidates)
-        .map(|(o, c)| align_all(o, db, c))
+        .map(|(o, c)| match method {
+            AlignMethod::Lm => align_all(o, db, c),
+            AlignMethod::Icp => icp::align_all(o, db, c),
+        })
         .collect()
 }
 

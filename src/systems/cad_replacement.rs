@@ -13,8 +13,9 @@ use crate::cad::alignment::Alignment;
 use crate::cad::database::CadDatabase;
 use crate::cad::matching::Candidate;
 use crate::cad::replacement::{
-    ReplacementRecord, align_scene, check_and_place, observed_objects, rank_scene,
+    AlignMethod, ReplacementRecord, align_scene, check_and_place, observed_objects, rank_scene,
 };
+use crate::cad::shape_filter::{Rejection, layout_planes, rejection};
 use crate::components::{ObservedSurface, SceneEntity};
 use crate::graph::ContactGraph;
 use crate::systems::contact_graph::SceneContactGraph;
@@ -25,7 +26,23 @@ use crate::systems::scene_graph::attach_contact_graph;
 #[derive(Resource, Clone)]
 pub struct CadLibrary(pub Arc<CadDatabase>);
 
-/// CadMatch's result: the ranked candidates of each object id.
+/// How CadMatch and CadAlign choose and align candidates (Levenberg-Marquardt unless set).
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct CadAlignMethod(pub AlignMethod);
+
+/// An object the shape filters kept from replacement, and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct RejectedObject {
+    pub id: String,
+    #[serde(flatten)]
+    pub rejection: Rejection,
+}
+
+/// CadMatch's result: the objects the shape filters rejected.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct CadRejections(pub Vec<RejectedObject>);
+
+/// CadMatch's result: the ranked candidates of each object id (none for a rejected object).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct CadCandidates(pub Vec<(String, Vec<Candidate>)>);
 
@@ -36,9 +53,13 @@ pub struct CadAlignments(pub Vec<(String, Vec<Alignment>)>);
 /// What replacement did, for report.json.
 #[derive(Resource, Clone, Debug, Serialize)]
 pub struct CadReport {
+    pub align_method: AlignMethod,
     pub database_models: usize,
     /// Objects of the contact graph (layout excluded).
     pub objects: usize,
+    /// Segments the shape filters found to be label bleeding or several objects: they keep
+    /// their segment meshes.
+    pub rejected: Vec<RejectedObject>,
     pub replaced: Vec<ReplacementRecord>,
     pub mean_alignment_error_m: Option<f32>,
     /// Objects the physical check moved off their best alignment.
@@ -73,14 +94,30 @@ fn cad_match_stage(world: &mut World) {
         .get_resource_or_insert_with(|| CadLibrary(Arc::new(CadDatabase::parametric())))
         .0
         .clone();
-    let objects = observed_objects(&graph, &points);
-    let ranked = rank_scene(&objects, &db);
+    let method = world.get_resource_or_init::<CadAlignMethod>().0;
+    let layout = layout_planes(&graph);
+    let (rejected, objects): (Vec<_>, Vec<_>) = observed_objects(&graph, &points)
+        .into_iter()
+        .map(|o| (rejection(&o, &layout), o))
+        .partition(|(r, _)| r.is_some());
+    let objects: Vec<_> = objects.into_iter().map(|(_, o)| o).collect();
+    let ranked = rank_scene(&objects, &db, method);
     let candidates = objects
         .iter()
         .zip(ranked)
         .map(|(o, c)| (o.id.to_string(), c))
         .collect();
+    let rejected = rejected
+        .into_iter()
+        .filter_map(|(r, o)| {
+            Some(RejectedObject {
+                id: o.id.to_string(),
+                rejection: r?,
+            })
+        })
+        .collect();
     world.insert_resource(CadCandidates(candidates));
+    world.insert_resource(CadRejections(rejected));
 }
 
 fn cad_align_stage(world: &mut World) {
@@ -106,7 +143,8 @@ fn cad_align_stage(world: &mut World) {
                 .unwrap_or_default()
         })
         .collect();
-    let aligned = align_scene(&objects, &db, &ranked);
+    let method = world.get_resource_or_init::<CadAlignMethod>().0;
+    let aligned = align_scene(&objects, &db, &ranked, method);
     let alignments = objects
         .iter()
         .map(|o| o.id.to_string())
@@ -146,8 +184,15 @@ fn physical_check_stage(world: &mut World) {
     }
     let mean_alignment_error_m = (!replaced.is_empty())
         .then(|| replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32);
+    let align_method = world.get_resource_or_init::<CadAlignMethod>().0;
+    let rejected = world
+        .get_resource::<CadRejections>()
+        .map(|r| r.0.clone())
+        .unwrap_or_default();
     world.insert_resource(CadReport {
+        align_method,
         database_models: db.len(),
+        rejected,
         objects: object_count,
         swapped: replaced.iter().filter(|r| r.check.chosen > 0).count(),
         conflicted: replaced

@@ -21,6 +21,7 @@ fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usiz
         fusion,
         estimate_gravity: false,
         cad: None,
+        align: Default::default(),
         progress: false,
     })
     .expect("reconstruct");

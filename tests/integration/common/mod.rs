@@ -124,6 +124,7 @@ pub fn map_every_second_frame(seq: &Path, out: &Path, cad: Option<PathBuf>) {
         fusion: iscene::panoptic::InstanceFusion::Joint,
         estimate_gravity: false,
         cad,
+        align: iscene::pipeline::AlignMethod::Lm,
         progress: false,
     })
     .expect("reconstruct");
