@@ -10,6 +10,7 @@ use serde::Serialize;
 use crate::cad::database::CadDatabase;
 use crate::cad::export::write_scene_models;
 use crate::error::{InputError, IsceneError};
+use crate::export::augmented::{augmented_ply_bytes, augmented_points};
 use crate::export::{write_occupancy, write_tree_exports};
 use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
@@ -314,6 +315,23 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             .map(|(p, _)| aligned_from_world.transform_point3(*p))
             .collect();
         outputs.extend(write_occupancy(staged.path(), &map_points, tree)?);
+        if let Some(library) = app.world().get_resource::<CadLibrary>() {
+            let points = augmented_points(
+                &surface.voxels,
+                &aligned_from_world,
+                &surface.entities,
+                &scene.graph,
+                &library.0,
+                options.voxel,
+            );
+            let classes: Vec<&str> = surface.entities.iter().map(|e| e.class.as_str()).collect();
+            let bytes = augmented_ply_bytes(&points, &classes)
+                .map_err(|e| IsceneError::Internal(format!("augmented.ply: {e}")))?;
+            let path = staged.path().join("augmented.ply");
+            std::fs::write(&path, bytes)
+                .map_err(|e| IsceneError::io(format!("writing {}", path.display()), e))?;
+            outputs.push("augmented.ply".into());
+        }
     }
     let mut report = ReconstructReport {
         input: sequence_dir,

@@ -1,6 +1,7 @@
 //! Exports of the kinematic tree for simulators and tools: URDF with OBJ meshes, MJCF, glTF, and
-//! the 2D occupancy layer in the ROS map_server format.
+//! the 2D occupancy layer in the ROS map_server format; the augmented geometry.
 
+pub mod augmented;
 pub mod mjcf;
 pub mod obj;
 pub mod occupancy;

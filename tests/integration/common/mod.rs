@@ -113,6 +113,16 @@ pub fn render_and_map_every_second_frame(
 /// Reconstructs every second frame of the rendered sequence `seq` into `out` with the oracle
 /// segmentation at 2 cm, replacing objects from the CAD database folder `cad` when given.
 pub fn map_every_second_frame(seq: &Path, out: &Path, cad: Option<PathBuf>) {
+    map_every_second_frame_aligning(seq, out, cad, iscene::pipeline::AlignMethod::Lm);
+}
+
+/// [`map_every_second_frame`], its CAD candidates chosen and aligned by `align`.
+pub fn map_every_second_frame_aligning(
+    seq: &Path,
+    out: &Path,
+    cad: Option<PathBuf>,
+    align: iscene::pipeline::AlignMethod,
+) {
     iscene::pipeline::reconstruct(&iscene::pipeline::ReconstructOptions {
         input: Some(seq.to_path_buf()),
         out: out.to_path_buf(),
@@ -124,7 +134,7 @@ pub fn map_every_second_frame(seq: &Path, out: &Path, cad: Option<PathBuf>) {
         fusion: iscene::panoptic::InstanceFusion::Joint,
         estimate_gravity: false,
         cad,
-        align: iscene::pipeline::AlignMethod::Lm,
+        align,
         progress: false,
     })
     .expect("reconstruct");
