@@ -136,7 +136,7 @@ struct ReconstructArgs {
     /// How CAD candidates are chosen and aligned: `lm` ranks every model of the class in 24
     /// orientations and aligns the 10 best by Levenberg-Marquardt over per-axis scale, yaw and
     /// translation (Han et al.); `icp` aligns every upright model of the class by a yaw sweep
-    /// and ICP at one scale (Sivananda et al.).
+    /// and ICP over yaw, floor position and width and depth scales (Sivananda et al.).
     #[arg(long, value_enum, default_value_t = Align::Lm)]
     align: Align,
 }

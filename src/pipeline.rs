@@ -325,8 +325,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
                 options.voxel,
             );
             let classes: Vec<&str> = surface.entities.iter().map(|e| e.class.as_str()).collect();
-            let bytes = augmented_ply_bytes(&points, &classes)
-                .map_err(|e| IsceneError::Internal(format!("augmented.ply: {e}")))?;
+            let bytes = augmented_ply_bytes(&points, &classes);
             let path = staged.path().join("augmented.ply");
             std::fs::write(&path, bytes)
                 .map_err(|e| IsceneError::io(format!("writing {}", path.display()), e))?;

@@ -9,11 +9,6 @@
 use std::collections::{HashMap, HashSet};
 
 use glam::{Affine3A, IVec3, Mat4, Vec3};
-use ply_rs_bw::ply::{
-    Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType,
-    ScalarType,
-};
-use ply_rs_bw::writer::Writer;
 
 use crate::cad::database::CadDatabase;
 use crate::graph::ContactGraph;
@@ -94,57 +89,40 @@ fn thinned(points: Vec<Vec3>, spacing: f32) -> Vec<Vec3> {
 
 /// `points` as binary little-endian PLY: x, y, z, entity, from_model (0 or 1), red, green, blue
 /// (the entity's class colour, grey for none). `classes` is each entity's class, in order.
-pub fn augmented_ply_bytes(points: &[AugmentedPoint], classes: &[&str]) -> Result<Vec<u8>, String> {
-    let mut ply = Ply::<DefaultElement>::new();
-    ply.header.encoding = Encoding::BinaryLittleEndian;
-    ply.header.comments.push(
-        "augmented geometry: map surface minus replaced segments plus CAD model surfaces; \
-         aligned frame (z up, floor at 0); entity = index in panoptic/entities.json + 1, 0 = none"
-            .into(),
+/// Written by hand rather than through ply-rs: one fixed record per point, and a scene has
+/// hundreds of thousands of them.
+pub fn augmented_ply_bytes(points: &[AugmentedPoint], classes: &[&str]) -> Vec<u8> {
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\n\
+         comment augmented geometry: map surface minus replaced segments plus CAD model surfaces\n\
+         comment aligned frame (z up, floor at 0); entity = index in panoptic/entities.json + 1, 0 = none\n\
+         element vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n\
+         property uint entity\nproperty uchar from_model\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\n\
+         end_header\n",
+        points.len()
     );
-    let mut vertex = ElementDef::new("vertex".into());
-    let scalar = |name: &str, t: ScalarType| PropertyDef::new(name.into(), PropertyType::Scalar(t));
-    for name in ["x", "y", "z"] {
-        vertex.properties.add(scalar(name, ScalarType::Float));
-    }
-    vertex.properties.add(scalar("entity", ScalarType::UInt));
-    vertex
-        .properties
-        .add(scalar("from_model", ScalarType::UChar));
-    for name in ["red", "green", "blue"] {
-        vertex.properties.add(scalar(name, ScalarType::UChar));
-    }
-    ply.header.elements.add(vertex);
     let colors: Vec<[u8; 3]> = classes
         .iter()
         .map(|c| class_color(c).map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
         .collect();
-    let vertices = points
-        .iter()
-        .map(|p| {
-            let rgb = (p.entity as usize)
-                .checked_sub(1)
-                .and_then(|i| colors.get(i))
-                .copied()
-                .unwrap_or([128; 3]);
-            let mut v = DefaultElement::new();
-            v.insert("x".into(), Property::Float(p.position.x));
-            v.insert("y".into(), Property::Float(p.position.y));
-            v.insert("z".into(), Property::Float(p.position.z));
-            v.insert("entity".into(), Property::UInt(p.entity));
-            v.insert("from_model".into(), Property::UChar(u8::from(p.from_model)));
-            v.insert("red".into(), Property::UChar(rgb[0]));
-            v.insert("green".into(), Property::UChar(rgb[1]));
-            v.insert("blue".into(), Property::UChar(rgb[2]));
-            v
-        })
-        .collect();
-    ply.payload.insert("vertex".into(), vertices);
-    let mut bytes = Vec::new();
-    Writer::new()
-        .write_ply(&mut bytes, &mut ply)
-        .map_err(|e| e.to_string())?;
-    Ok(bytes)
+    let mut bytes = Vec::with_capacity(header.len() + points.len() * 20);
+    bytes.extend_from_slice(header.as_bytes());
+    for p in points {
+        let rgb = (p.entity as usize)
+            .checked_sub(1)
+            .and_then(|i| colors.get(i))
+            .copied()
+            .unwrap_or([128; 3]);
+        for v in p.position.to_array() {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        bytes.extend_from_slice(&p.entity.to_le_bytes());
+        bytes.push(u8::from(p.from_model));
+        bytes.extend_from_slice(&rgb);
+    }
+    bytes
 }
 
 #[cfg(test)]
@@ -237,7 +215,19 @@ mod tests {
             .collect();
         assert_eq!(cells.len(), model.len());
         let classes: Vec<&str> = entities.iter().map(|e| e.class.as_str()).collect();
-        let bytes = augmented_ply_bytes(&points, &classes).expect("ply");
-        assert!(bytes.starts_with(b"ply\n"));
+        // ply-rs reads back what was written by hand.
+        let bytes = augmented_ply_bytes(&points, &classes);
+        let ply = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new()
+            .read_ply(&mut bytes.as_slice())
+            .expect("a PLY file");
+        let vertices = &ply.payload["vertex"];
+        assert_eq!(vertices.len(), points.len());
+        let last = vertices.last().expect("points");
+        assert_eq!(last["from_model"], ply_rs_bw::ply::Property::UChar(1));
+        assert_eq!(last["entity"], ply_rs_bw::ply::Property::UInt(2));
+        assert_eq!(
+            last["x"],
+            ply_rs_bw::ply::Property::Float(points.last().expect("points").position.x)
+        );
     }
 }
