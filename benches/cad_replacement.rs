@@ -2,7 +2,8 @@
 //! on 2 cores). Setup, untimed: render the kitchen and the living room, map every third frame,
 //! build their contact graphs, take 20 of their objects; the database is the parametric library
 //! at several sizes per model (pre-processing it is timed on its own). Timed: ranking every
-//! object's candidates, then aligning the best ten of each; and, apart, the global physical
+//! object's candidates, then aligning the best ten of each (and the ICP route of
+//! `--align icp`: every model of the class by a yaw sweep and ICP); and, apart, the global physical
 //! check of the kitchen's aligned candidates (choice, separation, snapping, verdicts). With the
 //! Sweet Home 3D catalogues unpacked (scripts/setup-sh3d.sh), the same objects against the
 //! imported models as well.
@@ -18,7 +19,9 @@ use glam::Vec3;
 use iscene::cad::ParametricLibrary;
 use iscene::cad::database::CadDatabase;
 use iscene::cad::matching::ObservedObject;
-use iscene::cad::replacement::{align_scene, check_and_place, observed_objects, rank_scene};
+use iscene::cad::replacement::{
+    AlignMethod, align_scene, check_and_place, observed_objects, rank_scene,
+};
 use iscene::graph::ContactGraph;
 use iscene::graph::build::{ContactGraphParams, build_contact_graph_with_surfaces};
 
@@ -77,21 +80,27 @@ fn cad_replacement(c: &mut Criterion) {
         db.len(),
         start.elapsed().as_secs_f64()
     );
-    // Ranking every object's candidates, then aligning the best ten of each.
-    let mut bench_against = |db: &CadDatabase, what: &str| {
+    // Ranking every object's candidates, then aligning the best ten of each (LM); or every model
+    // of the class by ICP.
+    let mut bench_against = |db: &CadDatabase, what: &str, method: AlignMethod| {
+        let route = match method {
+            AlignMethod::Lm => "",
+            AlignMethod::Icp => "_icp",
+        };
         let name = format!(
-            "cad_replacement_{}_objects_{}_{what}",
+            "cad_replacement{route}_{}_objects_{}_{what}",
             objects.len(),
             db.len()
         );
         c.bench_function(&name, |b| {
             b.iter(|| {
-                let ranked = rank_scene(&objects, db);
-                align_scene(&objects, db, &ranked)
+                let ranked = rank_scene(&objects, db, method);
+                align_scene(&objects, db, &ranked, method)
             })
         });
     };
-    bench_against(&db, "models");
+    bench_against(&db, "models", AlignMethod::Lm);
+    bench_against(&db, "models", AlignMethod::Icp);
 
     // The same objects against the imported Sweet Home 3D catalogues (scripts/setup-sh3d.sh),
     // when they are there: real meshes, as convex pieces, instead of generated boxes.
@@ -110,7 +119,7 @@ fn cad_replacement(c: &mut Criterion) {
             db.len(),
             start.elapsed().as_secs_f64()
         );
-        bench_against(&db, "sweet_home_3d_models");
+        bench_against(&db, "sweet_home_3d_models", AlignMethod::Lm);
     } else {
         eprintln!("no Sweet Home 3D catalogues in .sh3d: run scripts/setup-sh3d.sh to bench them");
     }
@@ -118,8 +127,8 @@ fn cad_replacement(c: &mut Criterion) {
     let (kitchen, points) = &scenes[0];
     let library = CadDatabase::parametric();
     let kitchen_objects = observed_objects(kitchen, points);
-    let ranked = rank_scene(&kitchen_objects, &library);
-    let aligned = align_scene(&kitchen_objects, &library, &ranked);
+    let ranked = rank_scene(&kitchen_objects, &library, AlignMethod::Lm);
+    let aligned = align_scene(&kitchen_objects, &library, &ranked, AlignMethod::Lm);
     let ids: Vec<String> = kitchen_objects.iter().map(|o| o.id.to_string()).collect();
     let name = format!("physical_check_kitchen_{}_objects", ids.len());
     c.bench_function(&name, |b| {

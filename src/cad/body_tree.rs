@@ -33,6 +33,9 @@ pub struct Body {
     /// Convex hulls of its visual-only geometry: the shape where the collision geometry leaves
     /// it out (a table whose file gives only its top a collision box).
     pub visual_pieces: Vec<TriMesh>,
+    /// Its visual geometry as the file gives it (not hulls), in the body's frame; empty when
+    /// it has none, and then its collision pieces are what it looks like.
+    pub visual_meshes: Vec<TriMesh>,
     /// Colours of its visual geometry (linear RGB) with their surface areas.
     pub colors: Vec<([f32; 3], f32)>,
 }
@@ -100,6 +103,8 @@ struct PartDraft {
     joint: JointSpec,
     mesh: TriMesh,
     visual_pieces: Vec<TriMesh>,
+    /// What its bodies look like (their visual meshes, else their collision pieces).
+    visual: TriMesh,
     colors: Vec<([f32; 3], f32)>,
 }
 
@@ -150,6 +155,9 @@ pub fn canonical_model(
         d.mesh = d
             .mesh
             .transformed(&Affine3A::from_scale(Vec3::splat(factor)));
+        d.visual = d
+            .visual
+            .transformed(&Affine3A::from_scale(Vec3::splat(factor)));
         if d.joint.kind == JointKind::Prismatic {
             d.joint.limits = d.joint.limits.map(|(lo, hi)| (lo * factor, hi * factor));
         }
@@ -163,6 +171,7 @@ pub fn canonical_model(
     // are then relative to the model.
     let root_frame = drafts[0].model_from_part;
     drafts[0].mesh = drafts[0].mesh.transformed(&root_frame);
+    drafts[0].visual = drafts[0].visual.transformed(&root_frame);
     drafts[0].model_from_part = Affine3A::IDENTITY;
     let parts = drafts
         .iter()
@@ -175,6 +184,7 @@ pub fn canonical_model(
                 * d.model_from_part,
             joint: d.joint,
             mesh: d.mesh.clone(),
+            visual: (d.visual != d.mesh).then(|| d.visual.clone()),
             color: mean_color(&d.colors),
         })
         .collect();
@@ -237,6 +247,7 @@ fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
                     joint: joint_spec,
                     mesh: TriMesh::default(),
                     visual_pieces: Vec::new(),
+                    visual: TriMesh::default(),
                     colors: Vec::new(),
                 });
                 drafts.len() - 1
@@ -250,6 +261,7 @@ fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
                     joint: JointSpec::FIXED,
                     mesh: TriMesh::default(),
                     visual_pieces: Vec::new(),
+                    visual: TriMesh::default(),
                     colors: Vec::new(),
                 });
                 0
@@ -267,6 +279,16 @@ fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
             drafts[part]
                 .visual_pieces
                 .push(piece.transformed(&part_from_body));
+        }
+        let looks = if body.visual_meshes.is_empty() {
+            &body.pieces
+        } else {
+            &body.visual_meshes
+        };
+        for mesh in looks {
+            drafts[part]
+                .visual
+                .append(&mesh.transformed(&part_from_body));
         }
         drafts[part].colors.extend_from_slice(&body.colors);
     }
@@ -365,6 +387,7 @@ mod tests {
                 Vec3::new(0.2, 0.3, 0.9),
             )],
             visual_pieces: Vec::new(),
+            visual_meshes: Vec::new(),
             colors: vec![([1.0, 0.0, 0.0], 1.0)],
         };
         let door = Body {
@@ -384,6 +407,7 @@ mod tests {
                 Vec3::new(0.02, 0.3, 0.9),
             )],
             visual_pieces: Vec::new(),
+            visual_meshes: Vec::new(),
             colors: Vec::new(),
         };
         BodyTree {

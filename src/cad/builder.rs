@@ -36,6 +36,7 @@ impl PartsBuilder {
                 parent_from_part: Affine3A::IDENTITY,
                 joint: JointSpec::FIXED,
                 mesh: TriMesh::default(),
+                visual: None,
                 color: body_color,
             }],
         }
@@ -70,6 +71,7 @@ impl PartsBuilder {
             parent_from_part,
             joint,
             mesh: TriMesh::default(),
+            visual: None,
             color,
         });
         self.parts.len() - 1

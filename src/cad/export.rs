@@ -36,6 +36,15 @@ pub struct PartMetadata {
     pub color: [f32; 3],
     pub vertices: usize,
     pub triangles: usize,
+    /// Triangles of its own visual mesh (node `<name>.visual` under the part's node), when it
+    /// has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub visual_triangles: Option<usize>,
+}
+
+/// The .glb node holding part `part`'s visual mesh, a child of the part's node.
+pub fn visual_node_name(part: &str) -> String {
+    format!("{part}.visual")
 }
 
 pub const CANONICAL_FRAME: &str =
@@ -62,6 +71,7 @@ pub fn metadata(model: &CadModel) -> ModelMetadata {
                 color: p.color,
                 vertices: p.mesh.positions.len(),
                 triangles: p.mesh.triangles.len(),
+                visual_triangles: p.visual.as_ref().map(|v| v.triangles.len()),
             })
             .collect(),
     }
@@ -79,6 +89,11 @@ pub fn model_glb(model: &CadModel) -> Result<Vec<u8>, String> {
             node.rotation = rotation;
             node.translation = translation;
             node.mesh = Some((p.mesh.clone(), p.color));
+            if let Some(visual) = &p.visual {
+                let mut child = GltfNode::new(visual_node_name(&p.name));
+                child.mesh = Some((visual.clone(), p.color));
+                node.children.push(child);
+            }
             node.extras = serde_json::to_value(p.joint)
                 .ok()
                 .map(|j| serde_json::json!({ "joint": j }));

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::cad::export::{DatabaseIndex, ModelMetadata};
+use crate::cad::export::{DatabaseIndex, ModelMetadata, visual_node_name};
 use crate::cad::model::{CadModel, CadPart};
 use crate::error::InputError;
 use crate::geometry::TriMesh;
@@ -67,12 +67,28 @@ pub fn read_model(dir: &Path, id: &str) -> Result<CadModel, InputError> {
                 format!("part {}: pose is not finite", part.name),
             ));
         }
+        // The part's look, where it has one of its own, is its node's child of that name.
+        let visual_name = visual_node_name(&part.name);
+        let visual = meshes
+            .iter()
+            .find(|(name, _)| *name == visual_name)
+            .map(|(_, m)| m.clone());
+        if part.visual_triangles.is_some() != visual.is_some() {
+            return Err(InputError::invalid(
+                &glb_path,
+                format!(
+                    "part {}: node {visual_name} does not match the metadata",
+                    part.name
+                ),
+            ));
+        }
         parts.push(CadPart {
             name: part.name.clone(),
             parent,
             parent_from_part,
             joint: part.joint,
             mesh,
+            visual,
             color: part.color,
         });
     }

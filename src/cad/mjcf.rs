@@ -64,6 +64,7 @@ pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
         joint: None,
         pieces: Vec::new(),
         visual_pieces: Vec::new(),
+        visual_meshes: Vec::new(),
         colors: Vec::new(),
     });
     reader.read_body_contents(worldbody, 0, "main", &mut tree)?;
@@ -325,6 +326,7 @@ impl Reader {
                 joint,
                 pieces: Vec::new(),
                 visual_pieces: Vec::new(),
+                visual_meshes: Vec::new(),
                 colors: Vec::new(),
             });
             let index = tree.bodies.len() - 1;
@@ -513,6 +515,7 @@ impl Reader {
             self.collision_colors[body].push(color);
         } else {
             target.visual_pieces.extend(hull);
+            target.visual_meshes.push(mesh);
             target.colors.push(color);
         }
         Ok(())

@@ -16,9 +16,21 @@ pub struct CadPart {
     /// The part's frame in its parent's frame at joint value zero.
     pub parent_from_part: Affine3A,
     pub joint: JointSpec,
+    /// What the part collides and is matched as.
     pub mesh: TriMesh,
+    /// What it looks like, where that is not its collision mesh: an imported model's visual
+    /// geometry (a LIBERO cabinet's panels and handles, where it collides as boxes). `None`:
+    /// the mesh is both.
+    pub visual: Option<TriMesh>,
     /// Linear RGB base colour in 0..1.
     pub color: [f32; 3],
+}
+
+impl CadPart {
+    /// The mesh it is drawn with.
+    pub fn visual_mesh(&self) -> &TriMesh {
+        self.visual.as_ref().unwrap_or(&self.mesh)
+    }
 }
 
 /// A complete model in the canonical frame: +z up, front facing -y, metres, the origin at the

@@ -352,6 +352,7 @@ fn entry_model(
             parent_from_part: Affine3A::IDENTITY,
             joint: JointSpec::FIXED,
             mesh,
+            visual: None,
             color,
         }],
     })

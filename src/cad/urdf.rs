@@ -71,6 +71,7 @@ pub fn read_urdf(path: &Path) -> Result<BodyTree, ModelFileError> {
             },
             pieces: Vec::new(),
             visual_pieces: Vec::new(),
+            visual_meshes: Vec::new(),
             colors: Vec::new(),
         };
         for collision in &link.collision {
@@ -96,6 +97,7 @@ pub fn read_urdf(path: &Path) -> Result<BodyTree, ModelFileError> {
             body.colors
                 .push(([color[0], color[1], color[2]], mesh.area() * color[3]));
             body.visual_pieces.extend(mesh.convex_hull());
+            body.visual_meshes.push(mesh);
         }
         tree.bodies.push(body);
         let index = tree.bodies.len() - 1;

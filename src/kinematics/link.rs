@@ -25,17 +25,23 @@ const FLOOR_MARGIN_M: f32 = 0.5;
 /// What a link is made of, in the link's frame.
 #[derive(Clone, Debug)]
 pub struct LinkGeometry {
+    /// What it looks like (the URDF's and the .glb's visual mesh).
     pub visual: TriMesh,
+    /// Its exact collision surface: static bodies collide as this triangle mesh, and the
+    /// simulator's navigation and placement read it. The visual mesh but for imported models
+    /// with visual geometry of their own.
+    pub surface: TriMesh,
     /// Linear RGB in 0..1.
     pub color: [f32; 3],
-    /// Convex pieces covering the visual mesh (the hull of each connected component).
+    /// Convex pieces covering the surface (the hull of each connected component).
     pub collision: Vec<TriMesh>,
     pub inertial: Inertial,
     pub friction: f32,
 }
 
 impl LinkGeometry {
-    /// Collision pieces, mass and friction of `visual` for a link of `class`.
+    /// Collision pieces, mass and friction of `visual`, which is also its surface, for a link of
+    /// `class`.
     pub fn new(visual: TriMesh, color: [f32; 3], class: &str) -> Self {
         let info = ClassTable::builtin().get(class);
         let density = info.map_or(500.0, |c| c.density);
@@ -47,6 +53,7 @@ impl LinkGeometry {
             .collect();
         let inertial = Inertial::of_mesh(&visual, density);
         Self {
+            surface: visual.clone(),
             visual,
             color,
             collision,
@@ -150,7 +157,12 @@ fn cad_links(node: &GraphNode, model: &CadModel, link_from_model: Affine3A) -> V
             let part_rotation = Mat3::from_quat(r);
             // The scale as seen in the part's frame: R^-1 S R.
             let scale_in_part = part_rotation.transpose() * scale_matrix * part_rotation;
-            let mesh_in_link = part.mesh.transformed(&Affine3A::from_mat3(scale_in_part));
+            let in_link = Affine3A::from_mat3(scale_in_part);
+            let mut geometry =
+                LinkGeometry::new(part.mesh.transformed(&in_link), part.color, &node.class);
+            if let Some(visual) = &part.visual {
+                geometry.visual = visual.transformed(&in_link);
+            }
             let (parent, parent_from_link, joint) = match (k, part.parent) {
                 (0, _) | (_, None) => (None, Affine3A::IDENTITY, JointSpec::FIXED),
                 (_, Some(p)) => (
@@ -166,7 +178,7 @@ fn cad_links(node: &GraphNode, model: &CadModel, link_from_model: Affine3A) -> V
                 parent_from_link,
                 joint,
                 value: joint.clamp(value),
-                geometry: LinkGeometry::new(mesh_in_link, part.color, &node.class),
+                geometry,
             }
         })
         .collect()

@@ -153,12 +153,12 @@ impl<'a> SceneView<'a> {
         ClassTable::builtin().is_layout(self.class_of(id))
     }
 
-    /// A link's visual mesh in the world.
+    /// A link's surface mesh in the world.
     pub fn world_mesh(&self, link: usize) -> TriMesh {
         self.tree.links[link]
             .geometry
             .as_ref()
-            .map(|g| g.visual.transformed(&self.poses[link]))
+            .map(|g| g.surface.transformed(&self.poses[link]))
             .unwrap_or_default()
     }
 
@@ -171,7 +171,7 @@ impl<'a> SceneView<'a> {
         let mut mesh = TriMesh::default();
         for l in self.body_links(id) {
             if let Some(g) = &self.tree.links[l].geometry {
-                mesh.append(&g.visual.transformed(&(node_from_world * self.poses[l])));
+                mesh.append(&g.surface.transformed(&(node_from_world * self.poses[l])));
             }
         }
         mesh

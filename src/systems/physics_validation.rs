@@ -140,7 +140,7 @@ pub(crate) fn spawn_bodies(
                 continue;
             };
             let Ok(collider) =
-                Collider::trimesh(g.visual.positions.clone(), g.visual.triangles.clone())
+                Collider::trimesh(g.surface.positions.clone(), g.surface.triangles.clone())
             else {
                 continue;
             };

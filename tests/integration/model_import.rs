@@ -114,6 +114,24 @@ fn libero_objects_import_with_their_joints_facing_front_at_furniture_size() {
             m.id,
             m.size
         );
+        // Every part keeps the file's visual meshes beside its collision pieces, in the same
+        // frame: closed, they cover about the same box (LIBERO's visuals are finer, not
+        // elsewhere; a part's alone may differ, a fridge's frame reaching around its door).
+        let mut visual = iscene::geometry::TriMesh::default();
+        for (part, pose) in m.parts.iter().zip(m.model_from_parts(&[])) {
+            let mesh = part
+                .visual
+                .as_ref()
+                .unwrap_or_else(|| panic!("{} {}: no visual mesh", m.id, part.name));
+            visual.append(&mesh.transformed(&pose));
+        }
+        let (vmin, vmax) = visual.bounds().expect("visual");
+        let slack = 0.1 * m.size.max_element();
+        assert!(
+            (vmin - min).abs().max_element() < slack && (vmax - max).abs().max_element() < slack,
+            "{}: visual {vmin} {vmax}, collision {min} {max}",
+            m.id
+        );
         // Doors and drawers open out of the front (-y): opened to the end of their range
         // farthest from zero, each reaches out in front of the closed model. The slide
         // cabinet's door slides sideways across its front instead.
@@ -218,6 +236,23 @@ fn articulated_objects_get_articulated_models() {
         }
     }
     assert!(articulated >= 3, "{articulated} articulated objects");
+    // The exported URDF draws the fridge with LIBERO's visual mesh, not its collision boxes.
+    let fridge = graph.node("fridge_1").expect("the fridge");
+    let model = &scene_db
+        .get(&fridge.cad.as_ref().expect("replaced").model)
+        .expect("copied")
+        .model;
+    let visual_obj = std::fs::read_to_string(out.join("meshes").join("fridge_1.obj"))
+        .expect("the fridge's visual mesh");
+    let faces = visual_obj.lines().filter(|l| l.starts_with("f ")).count();
+    let expected = model.parts[0]
+        .visual
+        .as_ref()
+        .expect("visual")
+        .triangles
+        .len();
+    assert_eq!(faces, expected);
+    assert_ne!(faces, model.parts[0].mesh.triangles.len());
     let eval = evaluate_reconstruction(&out, &seq).expect("eval");
     let cad = eval.cad.expect("CAD metrics");
     let right = cad.objects.iter().filter(|o| o.class_correct).count();
