@@ -10,8 +10,8 @@ use serde::Serialize;
 use crate::cad::database::CadDatabase;
 use crate::cad::export::write_scene_models;
 use crate::error::{InputError, IsceneError};
-use crate::export::augmented::{augmented_ply_bytes, augmented_points};
-use crate::export::{write_occupancy, write_tree_exports};
+use crate::export::augmented::augmented_points;
+use crate::export::{write_augmented, write_occupancy, write_tree_exports};
 use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
 use crate::io::atomic::StagedDir;
@@ -324,12 +324,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
                 &library.0,
                 options.voxel,
             );
-            let classes: Vec<&str> = surface.entities.iter().map(|e| e.class.as_str()).collect();
-            let bytes = augmented_ply_bytes(&points, &classes);
-            let path = staged.path().join("augmented.ply");
-            std::fs::write(&path, bytes)
-                .map_err(|e| IsceneError::io(format!("writing {}", path.display()), e))?;
-            outputs.push("augmented.ply".into());
+            outputs.push(write_augmented(staged.path(), &points, &surface.entities)?);
         }
     }
     let mut report = ReconstructReport {

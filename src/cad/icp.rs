@@ -110,16 +110,19 @@ fn align_candidate(
     let model_size = (hi - lo).max(Vec3::splat(1e-3));
     let object_height = object.top_z - object.bbox.bottom_z();
     let fit = ScaleFit::new(object.class, model_size);
-    let scale = (object_height / model_size.z).clamp(fit.lo.z, fit.hi.z);
+    // The height's scale on every axis, the horizontal ones kept in the class's range.
+    let scale = fit.clamped(Vec3::splat(
+        (object_height / model_size.z).clamp(fit.lo.z, fit.hi.z),
+    ));
     let start = |k: usize| {
         let yaw = object.bbox.yaw + k as f32 * std::f32::consts::TAU / YAW_STARTS as f32;
         let centre = Mat3::from_rotation_z(yaw) * (0.5 * (lo + hi) * scale);
         UprightPose {
-            scale: fit.clamped(Vec3::splat(scale)),
+            scale,
             yaw,
             translation: (object.bbox.center - centre)
                 .truncate()
-                .extend(object.bbox.bottom_z() - lo.z * scale),
+                .extend(object.bbox.bottom_z() - lo.z * scale.z),
         }
     };
     let coarse: Vec<Vec3> = stride_sample(object.points, COARSE_POINTS);

@@ -129,8 +129,8 @@ pub enum AlignMethod {
     /// over per-axis scale, yaw and translation.
     #[default]
     Lm,
-    /// Sivananda et al.: every model of the class, a yaw sweep, then ICP over yaw and
-    /// translation at one scale ([`icp`]).
+    /// Sivananda et al.: every model of the class, a yaw sweep, then ICP over yaw, floor
+    /// position and width and depth scales ([`icp`]).
     Icp,
 }
 

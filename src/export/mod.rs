@@ -44,6 +44,19 @@ pub fn write_tree_exports(
     ])
 }
 
+/// Writes `augmented.ply` (`points`, their entities `entities`); returns its path.
+pub fn write_augmented(
+    dir: &Path,
+    points: &[augmented::AugmentedPoint],
+    entities: &[crate::panoptic::PanopticEntity],
+) -> Result<String, IsceneError> {
+    let classes: Vec<&str> = entities.iter().map(|e| e.class.as_str()).collect();
+    let path = dir.join("augmented.ply");
+    std::fs::write(&path, augmented::augmented_ply_bytes(points, &classes))
+        .map_err(|e| IsceneError::io(format!("writing {}", path.display()), e))?;
+    Ok("augmented.ply".into())
+}
+
 /// Writes `occupancy.pgm/.yaml` (the map layer from `map_points`, aligned frame) and
 /// `occupancy_objects.pgm/.yaml` (plus the tree's objects projected); returns the paths.
 pub fn write_occupancy(

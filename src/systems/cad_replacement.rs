@@ -96,25 +96,21 @@ fn cad_match_stage(world: &mut World) {
         .clone();
     let method = world.get_resource_or_init::<CadAlignMethod>().0;
     let layout = layout_planes(&graph);
-    let (rejected, objects): (Vec<_>, Vec<_>) = observed_objects(&graph, &points)
-        .into_iter()
-        .map(|o| (rejection(&o, &layout), o))
-        .partition(|(r, _)| r.is_some());
-    let objects: Vec<_> = objects.into_iter().map(|(_, o)| o).collect();
+    let (mut objects, mut rejected) = (Vec::new(), Vec::new());
+    for object in observed_objects(&graph, &points) {
+        match rejection(&object, &layout) {
+            Some(rejection) => rejected.push(RejectedObject {
+                id: object.id.to_string(),
+                rejection,
+            }),
+            None => objects.push(object),
+        }
+    }
     let ranked = rank_scene(&objects, &db, method);
     let candidates = objects
         .iter()
         .zip(ranked)
         .map(|(o, c)| (o.id.to_string(), c))
-        .collect();
-    let rejected = rejected
-        .into_iter()
-        .filter_map(|(r, o)| {
-            Some(RejectedObject {
-                id: o.id.to_string(),
-                rejection: r?,
-            })
-        })
         .collect();
     world.insert_resource(CadCandidates(candidates));
     world.insert_resource(CadRejections(rejected));
