@@ -146,7 +146,7 @@ pub fn align_candidate(
 }
 
 /// Every `len / n`-th point, at most about `n`.
-fn stride_sample(points: &[Vec3], n: usize) -> impl Iterator<Item = Vec3> + '_ {
+pub(crate) fn stride_sample(points: &[Vec3], n: usize) -> impl Iterator<Item = Vec3> + '_ {
     let step = points.len().div_ceil(n.max(1)).max(1);
     points.iter().step_by(step).copied()
 }

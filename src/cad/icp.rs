@@ -13,7 +13,9 @@
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::cad::alignment::{Alignment, PRIOR_AE_WEIGHT, alignment_error, choice_score};
+use crate::cad::alignment::{
+    Alignment, PRIOR_AE_WEIGHT, alignment_error, choice_score, stride_sample,
+};
 use crate::cad::database::{CadDatabase, DatabaseModel};
 use crate::cad::matching::{Candidate, KEEP_CANDIDATES, ObservedObject, class_models};
 use crate::classes::ClassTable;
@@ -125,8 +127,8 @@ fn align_candidate(
                 .extend(object.bbox.bottom_z() - lo.z * scale.z),
         }
     };
-    let coarse: Vec<Vec3> = stride_sample(object.points, COARSE_POINTS);
-    let fine: Vec<Vec3> = stride_sample(object.points, FINE_POINTS);
+    let coarse: Vec<Vec3> = stride_sample(object.points, COARSE_POINTS).collect();
+    let fine: Vec<Vec3> = stride_sample(object.points, FINE_POINTS).collect();
     let mut starts: Vec<(f32, UprightPose)> = (0..YAW_STARTS)
         .map(|k| {
             let pose = icp(model, &fit, &coarse, start(k), COARSE_ITERATIONS);
@@ -322,12 +324,6 @@ fn facing_error(object: &ObservedObject, yaw: f32) -> f32 {
         let front = Mat3::from_rotation_z(yaw) * -Vec3::Y;
         facing.confidence * 0.5 * (1.0 - front.dot(facing.direction))
     })
-}
-
-/// Every `len / n`-th point, at most about `n`.
-fn stride_sample(points: &[Vec3], n: usize) -> Vec<Vec3> {
-    let step = points.len().div_ceil(n.max(1)).max(1);
-    points.iter().step_by(step).copied().collect()
 }
 
 #[cfg(test)]
