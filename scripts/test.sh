@@ -36,8 +36,8 @@ echo "== tests (with the viewer feature: one build serves every test)"
 # the same and clippy above checks it as it is. Building the tests once, with the feature,
 # keeps a clean CI run within its time budget: a second build of the Bevy stack would not.
 # Lints of the viewer code: `cargo clippy --features viewer --all-targets -- -D warnings`.
-# No --bins: src/main.rs is the command line only and has no tests, and its empty test harness
-# was one more link of the whole Bevy stack. The integration tests build and run the binary.
+# src/main.rs has no tests: Cargo.toml turns its test harness off (`test = false`), which saves
+# one more link of the whole Bevy stack. The integration tests build and run the binary.
 cargo test --locked --features viewer --lib --tests --no-fail-fast
 disk
 # The benchmarks are type-checked by clippy --all-targets above; building them is another full

