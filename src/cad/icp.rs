@@ -271,14 +271,6 @@ fn icp(
     pose
 }
 
-/// The closest point of the posed model to `world` (world frame; exact for a uniform scale,
-/// close for mildly unequal ones).
-fn closest_on_model(model: &DatabaseModel, pose: &UprightPose, world: Vec3) -> Vec3 {
-    let world_from_model = pose.world_from_model();
-    let local = world_from_model.inverse().transform_point3(world);
-    world_from_model.transform_point3(model.closest(local).point)
-}
-
 /// The rotation angle and translation (in the plane) that move the points `a` onto `b` in the
 /// least-squares sense (2D Kabsch); `None` for too few pairs.
 fn rigid_2d(pairs: &[(Vec2, Vec2)]) -> Option<(f32, Vec2)> {
@@ -306,10 +298,16 @@ fn score(
     points: &[Vec3],
     pose: &UprightPose,
 ) -> f32 {
+    let world_from_model = pose.world_from_model();
+    let model_from_world = world_from_model.inverse();
     let sum: f32 = points
         .iter()
         .map(|q| {
-            closest_on_model(model, pose, *q)
+            // The model's closest point to q, back in the world (exact for a uniform scale,
+            // close for mildly unequal ones).
+            let m = model.closest(model_from_world.transform_point3(*q)).point;
+            world_from_model
+                .transform_point3(m)
                 .distance(*q)
                 .min(OUTLIER_M)
                 .powi(2)
