@@ -5,6 +5,16 @@
 use glam::{Affine3A, Quat, Vec3};
 
 use crate::geometry::TriMesh;
+use crate::geometry::plane::fit_plane;
+
+/// The floor's own plane levels the up direction when the two disagree by more than this
+/// (degrees; less is within the plane fit's noise on a 2 cm map) ...
+const LEVEL_MIN_DEG: f32 = 0.5;
+/// ... and by less than this (more, and the "floor" is not level ground: a ramp, a wrong label).
+const LEVEL_MAX_DEG: f32 = 3.0;
+/// Floor points farther than this (metres) from the first plane fit are left out of the second
+/// (wall bottoms and furniture feet that took the floor's label).
+const FLOOR_BAND_M: f32 = 0.03;
 
 /// Cone half-angles (degrees) of the successive refinements of the up direction: wide enough at
 /// first to catch the floor from a hand-held camera's hint, narrow at the end to average only the
@@ -74,6 +84,11 @@ pub struct GravityReport {
     pub up_in_world: [f32; 3],
     /// Angle between the estimate and the sequence's gravity file, when both exist (degrees).
     pub estimate_to_given_deg: Option<f32>,
+    /// How far (degrees) the up direction was turned to the floor's normal, when the floor
+    /// tilted against it by 0.5 to 3 degrees (7-Scenes redkitchen's gravity file: 1.7). A
+    /// simulator's floor must be level under its gravity, or everything stands on it with one
+    /// edge sunk in.
+    pub leveled_to_floor_deg: Option<f32>,
     /// Column-major 4x4: the aligned frame (z up, floor at 0) of the contact graph and every
     /// export after it, from the sequence's world frame.
     pub aligned_from_world: [f32; 16],
@@ -99,6 +114,14 @@ pub fn resolve_gravity(
         (Some(g), None) => (GravitySource::Given, g),
         (None, None) => (GravitySource::Assumed, Vec3::Z),
     };
+    let floor_up = floor_normal(floor_points, up);
+    let leveled_to_floor_deg = floor_up
+        .map(|n| angle_deg(n, up))
+        .filter(|a| (LEVEL_MIN_DEG..=LEVEL_MAX_DEG).contains(a));
+    let up = match (leveled_to_floor_deg, floor_up) {
+        (Some(_), Some(n)) => n,
+        _ => up,
+    };
     let mut heights: Vec<f32> = floor_points.iter().map(|p| p.dot(up)).collect();
     heights.sort_by(f32::total_cmp);
     let floor_height = heights.get(heights.len() / 2).copied().unwrap_or(0.0);
@@ -106,8 +129,34 @@ pub fn resolve_gravity(
         source,
         up_in_world: up.to_array(),
         estimate_to_given_deg: estimated.zip(given_up).map(|(e, g)| angle_deg(e, g)),
+        leveled_to_floor_deg,
         aligned_from_world: glam::Mat4::from(aligned_from_world(up, floor_height)).to_cols_array(),
     }
+}
+
+/// The floor's normal (towards `up`) from its points: a least-squares plane, then again over
+/// the points within `FLOOR_BAND_M` of it. `None` for too few points.
+fn floor_normal(floor_points: &[Vec3], up: Vec3) -> Option<Vec3> {
+    const MIN_POINTS: usize = 100;
+    if floor_points.len() < MIN_POINTS {
+        return None;
+    }
+    let first = fit_plane(floor_points)?;
+    let near: Vec<Vec3> = floor_points
+        .iter()
+        .copied()
+        .filter(|p| first.signed_distance(*p).abs() <= FLOOR_BAND_M)
+        .collect();
+    let plane = if near.len() >= MIN_POINTS {
+        fit_plane(&near)?
+    } else {
+        first
+    };
+    Some(if plane.normal.dot(up) < 0.0 {
+        -plane.normal
+    } else {
+        plane.normal
+    })
 }
 
 /// Angle between two directions in degrees.
@@ -122,6 +171,49 @@ pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Floor points on a 4 x 3 m grid tilted `tilt_deg` about x from the world's z = 0, with a
+    /// strip of wall bottom that took the floor's label.
+    fn tilted_floor(tilt_deg: f32) -> Vec<Vec3> {
+        let tilt = Quat::from_rotation_x(tilt_deg.to_radians());
+        let mut points: Vec<Vec3> = (0..40)
+            .flat_map(|i| (0..30).map(move |j| Vec3::new(i as f32 * 0.1, j as f32 * 0.1, 0.0)))
+            .map(|p| tilt * p)
+            .collect();
+        points.extend((0..40).map(|i| Vec3::new(i as f32 * 0.1, 3.0, 0.1)));
+        points
+    }
+
+    #[test]
+    fn a_floor_tilted_against_the_given_gravity_by_a_degree_or_two_levels_it() {
+        let report = resolve_gravity(
+            Some(-Vec3::Z),
+            false,
+            None,
+            TriMesh::default,
+            &tilted_floor(1.5),
+        );
+        assert_eq!(report.source, GravitySource::Given);
+        let leveled = report.leveled_to_floor_deg.expect("leveled");
+        assert!((leveled - 1.5).abs() < 0.05, "{leveled}");
+        // The floor is now level at z = 0 in the aligned frame.
+        let aligned = Affine3A::from_mat4(glam::Mat4::from_cols_array(&report.aligned_from_world));
+        for p in tilted_floor(1.5).iter().take(1200) {
+            assert!(aligned.transform_point3(*p).z.abs() < 0.005, "{p}");
+        }
+        // Within the fit's noise, or too steep to be level ground: the given gravity stands.
+        for tilt in [0.2, 5.0] {
+            let report = resolve_gravity(
+                Some(-Vec3::Z),
+                false,
+                None,
+                TriMesh::default,
+                &tilted_floor(tilt),
+            );
+            assert_eq!(report.leveled_to_floor_deg, None, "{tilt}");
+            assert_eq!(report.up_in_world, [0.0, 0.0, 1.0]);
+        }
+    }
 
     #[test]
     fn the_floor_and_a_table_give_up_despite_a_wide_hint_and_walls() {
