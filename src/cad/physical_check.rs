@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cad::database::DatabaseModel;
-use crate::geometry::Plane;
+use crate::geometry::{Plane, TriMesh};
 
 /// Deeper interpenetration than this (metres) is a conflict (the bar).
 pub const MAX_PENETRATION_M: f32 = 0.01;
@@ -21,6 +21,11 @@ pub const MAX_PENETRATION_M: f32 = 0.01;
 pub const MIN_SUPPORT_AREA: f32 = 0.5;
 /// How far (metres) below or above a child's bottom the parent's upward surface may be found.
 const SUPPORT_HEIGHT_BAND_M: f32 = 0.03;
+/// How far (metres) from a child's bottom its parent's final surface may be for the child to be
+/// snapped onto it: the contact graph says the parent holds it, and the parent's model may be
+/// a few centimetres taller or lower than the surface the child was seen on (a table model
+/// scaled to the whole table segment, chairs and all).
+const SNAP_HEIGHT_BAND_M: f32 = 0.1;
 /// Samples per side of the child's bottom rectangle in the support-area test.
 const SUPPORT_SAMPLES: usize = 8;
 
@@ -76,6 +81,41 @@ impl PlacedSolid {
         }
     }
 
+    /// An object that keeps its segment mesh, as a fixed solid: the convex hull of what the map
+    /// saw of it (simulators collide such a mesh as its hull too). `None` when the points span
+    /// no volume.
+    pub fn from_hull(points: &[Vec3]) -> Option<Self> {
+        let hull = TriMesh {
+            positions: points.to_vec(),
+            triangles: Vec::new(),
+        }
+        .convex_hull()?;
+        let (lo, hi) = bounds(&hull.positions)?;
+        let piece = ConvexPolyhedron::from_convex_hull(&hull.positions)?;
+        let upward = (0..hull.triangles.len())
+            .filter(|&t| hull.face_normal(t).z > 0.9)
+            .map(|t| hull.triangle(t))
+            .collect();
+        Some(Self {
+            pieces: vec![(piece, lo, hi)],
+            lo,
+            hi,
+            upward,
+            footprint: [
+                lo,
+                Vec3::new(hi.x, lo.y, lo.z),
+                Vec3::new(hi.x, hi.y, lo.z),
+                Vec3::new(lo.x, hi.y, lo.z),
+            ],
+        })
+    }
+
+    /// How deep (metres) a neighbour may overlap this object, when it is movable, and still be
+    /// pulled apart from it: `MAX_SEPARATED_M` or `MAX_SEPARATED_SHARE` of its width.
+    fn separation_limit(&self) -> f32 {
+        MAX_SEPARATED_M.max(MAX_SEPARATED_SHARE * (self.hi - self.lo).truncate().max_element())
+    }
+
     /// The centre of its bounds.
     pub fn centre(&self) -> Vec3 {
         0.5 * (self.lo + self.hi)
@@ -86,12 +126,18 @@ impl PlacedSolid {
         self.lo.z
     }
 
-    /// The height of this model's upward surface at `xy` nearest to `z` within the band, if any.
+    /// The height of this model's upward surface at `xy` nearest to `z` within the support
+    /// band, if any.
     pub fn surface_height_at(&self, xy: Vec2, z: f32) -> Option<f32> {
+        self.surface_height_within(xy, z, SUPPORT_HEIGHT_BAND_M)
+    }
+
+    /// The height of this model's upward surface at `xy` nearest to `z` within `band` metres.
+    fn surface_height_within(&self, xy: Vec2, z: f32, band: f32) -> Option<f32> {
         self.upward
             .iter()
             .filter_map(|t| height_in_triangle(t, xy))
-            .filter(|h| (h - z).abs() <= SUPPORT_HEIGHT_BAND_M)
+            .filter(|h| (h - z).abs() <= band)
             .min_by(|a, b| (a - z).abs().total_cmp(&(b - z).abs()))
     }
 }
@@ -191,6 +237,8 @@ pub fn support_area(child: &PlacedSolid, parent: &PlacedSolid) -> f32 {
 pub enum Holder {
     /// Another object (index among the checked objects).
     Object(usize),
+    /// An obstacle (index among the check's obstacles): an object no model replaced.
+    Obstacle(usize),
     /// The floor plane.
     Floor(Plane),
     /// A wall, or nothing: no support test, no snapping.
@@ -233,13 +281,16 @@ const MAX_SEARCH_STEPS: usize = 64;
 /// so that as few conflicts as possible remain, pulls overlapping neighbours apart, then snaps
 /// every model onto what holds it. `holders` says what holds each object; `movable` which
 /// objects may be moved rather than shrunk when neighbours overlap; `layout` are the floor's
-/// and walls' planes, facing into the room.
+/// and walls' planes, facing into the room; `obstacles` the objects that keep their segment
+/// meshes, which neither move nor shrink (a counter no model replaced).
 pub fn check_placements(
     alignments: &[Vec<(&DatabaseModel, Affine3A)>],
     holders: &[Holder],
     movable: &[bool],
     layout: &[Plane],
+    obstacles: &[PlacedSolid],
 ) -> CheckedPlacements {
+    let alignments = &fit_heights_to_children(alignments, holders);
     let solids: Vec<Vec<PlacedSolid>> = alignments
         .par_iter()
         .map(|options| {
@@ -254,25 +305,86 @@ pub fn check_placements(
         .iter()
         .map(|s| (!s.is_empty()).then_some(0))
         .collect();
+    // Object i (as `me`) overlapping `other` (object j, or obstacle j - n) is a conflict
+    // unless one is movable and pulling apart will undo it: a chair tucked under the table is no
+    // reason to choose another table, whose next best model, taller, leaves the cups inside its
+    // top. (Two fixed neighbours are shrunk apart; another candidate may spare that.)
+    let conflict = |i: usize, me: &PlacedSolid, j: usize, other: &PlacedSolid| {
+        let Some((depth, normal)) = deepest_contact(me, other) else {
+            return false;
+        };
+        let movable_pair = movable[i] || (j < n && movable[j]);
+        depth > MAX_PENETRATION_M
+            && !(movable_pair && parted(i, j, depth, normal, me, other, holders, movable).is_some())
+    };
     let conflicts_of = |i: usize, k: usize, choice: &[Option<usize>]| -> usize {
         let me = &solids[i][k];
         let placed = |j: usize| choice[j].map(|m| &solids[j][m]);
         let mut count = usize::from(layout_penetration(me, layout) > MAX_PENETRATION_M);
+        count += obstacles
+            .iter()
+            .enumerate()
+            .filter(|(k, o)| conflict(i, me, n + k, o))
+            .count();
         for j in (0..n).filter(|&j| j != i) {
             if let Some(other) = placed(j) {
-                count += usize::from(penetration_depth(me, other) > MAX_PENETRATION_M);
+                count += usize::from(conflict(i, me, j, other));
                 if holders[j] == Holder::Object(i) {
                     count += usize::from(support_area(other, me) < MIN_SUPPORT_AREA);
                 }
             }
         }
-        if let Holder::Object(p) = holders[i]
-            && let Some(parent) = placed(p)
-        {
+        let parent = match holders[i] {
+            Holder::Object(p) => placed(p),
+            Holder::Obstacle(k) => obstacles.get(k),
+            _ => None,
+        };
+        if let Some(parent) = parent {
             count += usize::from(support_area(me, parent) < MIN_SUPPORT_AREA);
         }
         count
     };
+    if std::env::var_os("ISCENE_DEBUG_CHECK").is_some() {
+        for i in 0..n {
+            let cs: Vec<usize> = (0..solids[i].len())
+                .map(|k| conflicts_of(i, k, &choice))
+                .collect();
+            eprintln!(
+                "DEBUG obj {i} holder {:?} movable {} conflicts {:?}",
+                holders[i], movable[i], cs
+            );
+            for k in 0..solids[i].len() {
+                for j in (0..n).filter(|&j| j != i) {
+                    if let Some(o) = choice[j].map(|m| &solids[j][m]) {
+                        if let Some((d, nrm)) = deepest_contact(&solids[i][k], o) {
+                            if d > MAX_PENETRATION_M {
+                                eprintln!(
+                                    "   cand {k} vs {j}: depth {d:.3} normal {nrm:?} sup {:.2}",
+                                    if holders[j] == Holder::Object(i) {
+                                        support_area(o, &solids[i][k])
+                                    } else {
+                                        -1.0
+                                    }
+                                );
+                            }
+                        } else if holders[j] == Holder::Object(i) {
+                            eprintln!(
+                                "   cand {k} child {j} sup {:.2}",
+                                support_area(o, &solids[i][k])
+                            );
+                        }
+                    }
+                }
+                for (q, o) in obstacles.iter().enumerate() {
+                    if let Some((d, _)) = deepest_contact(&solids[i][k], o) {
+                        if d > MAX_PENETRATION_M {
+                            eprintln!("   cand {k} vs obstacle {q}: depth {d:.3}");
+                        }
+                    }
+                }
+            }
+        }
+    }
     let mut tried_in_vain = vec![false; n];
     for _ in 0..MAX_SEARCH_STEPS {
         let current: Vec<usize> = (0..n)
@@ -306,11 +418,12 @@ pub fn check_placements(
         .map(|i| choice[i].map(|k| alignments[i][k].0))
         .collect();
     let retreated_m = retreat_from_walls(&models, movable, layout, &mut poses);
-    let separated_m: Vec<f32> = separate_neighbours(&models, holders, movable, &mut poses)
-        .iter()
-        .zip(&retreated_m)
-        .map(|(a, b)| a + b)
-        .collect();
+    let separated_m: Vec<f32> =
+        separate_neighbours(&models, holders, movable, obstacles, &mut poses)
+            .iter()
+            .zip(&retreated_m)
+            .map(|(a, b)| a + b)
+            .collect();
     // Snap parents before children: a child rests on its parent's final surface.
     let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
     for i in support_order(holders) {
@@ -321,9 +434,18 @@ pub fn check_placements(
         let solid = PlacedSolid::new(model, &pose);
         let centre = 0.25 * solid.footprint.iter().sum::<Vec3>();
         let target = match holders[i] {
-            Holder::Object(p) => finals[p]
-                .as_ref()
-                .and_then(|parent| parent.surface_height_at(centre.truncate(), solid.bottom_z())),
+            Holder::Object(p) => finals[p].as_ref().and_then(|parent| {
+                parent.surface_height_within(
+                    centre.truncate(),
+                    solid.bottom_z(),
+                    SNAP_HEIGHT_BAND_M,
+                )
+            }),
+            Holder::Obstacle(k) => obstacles[k].surface_height_within(
+                centre.truncate(),
+                solid.bottom_z(),
+                SNAP_HEIGHT_BAND_M,
+            ),
             Holder::Floor(plane) if plane.normal.z.abs() > 1e-3 => Some(
                 -(plane.normal.x * centre.x + plane.normal.y * centre.y + plane.offset)
                     / plane.normal.z,
@@ -344,11 +466,13 @@ pub fn check_placements(
                 .filter(|&j| j != i)
                 .filter_map(|j| finals[j].as_ref());
             let max_penetration_m = others
+                .chain(obstacles)
                 .map(|o| penetration_depth(me, o))
                 .fold(0.0f32, f32::max);
             let layout_penetration_m = layout_penetration(me, layout);
             let held_area = match holders[i] {
                 Holder::Object(p) => finals[p].as_ref().map(|parent| support_area(me, parent)),
+                Holder::Obstacle(k) => obstacles.get(k).map(|parent| support_area(me, parent)),
                 _ => None,
             };
             let children_unsupported = (0..n)
@@ -377,6 +501,72 @@ pub fn check_placements(
     }
 }
 
+/// How far (metres) above or below what an object holds its model's top may be for its height
+/// to be fitted to it, and the scales that fit may take.
+const HEIGHT_FIT_BAND_M: f32 = 0.2;
+const HEIGHT_FIT_SCALES: std::ops::RangeInclusive<f32> = 0.7..=1.3;
+
+/// `alignments` with every holder's candidates stretched or squashed in height, about their
+/// bottom, so that the surface under what they hold meets its bottom: what stands on a table
+/// was seen where its top is, while the table's model was scaled to its segment, which the
+/// chairs pushed under it bled into (7-Scenes redkitchen: a table segment 0.84 m tall under
+/// cups standing at 0.715 m). The median over the held objects' best candidates decides; a
+/// scale outside `HEIGHT_FIT_SCALES` is left alone.
+fn fit_heights_to_children<'a>(
+    alignments: &[Vec<(&'a DatabaseModel, Affine3A)>],
+    holders: &[Holder],
+) -> Vec<Vec<(&'a DatabaseModel, Affine3A)>> {
+    let held: Vec<Option<PlacedSolid>> = alignments
+        .iter()
+        .map(|options| options.first().map(|(m, pose)| PlacedSolid::new(m, pose)))
+        .collect();
+    alignments
+        .iter()
+        .enumerate()
+        .map(|(i, options)| {
+            let children: Vec<&PlacedSolid> = (0..holders.len())
+                .filter(|&c| holders[c] == Holder::Object(i))
+                .filter_map(|c| held[c].as_ref())
+                .collect();
+            if children.is_empty() {
+                return options.clone();
+            }
+            options
+                .iter()
+                .map(|&(model, pose)| {
+                    let solid = PlacedSolid::new(model, &pose);
+                    let base = solid.bottom_z();
+                    let mut scales: Vec<f32> = children
+                        .iter()
+                        .filter_map(|c| {
+                            let centre = 0.25 * c.footprint.iter().sum::<Vec3>();
+                            let z = c.bottom_z();
+                            let top = solid.surface_height_within(
+                                centre.truncate(),
+                                z,
+                                HEIGHT_FIT_BAND_M,
+                            )?;
+                            (top - base > 0.05).then(|| (z - base) / (top - base))
+                        })
+                        .collect();
+                    if scales.is_empty() {
+                        return (model, pose);
+                    }
+                    scales.sort_by(f32::total_cmp);
+                    let scale = scales[scales.len() / 2];
+                    if !HEIGHT_FIT_SCALES.contains(&scale) {
+                        return (model, pose);
+                    }
+                    let about_base = Affine3A::from_translation(Vec3::Z * base)
+                        * Affine3A::from_scale(Vec3::new(1.0, 1.0, scale))
+                        * Affine3A::from_translation(-Vec3::Z * base);
+                    (model, about_base * pose)
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// Side by side, neighbours overlapping by at most this much (metres) are pulled apart when one
 /// of them is movable; more is a segmentation fault (a cup's label over its neighbour) that
 /// moving it would hide. Two fixed neighbours (cabinets in a row) are shrunk apart however deep
@@ -394,17 +584,19 @@ const SEPARATION_ROUNDS: usize = 10;
 /// Pulled-apart neighbours end this far apart (metres).
 const SEPARATION_GAP_M: f32 = 0.002;
 
-/// Neighbours that interpenetrate side by side (by no more than `MAX_SEPARATED_M`, or
-/// `MAX_SEPARATED_SHARE` of its width, when one is movable) are pulled apart horizontally: along the contact normal when it is horizontal and,
-/// for two objects on one support, roughly along the line between their centres; else, for such
-/// two (which cannot part vertically), along that line. A movable
-/// object (a cup) is moved; a fixed one (a cabinet) is shrunk with its far side kept: two fixed
-/// neighbours were widened by the same bleeding across their shared boundary, so the truth lies
-/// in the middle. Returns how far each object was moved or shrunk, metres.
+/// Neighbours that interpenetrate side by side (by no more than the movable one's
+/// `separation_limit`, when one is movable) are pulled apart horizontally: along the contact
+/// normal when it is horizontal and, for two objects on one support, roughly along the line
+/// between their centres; else, for such two (which cannot part vertically), along that line. A
+/// movable object (a cup) is moved; a fixed one (a cabinet) is shrunk with its far side kept: two
+/// fixed neighbours were widened by the same bleeding across their shared boundary, so the truth
+/// lies in the middle. Against an obstacle (`obstacles`: it neither moves nor shrinks) the
+/// object gives way alone. Returns how far each object was moved or shrunk, metres.
 fn separate_neighbours(
     models: &[Option<&DatabaseModel>],
     holders: &[Holder],
     movable: &[bool],
+    obstacles: &[PlacedSolid],
     poses: &mut [Option<Affine3A>],
 ) -> Vec<f32> {
     let n = models.len();
@@ -415,42 +607,27 @@ fn separate_neighbours(
             .collect();
         let mut moved = false;
         for i in 0..n {
-            for j in (i + 1)..n {
-                let (Some(a), Some(b)) = (&solids[i], &solids[j]) else {
+            // The other objects after this one, then every obstacle (index n + k).
+            let later = ((i + 1)..n).filter_map(|j| Some((j, solids[j].as_ref()?)));
+            let fixed = obstacles.iter().enumerate().map(|(k, o)| (n + k, o));
+            for (j, b) in later.chain(fixed) {
+                let Some(a) = &solids[i] else {
                     continue;
                 };
                 let Some((depth, normal)) = deepest_contact(a, b) else {
                     continue;
                 };
-                let movable_pair = movable[i] || movable[j];
-                let limit = [(i, a), (j, b)]
-                    .iter()
-                    .filter(|(k, _)| movable[*k])
-                    .map(|(_, s)| MAX_SEPARATED_SHARE * (s.hi - s.lo).truncate().max_element())
-                    .fold(MAX_SEPARATED_M, f32::max);
-                if depth <= 0.5 * MAX_PENETRATION_M || (movable_pair && depth > limit) {
+                if depth <= 0.5 * MAX_PENETRATION_M {
                     continue;
                 }
-                let horizontal = normal.with_z(0.0);
-                let siblings = holders[i] == holders[j] && holders[i] != Holder::Other;
-                let between = (b.centre() - a.centre()).with_z(0.0).try_normalize();
-                let direction = match between {
-                    // Neighbours on one support part along the line between them when the
-                    // deepest contact points elsewhere: vertically, or across it where two thin
-                    // panels cross (an imported cabinet's back panel through its neighbour's
-                    // side panel is shallowest to push out front to back).
-                    Some(d)
-                        if siblings
-                            && (horizontal.length() < 0.9
-                                || horizontal.normalize().dot(d).abs() < 0.7) =>
-                    {
-                        d
-                    }
-                    _ if horizontal.length() >= 0.9 => horizontal.normalize(),
-                    _ => continue,
+                let Some(direction) = parted(i, j, depth, normal, a, b, holders, movable) else {
+                    continue;
                 };
+                let obstacle = j >= n;
+                let b_movable = !obstacle && movable[j];
                 let push = depth + 2.0 * SEPARATION_GAP_M;
-                let share = match (movable[i], movable[j]) {
+                let share = match (movable[i], b_movable) {
+                    _ if obstacle => [1.0, 0.0],
                     (true, false) => [1.0, 0.0],
                     (false, true) => [0.0, 1.0],
                     _ => [0.5, 0.5],
@@ -479,6 +656,57 @@ fn separate_neighbours(
         }
     }
     separated
+}
+
+/// Which way (horizontal unit vector, from `a` towards `b`) object `i` (`a`) and object `j`
+/// (`b`; obstacle `j - n` for `j` past the objects), overlapping `depth` deep with the deepest
+/// contact `normal` (out of `a`), are pulled apart; `None` when they are not:
+/// - when one is movable and the overlap is deeper than its `separation_limit` (a segmentation
+///   fault that moving it would hide), or `a` stands on obstacle `b` (snapping's business);
+/// - neighbours on one support part along the line between them when the deepest contact
+///   points elsewhere: vertically, or across it where two thin panels cross (an imported
+///   cabinet's back panel through its neighbour's side panel is shallowest to push out front to
+///   back);
+/// - others along a horizontal contact normal, and out of an obstacle (a chair tucked under a
+///   counter no model replaced) away from its middle. Others overlapping vertically (a cup sunk
+///   into the shelf above it) cannot part sideways.
+#[allow(clippy::too_many_arguments)]
+fn parted(
+    i: usize,
+    j: usize,
+    depth: f32,
+    normal: Vec3,
+    a: &PlacedSolid,
+    b: &PlacedSolid,
+    holders: &[Holder],
+    movable: &[bool],
+) -> Option<Vec3> {
+    let n = movable.len();
+    let obstacle = j >= n;
+    let b_movable = !obstacle && movable[j];
+    let too_deep = [(movable[i], a), (b_movable, b)]
+        .iter()
+        .filter(|(m, _)| *m)
+        .all(|(_, s)| depth > s.separation_limit());
+    if ((movable[i] || b_movable) && too_deep)
+        || (obstacle && holders[i] == Holder::Obstacle(j - n))
+    {
+        return None;
+    }
+    let siblings = !obstacle && holders[i] == holders[j] && holders[i] != Holder::Other;
+    let horizontal = normal.with_z(0.0);
+    let between = (b.centre() - a.centre()).with_z(0.0).try_normalize();
+    match between {
+        Some(d)
+            if siblings
+                && (horizontal.length() < 0.9 || horizontal.normalize().dot(d).abs() < 0.7) =>
+        {
+            Some(d)
+        }
+        _ if horizontal.length() >= 0.9 => Some(horizontal.normalize()),
+        Some(d) if obstacle => Some(d),
+        _ => None,
+    }
 }
 
 /// Objects reaching behind a wall are brought out of it: a fixed one (a cabinet) is shrunk with
@@ -646,7 +874,7 @@ mod tests {
             ],
         ];
         let holders = [Holder::Floor(floor), Holder::Object(0)];
-        let checked = check_placements(&alignments, &holders, &[false, true], &[floor]);
+        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[]);
         let (k, pose) = checked.chosen[1].expect("cup placed");
         assert_eq!(k, 1, "the cup that does not sink in");
         assert_eq!(checked.swaps, 1);
@@ -672,7 +900,7 @@ mod tests {
         let at = |x: f32| vec![(cabinet, Affine3A::from_translation(Vec3::X * x))];
         let alignments = vec![at(0.0), at(width - overlap)];
         let holders = [Holder::Floor(floor), Holder::Floor(floor)];
-        let checked = check_placements(&alignments, &holders, &[false, false], &[floor]);
+        let checked = check_placements(&alignments, &holders, &[false, false], &[floor], &[]);
         let solids: Vec<PlacedSolid> = (0..2)
             .map(|i| PlacedSolid::new(cabinet, &checked.chosen[i].expect("placed").1))
             .collect();
@@ -701,9 +929,112 @@ mod tests {
         // The same overlap with a movable object (as if the second were a chair) is a
         // segmentation fault too deep to move it over: it stays, reported.
         let alignments = vec![at(0.0), at(width - overlap)];
-        let checked = check_placements(&alignments, &holders, &[false, true], &[floor]);
+        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[]);
         let check = checked.checks[1].as_ref().expect("second check");
         assert_eq!(check.separated_m, 0.0);
         assert!(check.conflicts > 0, "{check:?}");
+    }
+
+    #[test]
+    fn a_chair_tucked_into_an_obstacle_is_pulled_out_of_it() {
+        let db = CadDatabase::parametric();
+        let chair = model_of(&db, "chair_01");
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        // A counter no model replaced, seen as a box 2 m long, 0.6 m deep and 0.9 m tall, its
+        // front at y = 0.
+        let corners: Vec<Vec3> = (0..8)
+            .map(|k| {
+                Vec3::new(
+                    [0.0, 2.0][k & 1],
+                    [0.0, 0.6][(k >> 1) & 1],
+                    [0.0, 0.9][k >> 2],
+                )
+            })
+            .collect();
+        let counter = PlacedSolid::from_hull(&corners).expect("a box spans volume");
+        assert!((counter.hi - Vec3::new(2.0, 0.6, 0.9)).length() < 1e-5);
+        let depth = chair.model.size.y;
+        let tucked = Affine3A::from_translation(Vec3::new(1.0, -depth / 2.0 + 0.08, 0.0));
+        let before = PlacedSolid::new(chair, &tucked);
+        assert!((penetration_depth(&before, &counter) - 0.08).abs() < 0.01);
+        let checked = check_placements(
+            &[vec![(chair, tucked)]],
+            &[Holder::Floor(floor)],
+            &[true],
+            &[floor],
+            std::slice::from_ref(&counter),
+        );
+        let (_, pose) = checked.chosen[0].expect("placed");
+        let after = PlacedSolid::new(chair, &pose);
+        assert!(penetration_depth(&after, &counter) < 0.005);
+        assert!(
+            pose.translation.y < tucked.translation.y - 0.07,
+            "pulled out to the front"
+        );
+        let check = checked.checks[0].as_ref().expect("check");
+        assert_eq!(check.conflicts, 0, "{check:?}");
+        assert!((0.07..0.1).contains(&check.separated_m), "{check:?}");
+    }
+
+    #[test]
+    fn chairs_overlapping_a_table_are_pulled_away_rather_than_the_table_swapped_for_a_worse_fit() {
+        let db = CadDatabase::parametric();
+        let model = |id: &str| model_of(&db, id);
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let (table, chair, cup) = (model("table_01"), model("chair_01"), model("cup_01"));
+        let (half, top) = (table.model.size.x / 2.0, table.model.size.z);
+        // The table's best fit, and a narrower, taller second one that no chair touches but
+        // whose top is 7.5 cm above the cup.
+        let best = Affine3A::IDENTITY;
+        let second = Affine3A::from_scale(Vec3::new(0.85, 1.0, 1.1));
+        // A chair on either end, 5 cm into the table (tucked under its top).
+        let chair_at = |x: f32| vec![(chair, Affine3A::from_translation(Vec3::X * x))];
+        let reach = half + chair.model.size.x / 2.0 - 0.05;
+        let on_top = Affine3A::from_translation(Vec3::new(0.2, 0.1, top));
+        let holders = [
+            Holder::Floor(floor),
+            Holder::Floor(floor),
+            Holder::Floor(floor),
+            Holder::Object(0),
+        ];
+        let movable = [false, true, true, true];
+        let alignments = vec![
+            vec![(table, best), (table, second)],
+            chair_at(reach),
+            chair_at(-reach),
+            vec![(cup, on_top)],
+        ];
+        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[]);
+        assert_eq!(
+            checked.chosen[0].expect("table").0,
+            0,
+            "the table's best fit"
+        );
+        let solids: Vec<PlacedSolid> = (0..4)
+            .map(|i| {
+                let (k, pose) = checked.chosen[i].expect("placed");
+                PlacedSolid::new(alignments[i][k].0, &pose)
+            })
+            .collect();
+        for chair in &solids[1..3] {
+            assert!(penetration_depth(chair, &solids[0]) < 0.005);
+        }
+        for check in checked.checks.iter().flatten() {
+            assert_eq!(check.conflicts, 0, "{check:?}");
+        }
+
+        // With only the taller table, the cup is lifted onto its top all the same: the contact
+        // graph says the table holds it.
+        let alignments = vec![vec![(table, second)], vec![(cup, on_top)]];
+        let holders = [Holder::Floor(floor), Holder::Object(0)];
+        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[]);
+        let (_, pose) = checked.chosen[1].expect("cup");
+        assert!(
+            (pose.translation.z - 1.1 * top).abs() < 1e-3,
+            "{}",
+            pose.translation.z
+        );
+        let check = checked.checks[1].as_ref().expect("cup check");
+        assert!(check.support_area.expect("held") > 0.99, "{check:?}");
     }
 }

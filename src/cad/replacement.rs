@@ -12,7 +12,7 @@ use crate::cad::alignment::{Alignment, align_all, alignment_error, choice_score}
 use crate::cad::database::{CadDatabase, DatabaseModel};
 use crate::cad::icp;
 use crate::cad::matching::{Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates};
-use crate::cad::physical_check::{Holder, PlacementCheck, check_placements};
+use crate::cad::physical_check::{Holder, PlacedSolid, PlacementCheck, check_placements};
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
@@ -212,14 +212,35 @@ pub fn check_and_place(
         .filter(|n| n.class == "wall" || n.class == "floor")
         .filter_map(|n| layout_plane(&n.id))
         .collect();
+    // The objects no model replaces keep their segment meshes, which simulators collide as
+    // their boxes (`kinematics::link`): the models must not enter those either (chairs tucked
+    // under a counter that no model replaced), and what stands on one is snapped onto its top.
+    let (obstacle_ids, obstacles): (Vec<&str>, Vec<PlacedSolid>) = graph
+        .nodes
+        .iter()
+        .filter(|n| n.kind != EntityKind::Layout)
+        .filter(|n| {
+            ids.iter()
+                .position(|id| *id == n.id)
+                .is_none_or(|i| alignments[i].is_empty())
+        })
+        .filter_map(|n| {
+            let gbox = GravityBox::from(&n.bbox);
+            let solid = PlacedSolid::from_hull(&gbox.corners())?;
+            Some((n.id.as_str(), solid))
+        })
+        .unzip();
     let holders: Vec<Holder> = ids
         .iter()
         .map(|id| match graph.parent_of(id) {
             Some("floor") => floor.map_or(Holder::Other, Holder::Floor),
-            Some(parent) => ids
-                .iter()
-                .position(|o| o == parent)
-                .map_or(Holder::Other, Holder::Object),
+            Some(parent) => match ids.iter().position(|o| o == parent) {
+                Some(p) if !alignments[p].is_empty() => Holder::Object(p),
+                _ => obstacle_ids
+                    .iter()
+                    .position(|o| *o == parent)
+                    .map_or(Holder::Other, Holder::Obstacle),
+            },
             None => Holder::Other,
         })
         .collect();
@@ -247,7 +268,7 @@ pub fn check_and_place(
                 .is_some_and(|c| c.movable)
         })
         .collect();
-    let checked = check_placements(&options, &holders, &movable, &layout);
+    let checked = check_placements(&options, &holders, &movable, &layout, &obstacles);
     let mut records = Vec::new();
     for (i, id) in ids.iter().enumerate() {
         let (Some((k, pose)), Some(check)) = (checked.chosen[i], checked.checks[i].clone()) else {

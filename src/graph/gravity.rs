@@ -8,8 +8,9 @@ use crate::geometry::TriMesh;
 use crate::geometry::plane::fit_plane;
 
 /// The floor's own plane levels the up direction when the two disagree by more than this
-/// (degrees; less is within the plane fit's noise on a 2 cm map) ...
-const LEVEL_MIN_DEG: f32 = 0.5;
+/// (degrees; less is within the plane fit's noise on a 2 cm map, and the contact graph takes such
+/// a floor as level) ...
+pub const LEVEL_MIN_DEG: f32 = 0.5;
 /// ... and by less than this (more, and the "floor" is not level ground: a ramp, a wrong label).
 const LEVEL_MAX_DEG: f32 = 3.0;
 /// Floor points farther than this (metres) from the first plane fit are left out of the second

@@ -42,10 +42,14 @@ pub fn transform_of(a: Affine3A) -> Transform {
     }
 }
 
-/// The joint an object gets to its support: floating for movable classes, fixed otherwise.
-pub fn support_joint(class: &str) -> JointSpec {
+/// The joint an object gets to its support: floating for a movable class with a model, fixed
+/// otherwise. An object no model replaced keeps its segment mesh, the surface seen from one side:
+/// it has no inside to weigh, its hull stands on nothing in particular, and the worst such
+/// segments are the ones the shape filters rejected (a 1.1 m "book" of label bleeding), so it
+/// stays where it was seen.
+pub fn support_joint(class: &str, has_model: bool) -> JointSpec {
     match ClassTable::builtin().get(class) {
-        Some(info) if info.movable => JointSpec::FLOATING,
+        Some(info) if info.movable && has_model => JointSpec::FLOATING,
         _ => JointSpec::FIXED,
     }
 }
@@ -118,13 +122,14 @@ pub fn attach_contact_graph(
         poses.insert(node.id.clone(), pose);
     }
     for node in &graph.nodes {
+        let has_model = node.cad.is_some();
         let (parent, parent_pose, joint) = match graph.parent_of(&node.id) {
-            Some(p) => (entities[p], poses[p], support_joint(&node.class)),
+            Some(p) => (entities[p], poses[p], support_joint(&node.class, has_model)),
             None => {
                 let joint = if node.kind == EntityKind::Layout {
                     JointSpec::FIXED
                 } else {
-                    support_joint(&node.class)
+                    support_joint(&node.class, has_model)
                 };
                 (root, Affine3A::IDENTITY, joint)
             }
@@ -212,6 +217,32 @@ mod tests {
             global.translation().distance(expected) < 1e-4,
             "cup at {} instead of {expected}",
             global.translation()
+        );
+    }
+
+    #[test]
+    fn a_movable_object_no_model_replaced_is_fixed_where_it_was_seen() {
+        let mut graph = kitchen_graph();
+        graph
+            .nodes
+            .iter_mut()
+            .find(|n| n.id == "cup_1")
+            .expect("cup")
+            .cad = None;
+        let mut app = App::new();
+        app.add_plugins((MinimalPlugins, TransformPlugin));
+        let entities = spawn_contact_graph(app.world_mut(), &graph).expect("spawn");
+        let world = app.world();
+        let kind = |id: &str| world.get::<Joint>(entities[id]).map(|j| j.spec.kind);
+        assert_eq!(kind("cup_1"), Some(crate::kinematics::JointKind::Fixed));
+        assert_eq!(
+            world.get::<ChildOf>(entities["cup_1"]).map(ChildOf::parent),
+            Some(entities["table_1"]),
+            "still on the table"
+        );
+        assert_eq!(
+            kind("chair_1"),
+            Some(crate::kinematics::JointKind::Floating)
         );
     }
 

@@ -302,7 +302,8 @@ pub fn apply_change(world: &mut World, change: &Change) {
                     .get::<Panoptic>(child)
                     .map(|p| p.class.clone())
                     .unwrap_or_default();
-                crate::systems::scene_graph::support_joint(&class)
+                let has_model = world.get::<crate::components::CadModel>(child).is_some();
+                crate::systems::scene_graph::support_joint(&class, has_model)
             };
             world.entity_mut(child).insert((
                 ChildOf(parent),
