@@ -26,6 +26,11 @@ const SUPPORT_HEIGHT_BAND_M: f32 = 0.03;
 /// a few centimetres taller or lower than the surface the child was seen on (a table model
 /// scaled to the whole table segment, chairs and all).
 const SNAP_HEIGHT_BAND_M: f32 = 0.1;
+/// Points of a model this close above its lowest are what it stands on: this share of its
+/// height, within these bounds (metres). Tight, or a mug laid on its side stands on the rows of
+/// its round body a few millimetres up, and rolls over in a simulator.
+const STANDING_BAND_SHARE: f32 = 0.005;
+const STANDING_BAND_M: std::ops::RangeInclusive<f32> = 0.001..=0.005;
 /// Samples per side of the child's bottom rectangle in the support-area test.
 const SUPPORT_SAMPLES: usize = 8;
 
@@ -107,6 +112,40 @@ impl PlacedSolid {
                 Vec3::new(hi.x, hi.y, lo.z),
                 Vec3::new(lo.x, hi.y, lo.z),
             ],
+        })
+    }
+
+    /// Whether it stands by itself where it rests: its centre of mass (of its convex pieces,
+    /// uniformly dense) over the hull of its lowest points. A chair laid on its back by the
+    /// orientation search, its seat sticking out, tips over in any simulator.
+    pub fn stands(&self) -> bool {
+        use parry3d::shape::Shape;
+        let (mut mass, mut moment) = (0.0f32, Vec3::ZERO);
+        for (piece, _, _) in &self.pieces {
+            let props = piece.mass_properties(1.0);
+            mass += props.mass();
+            moment += props.local_com * props.mass();
+        }
+        if mass <= 0.0 {
+            return true;
+        }
+        let com = (moment / mass).truncate();
+        let band = (STANDING_BAND_SHARE * (self.hi.z - self.lo.z))
+            .clamp(*STANDING_BAND_M.start(), *STANDING_BAND_M.end());
+        let feet: Vec<Vec2> = self
+            .pieces
+            .iter()
+            .flat_map(|(p, _, _)| p.points().iter())
+            .filter(|v| v.z <= self.lo.z + band)
+            .map(|v| v.truncate())
+            .collect();
+        let hull = crate::geometry::min_area_rect::convex_hull(&feet);
+        if hull.len() < 3 {
+            return false;
+        }
+        (0..hull.len()).all(|k| {
+            let (a, b) = (hull[k], hull[(k + 1) % hull.len()]);
+            (b - a).perp_dot(com - a) >= 0.0
         })
     }
 
@@ -263,6 +302,8 @@ pub struct PlacementCheck {
     /// this is the map's segmentation at fault (one label bled over the neighbour) or a model
     /// deeper than the object (big handles), fixed here, not hidden.
     pub separated_m: f32,
+    /// Its centre of mass is not over what it stands on (`PlacedSolid::stands`).
+    pub tips_over: bool,
 }
 
 /// The min-conflict choice of every object's placement, snapped onto its support.
@@ -301,6 +342,10 @@ pub fn check_placements(
         })
         .collect();
     let n = alignments.len();
+    let stands: Vec<Vec<bool>> = solids
+        .par_iter()
+        .map(|options| options.iter().map(PlacedSolid::stands).collect())
+        .collect();
     let mut choice: Vec<Option<usize>> = solids
         .iter()
         .map(|s| (!s.is_empty()).then_some(0))
@@ -321,6 +366,7 @@ pub fn check_placements(
         let me = &solids[i][k];
         let placed = |j: usize| choice[j].map(|m| &solids[j][m]);
         let mut count = usize::from(layout_penetration(me, layout) > MAX_PENETRATION_M);
+        count += usize::from(holders[i] != Holder::Other && !stands[i][k]);
         count += obstacles
             .iter()
             .enumerate()
@@ -344,47 +390,6 @@ pub fn check_placements(
         }
         count
     };
-    if std::env::var_os("ISCENE_DEBUG_CHECK").is_some() {
-        for i in 0..n {
-            let cs: Vec<usize> = (0..solids[i].len())
-                .map(|k| conflicts_of(i, k, &choice))
-                .collect();
-            eprintln!(
-                "DEBUG obj {i} holder {:?} movable {} conflicts {:?}",
-                holders[i], movable[i], cs
-            );
-            for k in 0..solids[i].len() {
-                for j in (0..n).filter(|&j| j != i) {
-                    if let Some(o) = choice[j].map(|m| &solids[j][m]) {
-                        if let Some((d, nrm)) = deepest_contact(&solids[i][k], o) {
-                            if d > MAX_PENETRATION_M {
-                                eprintln!(
-                                    "   cand {k} vs {j}: depth {d:.3} normal {nrm:?} sup {:.2}",
-                                    if holders[j] == Holder::Object(i) {
-                                        support_area(o, &solids[i][k])
-                                    } else {
-                                        -1.0
-                                    }
-                                );
-                            }
-                        } else if holders[j] == Holder::Object(i) {
-                            eprintln!(
-                                "   cand {k} child {j} sup {:.2}",
-                                support_area(o, &solids[i][k])
-                            );
-                        }
-                    }
-                }
-                for (q, o) in obstacles.iter().enumerate() {
-                    if let Some((d, _)) = deepest_contact(&solids[i][k], o) {
-                        if d > MAX_PENETRATION_M {
-                            eprintln!("   cand {k} vs obstacle {q}: depth {d:.3}");
-                        }
-                    }
-                }
-            }
-        }
-    }
     let mut tried_in_vain = vec![false; n];
     for _ in 0..MAX_SEARCH_STEPS {
         let current: Vec<usize> = (0..n)
@@ -480,12 +485,15 @@ pub fn check_placements(
                 .filter_map(|c| finals[c].as_ref())
                 .filter(|c| support_area(c, me) < MIN_SUPPORT_AREA)
                 .count();
+            let tips_over = holders[i] != Holder::Other && !me.stands();
             let conflicts = usize::from(max_penetration_m > MAX_PENETRATION_M)
                 + usize::from(layout_penetration_m > MAX_PENETRATION_M)
                 + usize::from(held_area.is_some_and(|a| a < MIN_SUPPORT_AREA))
+                + usize::from(tips_over)
                 + children_unsupported;
             Some(PlacementCheck {
                 chosen: choice[i]?,
+                tips_over,
                 max_penetration_m,
                 layout_penetration_m,
                 support_area: held_area,
@@ -858,6 +866,8 @@ mod tests {
         let top = table.model.size.z;
         let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
         let cup = model("cup_01");
+        let book = model("book_01");
+        let book_at = |x: f32| vec![(book, Affine3A::from_translation(Vec3::new(x, -0.2, top)))];
         let alignments = vec![
             vec![(table, Affine3A::IDENTITY)],
             vec![
@@ -872,9 +882,18 @@ mod tests {
                     Affine3A::from_translation(Vec3::new(0.2, 0.1, top + 0.005)),
                 ),
             ],
+            // Two books seen on the top: the table's height is not fitted to the sunk cup.
+            book_at(-0.4),
+            book_at(0.4),
         ];
-        let holders = [Holder::Floor(floor), Holder::Object(0)];
-        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[]);
+        let holders = [
+            Holder::Floor(floor),
+            Holder::Object(0),
+            Holder::Object(0),
+            Holder::Object(0),
+        ];
+        let movable = [false, true, true, true];
+        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[]);
         let (k, pose) = checked.chosen[1].expect("cup placed");
         assert_eq!(k, 1, "the cup that does not sink in");
         assert_eq!(checked.swaps, 1);
@@ -1023,14 +1042,17 @@ mod tests {
             assert_eq!(check.conflicts, 0, "{check:?}");
         }
 
-        // With only the taller table, the cup is lifted onto its top all the same: the contact
-        // graph says the table holds it.
+        // With only the taller table, its height is fitted to the cup it holds: its top comes
+        // down to where the cup was seen standing.
         let alignments = vec![vec![(table, second)], vec![(cup, on_top)]];
         let holders = [Holder::Floor(floor), Holder::Object(0)];
         let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[]);
+        let (_, table_pose) = checked.chosen[0].expect("table");
+        let table_top = PlacedSolid::new(table, &table_pose).hi.z;
+        assert!((table_top - top).abs() < 1e-3, "{table_top}");
         let (_, pose) = checked.chosen[1].expect("cup");
         assert!(
-            (pose.translation.z - 1.1 * top).abs() < 1e-3,
+            (pose.translation.z - top).abs() < 1e-3,
             "{}",
             pose.translation.z
         );

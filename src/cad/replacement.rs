@@ -245,17 +245,30 @@ pub fn check_and_place(
         })
         .collect();
     // Only candidates that explain the points about as well as the best may replace it: a
-    // table lying on its side conflicts with nothing, and explains nothing.
+    // table lying on its side conflicts with nothing, and explains nothing. But when none of
+    // those stands by itself (a mug seen from above, fitted best lying on its side), the best
+    // that does is tried as well: a worse fit beats one that rolls over.
     let options: Vec<Vec<(&DatabaseModel, glam::Affine3A)>> = alignments
         .iter()
         .map(|list| {
             let best = list.first().map_or(0.0, choice_score);
-            list.iter()
+            let placed = |a: &Alignment| (&db.models()[a.candidate.model], a.world_from_model);
+            let stands = |a: &&Alignment| {
+                let (model, pose) = placed(a);
+                PlacedSolid::new(model, &pose).stands()
+            };
+            let mut options: Vec<&Alignment> = list
+                .iter()
                 .take_while(|a| {
                     choice_score(a) <= best + (SWAP_SLACK_RATIO * best).max(SWAP_SLACK_M)
                 })
-                .map(|a| (&db.models()[a.candidate.model], a.world_from_model))
-                .collect()
+                .collect();
+            if !options.iter().any(stands)
+                && let Some(standing) = list.iter().skip(options.len()).find(stands)
+            {
+                options.push(standing);
+            }
+            options.into_iter().map(placed).collect()
         })
         .collect();
     let table = ClassTable::builtin();

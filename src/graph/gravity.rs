@@ -181,7 +181,7 @@ mod tests {
             .flat_map(|i| (0..30).map(move |j| Vec3::new(i as f32 * 0.1, j as f32 * 0.1, 0.0)))
             .map(|p| tilt * p)
             .collect();
-        points.extend((0..40).map(|i| Vec3::new(i as f32 * 0.1, 3.0, 0.1)));
+        points.extend((0..40).map(|i| Vec3::new(i as f32 * 0.1, 3.0, 0.25)));
         points
     }
 
