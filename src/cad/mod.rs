@@ -18,6 +18,7 @@ pub mod mjcf_xml;
 pub mod model;
 pub mod orientation;
 pub mod physical_check;
+pub mod placed_solid;
 pub mod replacement;
 pub mod seating;
 pub mod sh3d;

@@ -5,272 +5,26 @@
 //! bounded) picks the final models; neighbours still overlapping side by side are pulled apart;
 //! then every model is snapped onto its supporting surface.
 
-use glam::{Affine3A, Vec2, Vec3};
-use parry3d::math::Pose;
-use parry3d::shape::ConvexPolyhedron;
+use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cad::database::DatabaseModel;
-use crate::geometry::{Plane, TriMesh};
+pub use crate::cad::placed_solid::{
+    PlacedSolid, deepest_contact, layout_penetration, penetration_depth, support_area,
+};
+use crate::geometry::Plane;
 
 /// Deeper interpenetration than this (metres) is a conflict (the bar).
 pub const MAX_PENETRATION_M: f32 = 0.01;
 /// A child must stand on at least this share of its bottom rectangle (the contact graph's
 /// stable-support bar).
 pub const MIN_SUPPORT_AREA: f32 = 0.5;
-/// How far (metres) below or above a child's bottom the parent's upward surface may be found.
-const SUPPORT_HEIGHT_BAND_M: f32 = 0.03;
 /// How far (metres) from a child's bottom its parent's final surface may be for the child to be
 /// snapped onto it: the contact graph says the parent holds it, and the parent's model may be
 /// a few centimetres taller or lower than the surface the child was seen on (a table model
 /// scaled to the whole table segment, chairs and all).
 const SNAP_HEIGHT_BAND_M: f32 = 0.1;
-/// Points of a model this close above its lowest are what it stands on: this share of its
-/// height, within these bounds (metres). Tight, or a mug laid on its side stands on the rows of
-/// its round body a few millimetres up, and rolls over in a simulator.
-const STANDING_BAND_SHARE: f32 = 0.005;
-const STANDING_BAND_M: std::ops::RangeInclusive<f32> = 0.001..=0.005;
-/// Samples per side of the child's bottom rectangle in the support-area test.
-const SUPPORT_SAMPLES: usize = 8;
-
-/// A model placed in the world as solid convex pieces (the primitives it is built from).
-pub struct PlacedSolid {
-    pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)>,
-    /// Bounds of the whole model.
-    pub lo: Vec3,
-    pub hi: Vec3,
-    /// Upward-facing triangles of the posed mesh (support surfaces), world frame.
-    upward: Vec<[Vec3; 3]>,
-    /// The bottom rectangle of the model's box, world frame (corners in order).
-    pub footprint: [Vec3; 4],
-}
-
-impl PlacedSolid {
-    pub fn new(model: &DatabaseModel, world_from_model: &Affine3A) -> Self {
-        let pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)> = model
-            .pieces
-            .iter()
-            .filter_map(|piece| {
-                let points: Vec<Vec3> = piece
-                    .iter()
-                    .map(|p| world_from_model.transform_point3(*p))
-                    .collect();
-                let (lo, hi) = bounds(&points)?;
-                Some((ConvexPolyhedron::from_convex_hull(&points)?, lo, hi))
-            })
-            .collect();
-        let (lo, hi) = pieces.iter().fold(
-            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-            |(lo, hi), (_, a, b)| (lo.min(*a), hi.max(*b)),
-        );
-        let posed = model.mesh.transformed(world_from_model);
-        let upward = (0..posed.triangles.len())
-            .filter(|&t| posed.face_normal(t).z > 0.9)
-            .map(|t| posed.triangle(t))
-            .collect();
-        let (mlo, mhi) = model.mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
-        let footprint = [
-            Vec3::new(mlo.x, mlo.y, mlo.z),
-            Vec3::new(mhi.x, mlo.y, mlo.z),
-            Vec3::new(mhi.x, mhi.y, mlo.z),
-            Vec3::new(mlo.x, mhi.y, mlo.z),
-        ]
-        .map(|c| world_from_model.transform_point3(c));
-        Self {
-            pieces,
-            lo,
-            hi,
-            upward,
-            footprint,
-        }
-    }
-
-    /// An object that keeps its segment mesh, as a fixed solid: the convex hull of what the map
-    /// saw of it (simulators collide such a mesh as its hull too). `None` when the points span
-    /// no volume.
-    pub fn from_hull(points: &[Vec3]) -> Option<Self> {
-        let hull = TriMesh {
-            positions: points.to_vec(),
-            triangles: Vec::new(),
-        }
-        .convex_hull()?;
-        let (lo, hi) = bounds(&hull.positions)?;
-        let piece = ConvexPolyhedron::from_convex_hull(&hull.positions)?;
-        let upward = (0..hull.triangles.len())
-            .filter(|&t| hull.face_normal(t).z > 0.9)
-            .map(|t| hull.triangle(t))
-            .collect();
-        Some(Self {
-            pieces: vec![(piece, lo, hi)],
-            lo,
-            hi,
-            upward,
-            footprint: [
-                lo,
-                Vec3::new(hi.x, lo.y, lo.z),
-                Vec3::new(hi.x, hi.y, lo.z),
-                Vec3::new(lo.x, hi.y, lo.z),
-            ],
-        })
-    }
-
-    /// Whether it stands by itself where it rests: its centre of mass (of its convex pieces,
-    /// uniformly dense) over the hull of its lowest points. A chair laid on its back by the
-    /// orientation search, its seat sticking out, tips over in any simulator.
-    pub fn stands(&self) -> bool {
-        use parry3d::shape::Shape;
-        let (mut mass, mut moment) = (0.0f32, Vec3::ZERO);
-        for (piece, _, _) in &self.pieces {
-            let props = piece.mass_properties(1.0);
-            mass += props.mass();
-            moment += props.local_com * props.mass();
-        }
-        if mass <= 0.0 {
-            return true;
-        }
-        let com = (moment / mass).truncate();
-        let band = (STANDING_BAND_SHARE * (self.hi.z - self.lo.z))
-            .clamp(*STANDING_BAND_M.start(), *STANDING_BAND_M.end());
-        let feet: Vec<Vec2> = self
-            .pieces
-            .iter()
-            .flat_map(|(p, _, _)| p.points().iter())
-            .filter(|v| v.z <= self.lo.z + band)
-            .map(|v| v.truncate())
-            .collect();
-        let hull = crate::geometry::min_area_rect::convex_hull(&feet);
-        if hull.len() < 3 {
-            return false;
-        }
-        (0..hull.len()).all(|k| {
-            let (a, b) = (hull[k], hull[(k + 1) % hull.len()]);
-            (b - a).perp_dot(com - a) >= 0.0
-        })
-    }
-
-    /// How deep (metres) a neighbour may overlap this object, when it is movable, and still be
-    /// pulled apart from it: `MAX_SEPARATED_M` or `MAX_SEPARATED_SHARE` of its width.
-    fn separation_limit(&self) -> f32 {
-        MAX_SEPARATED_M.max(MAX_SEPARATED_SHARE * (self.hi - self.lo).truncate().max_element())
-    }
-
-    /// The centre of its bounds.
-    pub fn centre(&self) -> Vec3 {
-        0.5 * (self.lo + self.hi)
-    }
-
-    /// The lowest point of the model.
-    pub fn bottom_z(&self) -> f32 {
-        self.lo.z
-    }
-
-    /// The height of this model's upward surface at `xy` nearest to `z` within the support
-    /// band, if any.
-    pub fn surface_height_at(&self, xy: Vec2, z: f32) -> Option<f32> {
-        self.surface_height_within(xy, z, SUPPORT_HEIGHT_BAND_M)
-    }
-
-    /// The height of this model's upward surface at `xy` nearest to `z` within `band` metres.
-    fn surface_height_within(&self, xy: Vec2, z: f32, band: f32) -> Option<f32> {
-        self.upward
-            .iter()
-            .filter_map(|t| height_in_triangle(t, xy))
-            .filter(|h| (h - z).abs() <= band)
-            .min_by(|a, b| (a - z).abs().total_cmp(&(b - z).abs()))
-    }
-}
-
-fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
-    let first = *points.first()?;
-    Some(
-        points
-            .iter()
-            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
-    )
-}
-
-/// The height of triangle `t`'s plane at `xy` when `xy` lies inside its projection.
-fn height_in_triangle(t: &[Vec3; 3], xy: Vec2) -> Option<f32> {
-    let [a, b, c] = *t;
-    let (a2, b2, c2) = (a.truncate(), b.truncate(), c.truncate());
-    let area = (b2 - a2).perp_dot(c2 - a2);
-    if area.abs() < 1e-12 {
-        return None;
-    }
-    let u = (c2 - b2).perp_dot(xy - b2) / area;
-    let v = (a2 - c2).perp_dot(xy - c2) / area;
-    let w = 1.0 - u - v;
-    (u >= -1e-6 && v >= -1e-6 && w >= -1e-6).then_some(u * a.z + v * b.z + w * c.z)
-}
-
-/// How deep (metres, 0 when apart) two placed models interpenetrate: the deepest contact of
-/// any two of their convex pieces.
-pub fn penetration_depth(a: &PlacedSolid, b: &PlacedSolid) -> f32 {
-    deepest_contact(a, b).map_or(0.0, |(depth, _)| depth)
-}
-
-/// The deepest interpenetration of two placed models and its normal (out of `a`, towards `b`);
-/// `None` when they do not interpenetrate.
-pub fn deepest_contact(a: &PlacedSolid, b: &PlacedSolid) -> Option<(f32, Vec3)> {
-    if !overlap(a.lo, a.hi, b.lo, b.hi) {
-        return None;
-    }
-    let mut deepest: Option<(f32, Vec3)> = None;
-    for (pa, alo, ahi) in &a.pieces {
-        if !overlap(*alo, *ahi, b.lo, b.hi) {
-            continue;
-        }
-        for (pb, blo, bhi) in &b.pieces {
-            if !overlap(*alo, *ahi, *blo, *bhi) {
-                continue;
-            }
-            if let Ok(Some(contact)) =
-                parry3d::query::contact(&Pose::IDENTITY, pa, &Pose::IDENTITY, pb, 0.0)
-                && contact.dist < 0.0
-                && deepest.is_none_or(|(d, _)| -contact.dist > d)
-            {
-                deepest = Some((-contact.dist, contact.normal1));
-            }
-        }
-    }
-    deepest
-}
-
-fn overlap(alo: Vec3, ahi: Vec3, blo: Vec3, bhi: Vec3) -> bool {
-    alo.cmple(bhi).all() && blo.cmple(ahi).all()
-}
-
-/// How far (metres, 0 when not) the model reaches behind any of the layout `planes` (facing
-/// into the room: the floor's up, walls' inwards).
-pub fn layout_penetration(solid: &PlacedSolid, planes: &[Plane]) -> f32 {
-    solid
-        .pieces
-        .iter()
-        .flat_map(|(p, _, _)| p.points().iter())
-        .flat_map(|v| planes.iter().map(move |plane| -plane.signed_distance(*v)))
-        .fold(0.0f32, f32::max)
-}
-
-/// The share of the child's bottom rectangle over the parent's upward surface at the child's
-/// bottom height.
-pub fn support_area(child: &PlacedSolid, parent: &PlacedSolid) -> f32 {
-    let [c0, c1, _, c3] = child.footprint;
-    let z = child.bottom_z();
-    let n = SUPPORT_SAMPLES;
-    let mut held = 0;
-    for i in 0..n {
-        for j in 0..n {
-            let (u, v) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
-            let p = c0 + (c1 - c0) * u + (c3 - c0) * v;
-            if parent.surface_height_at(p.truncate(), z).is_some() {
-                held += 1;
-            }
-        }
-    }
-    held as f32 / (n * n) as f32
-}
-
 /// What holds an object up, as the check needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Holder {
@@ -587,6 +341,11 @@ const MAX_SEPARATED_M: f32 = 0.1;
 /// counter, its model taller than the knee space, starts 10-12 cm inside it (7-Scenes
 /// redkitchen), and is pulled out rather than left in.
 const MAX_SEPARATED_SHARE: f32 = 0.3;
+/// How deep (metres) a neighbour may overlap `solid`, when it is movable, and still be pulled
+/// apart from it: `MAX_SEPARATED_M` or `MAX_SEPARATED_SHARE` of its width.
+fn separation_limit(solid: &PlacedSolid) -> f32 {
+    MAX_SEPARATED_M.max(MAX_SEPARATED_SHARE * (solid.hi - solid.lo).truncate().max_element())
+}
 /// Rounds of pulling apart (a pair's separation can push one into a third).
 const SEPARATION_ROUNDS: usize = 10;
 /// Pulled-apart neighbours end this far apart (metres).
@@ -695,7 +454,7 @@ fn parted(
     let too_deep = [(movable[i], a), (b_movable, b)]
         .iter()
         .filter(|(m, _)| *m)
-        .all(|(_, s)| depth > s.separation_limit());
+        .all(|(_, s)| depth > separation_limit(s));
     if ((movable[i] || b_movable) && too_deep)
         || (obstacle && holders[i] == Holder::Obstacle(j - n))
     {
