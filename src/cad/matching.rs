@@ -67,7 +67,8 @@ pub struct Candidate {
 }
 
 /// The `keep` best candidates for `object` among the models of its class, lowest ME first (ties
-/// by model index, then orientation, so the order is deterministic). Empty when the database
+/// by model index, then orientation, so the order is deterministic), and after them the best
+/// upright one when none of those is upright. Empty when the database
 /// has no model of the class; the models are [`class_models`]. Articulated models are tried
 /// upright only.
 pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -> Vec<Candidate> {
@@ -110,7 +111,16 @@ pub fn rank_candidates(object: &ObservedObject, db: &CadDatabase, keep: usize) -
             .then(a.model.cmp(&b.model))
             .then(a.orientation.cmp(&b.orientation))
     });
-    candidates.truncate(keep);
+    // The best upright candidate goes on to alignment even when lying ones rank above it: a
+    // mug seen from above has a flat box that a mug on its side fits best, and a model lying
+    // on its side may roll (the physical check tries the best one that stands).
+    let best_upright = candidates.iter().position(|c| c.upright_error == 0.0);
+    if let Some(upright) = best_upright.filter(|&k| k >= keep) {
+        candidates.swap(keep, upright);
+        candidates.truncate(keep + 1);
+    } else {
+        candidates.truncate(keep);
+    }
     candidates
 }
 

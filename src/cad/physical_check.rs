@@ -350,6 +350,15 @@ fn separation_limit(solid: &PlacedSolid) -> f32 {
 const SEPARATION_ROUNDS: usize = 10;
 /// Pulled-apart neighbours end this far apart (metres).
 const SEPARATION_GAP_M: f32 = 0.002;
+/// Neighbours overlapping by more than this (metres) are pulled apart: simulators take any
+/// overlap as a contact to resolve at the first step, and MuJoCo's rest test counts over 1 mm
+/// as a start overlap (two books on a table shared 2 mm).
+const SEPARATION_TOLERANCE_M: f32 = 0.0005;
+/// A model reaching behind a wall by more than this (metres) is brought out of it. Walls are
+/// planes fitted to noisy depth, and a cabinet shrunk off a wall by a few millimetres squeezed
+/// its neighbours in a row of three (the rendered kitchen's imported cabinets) past what ten
+/// rounds of `separate_neighbours` undo: 1.1 cm left between two of them.
+const WALL_TOLERANCE_M: f32 = 0.5 * MAX_PENETRATION_M;
 
 /// Neighbours that interpenetrate side by side (by no more than the movable one's
 /// `separation_limit`, when one is movable) are pulled apart horizontally: along the contact
@@ -384,7 +393,7 @@ fn separate_neighbours(
                 let Some((depth, normal)) = deepest_contact(a, b) else {
                     continue;
                 };
-                if depth <= 0.5 * MAX_PENETRATION_M {
+                if depth <= SEPARATION_TOLERANCE_M {
                     continue;
                 }
                 let Some(direction) = parted(i, j, depth, normal, a, b, holders, movable) else {
@@ -498,7 +507,7 @@ fn retreat_from_walls(
             let Some(pose) = poses[i] else { continue };
             let solid = PlacedSolid::new(model, &pose);
             let depth = layout_penetration(&solid, std::slice::from_ref(wall));
-            if depth <= 0.5 * MAX_PENETRATION_M {
+            if depth <= WALL_TOLERANCE_M {
                 continue;
             }
             let Some(into_room) = wall.normal.with_z(0.0).try_normalize() else {

@@ -29,6 +29,9 @@ pub struct TreeLink {
     pub parent_from_link: Affine3A,
     /// `None` for the root.
     pub geometry: Option<Arc<LinkGeometry>>,
+    /// Whether a CAD model makes the link: false for the root, the layout, and an object no
+    /// model replaced (its geometry is its segment's box).
+    pub modelled: bool,
 }
 
 impl TreeLink {
@@ -43,11 +46,12 @@ impl TreeLink {
             value: 0.0,
             parent_from_link: Affine3A::IDENTITY,
             geometry: None,
+            modelled: false,
         }
     }
 
     /// A node's own link made of `mesh` (its frame), grey, with the class's density and
-    /// friction; the link is named by the node.
+    /// friction, as a model would make it; the link is named by the node.
     pub fn body(
         name: &str,
         class: &str,
@@ -65,6 +69,7 @@ impl TreeLink {
             value: 0.0,
             parent_from_link,
             geometry: Some(Arc::new(LinkGeometry::new(mesh, [0.5; 3], class))),
+            modelled: true,
         }
     }
 

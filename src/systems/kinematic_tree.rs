@@ -12,7 +12,7 @@ use glam::Affine3A;
 use rayon::prelude::*;
 
 use crate::cad::database::CadDatabase;
-use crate::components::{Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
+use crate::components::{CadModel, Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
 use crate::graph::ContactGraph;
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
@@ -182,6 +182,7 @@ pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, String> {
                 value: joint.value,
                 parent_from_link: local * joint.spec.motion(joint.value).inverse(),
                 geometry: e.get::<LinkBody>().map(|b| b.0.clone()),
+                modelled: e.contains::<CadModel>() || e.contains::<ModelPart>(),
             });
             pushed.push((child, tree.links.len() - 1));
         }
