@@ -184,7 +184,9 @@ pub fn build_contact_graph_with_surfaces(
         })
         .collect();
     let mut supports = infer_supports(&support_input, &params.support);
-    // A counter stands on the floor, whatever share of the floor around it was seen.
+    // A counter stands on the floor, whatever share of the floor around it was seen, and never
+    // hangs on the wall behind it (a wall cabinet would have been found above it, not a top at
+    // counter height).
     let floor = shaped
         .iter()
         .position(|(i, _)| entities[*i].class == "floor");
@@ -192,7 +194,8 @@ pub fn build_contact_graph_with_surfaces(
         && let Some(&plane) = shaped[floor].1.planes.first()
     {
         for (k, (i, _)) in shaped.iter().enumerate() {
-            if entities[*i].class == COUNTER_CLASS && supports[k].is_none() {
+            let unsupported = matches!(supports[k], None | Some(SupportChoice::Wall { .. }));
+            if entities[*i].class == COUNTER_CLASS && unsupported {
                 supports[k] = Some(SupportChoice::Below {
                     parent: floor,
                     plane,

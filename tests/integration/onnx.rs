@@ -92,6 +92,12 @@ fn the_survey_estimates_gravity_within_2_degrees_and_finds_the_floor() {
     assert!(layout.floor_height.is_some(), "the floor is seen");
     // With the given gravity, frame 0's lower half is mostly floor (it looks down past the table).
     let with_given = RoomLayout::survey(&kitchen(), LayoutParams::default()).expect("survey");
+    for w in &with_given.walls {
+        eprintln!(
+            "wall: normal {:.3} offset {:.2} span {:.2?} heights {:.2?}",
+            w.plane.normal, w.plane.offset, w.span, w.heights
+        );
+    }
     let frame = sequence.load_frame(0).expect("frame 0");
     let on_floor = (320 * 640..480 * 640)
         .filter(|&i| frame.depth[i] > 0.0)

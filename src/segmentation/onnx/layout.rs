@@ -18,6 +18,8 @@ pub struct LayoutParams {
     pub survey_frames: usize,
     /// Pixels sampled every this many in each direction.
     pub stride: usize,
+    /// Surface elements are planes fitted to square patches of this many samples a side.
+    pub patch: usize,
     /// A surface within this angle (degrees) of horizontal or vertical counts as such.
     pub orientation_tolerance_deg: f32,
     /// Height-histogram bin and plane-binning step (metres).
@@ -39,6 +41,7 @@ impl Default for LayoutParams {
         Self {
             survey_frames: 60,
             stride: 4,
+            patch: 8,
             orientation_tolerance_deg: 10.0,
             bin: 0.04,
             label_distance: 0.05,
@@ -84,23 +87,25 @@ impl RoomLayout {
     pub fn survey(sequence: &Sequence, params: LayoutParams) -> Result<Self, InputError> {
         let n = sequence.frames.len();
         let step = n.div_ceil(params.survey_frames.max(1)).max(1);
-        let meshes: Vec<TriMesh> = (0..n)
+        let surveyed: Vec<(TriMesh, Vec<Surfel>)> = (0..n)
             .step_by(step)
             .collect::<Vec<_>>()
             .into_par_iter()
             .map(|i| {
                 let frame = sequence.load_frame(i)?;
-                Ok(depth_grid_mesh(
-                    &frame.depth,
-                    &frame.camera,
-                    &frame.world_from_camera,
-                    params.stride,
+                let (depth, camera, pose) =
+                    (&frame.depth, &frame.camera, &frame.world_from_camera);
+                Ok((
+                    depth_grid_mesh(depth, camera, pose, params.stride),
+                    depth_patches(depth, camera, pose, params.stride, params.patch),
                 ))
             })
             .collect::<Result<_, InputError>>()?;
         let mut mesh = TriMesh::default();
-        for m in &meshes {
+        let mut surfels = Vec::new();
+        for (m, p) in &surveyed {
             mesh.append(m);
+            surfels.extend_from_slice(p);
         }
         let cameras: Vec<Affine3A> = sequence
             .frames
@@ -118,15 +123,19 @@ impl RoomLayout {
             .map(|c| Vec3::from(c.translation))
             .sum::<Vec3>()
             / cameras.len().max(1) as f32;
-        Ok(Self::from_mesh(&mesh, up, camera_centre, params))
+        Ok(Self::from_surfels(
+            &surfels,
+            &mesh.positions,
+            up,
+            camera_centre,
+            params,
+        ))
     }
 
-    /// The floor and walls of a surveyed surface mesh with a known up direction, seen from around
-    /// `camera_centre`.
+    /// The floor and walls of a surface mesh with a known up direction, seen from around
+    /// `camera_centre`, its triangles taken as surface elements.
     pub fn from_mesh(mesh: &TriMesh, up: Vec3, camera_centre: Vec3, params: LayoutParams) -> Self {
-        let sin_tol = params.orientation_tolerance_deg.to_radians().sin();
-        let cos_tol = params.orientation_tolerance_deg.to_radians().cos();
-        let faces: Vec<(Vec3, Vec3, f32)> = (0..mesh.triangles.len())
+        let faces: Vec<Surfel> = (0..mesh.triangles.len())
             .filter_map(|t| {
                 let [a, b, c] = mesh.triangle(t);
                 let cross = (b - a).cross(c - a);
@@ -134,6 +143,20 @@ impl RoomLayout {
                 Some(((a + b + c) / 3.0, n, 0.5 * cross.length()))
             })
             .collect();
+        Self::from_surfels(&faces, &mesh.positions, up, camera_centre, params)
+    }
+
+    /// The floor and walls of surface elements with a known up direction, seen from around
+    /// `camera_centre`; `points` are every surface point surveyed (what may lie behind a wall).
+    pub fn from_surfels(
+        faces: &[Surfel],
+        points: &[Vec3],
+        up: Vec3,
+        camera_centre: Vec3,
+        params: LayoutParams,
+    ) -> Self {
+        let sin_tol = params.orientation_tolerance_deg.to_radians().sin();
+        let cos_tol = params.orientation_tolerance_deg.to_radians().cos();
         let horizontal: Vec<(f32, f32)> = faces
             .iter()
             .filter(|(_, n, _)| n.dot(up).abs() >= cos_tol)
@@ -147,7 +170,7 @@ impl RoomLayout {
             .collect();
         let walls = find_walls(
             &vertical,
-            &mesh.positions,
+            points,
             up,
             floor_height.unwrap_or(0.0),
             camera_centre,
@@ -282,6 +305,70 @@ pub fn depth_grid_mesh(
     mesh
 }
 
+/// A surface element: centre, unit normal, area (square metres).
+pub type Surfel = (Vec3, Vec3, f32);
+
+/// Surface elements of a depth image, in the world frame: a plane fitted to each square patch of
+/// `patch` x `patch` samples (every `stride` pixels) that is planar within the depth noise.
+/// Depth quantisation stair-steps a far wall (a Kinect's steps are centimetres at 3 m), which
+/// turns the normals of small triangles by tens of degrees; a plane through 64 points averages
+/// the steps out, so a far wall's patches are vertical where its triangles are not.
+pub fn depth_patches(
+    depth: &[f32],
+    camera: &Pinhole,
+    world_from_camera: &Affine3A,
+    stride: usize,
+    patch: usize,
+) -> Vec<Surfel> {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let side = stride * patch;
+    let mut surfels = Vec::new();
+    let mut points = Vec::with_capacity(patch * patch);
+    for v0 in (0..h.saturating_sub(side - 1)).step_by(side) {
+        for u0 in (0..w.saturating_sub(side - 1)).step_by(side) {
+            points.clear();
+            for v in (v0..v0 + side).step_by(stride) {
+                for u in (u0..u0 + side).step_by(stride) {
+                    let d = depth[v * w + u];
+                    if d > 0.0 && d.is_finite() {
+                        points.push(camera.unproject(u as f32, v as f32, d));
+                    }
+                }
+            }
+            // Most of the patch measured, and one surface (no depth jump, no corner).
+            if points.len() * 4 < patch * patch * 3 {
+                continue;
+            }
+            let Some(plane) = fit_plane(&points) else {
+                continue;
+            };
+            let centre = points.iter().sum::<Vec3>() / points.len() as f32;
+            let z = centre.z;
+            let noise = 0.005 + 0.004 * z * z;
+            let rms = (points
+                .iter()
+                .map(|p| plane.signed_distance(*p).powi(2))
+                .sum::<f32>()
+                / points.len() as f32)
+                .sqrt();
+            if rms > noise {
+                continue;
+            }
+            // The patch's footprint on its plane: the pixels' footprint over the obliquity.
+            let view = centre.normalize();
+            let obliquity = plane.normal.dot(view).abs().max(0.2);
+            let pixel = z / camera.fx.max(1.0) * stride as f32;
+            let area = points.len() as f32 * pixel * pixel / obliquity;
+            surfels.push((
+                world_from_camera.transform_point3(centre),
+                world_from_camera.transform_vector3(plane.normal),
+                area,
+            ));
+        }
+    }
+    surfels
+}
+
 /// Smoothed area per height bin of `bin` metres over (height, area) pairs, from the lowest
 /// height: each bin summed with its neighbours, so a surface split over two bins counts once.
 fn height_histogram(heights_areas: &[(f32, f32)], bin: f32) -> Option<(f32, Vec<f32>)> {
@@ -350,7 +437,7 @@ fn lowest_surface(heights_areas: &[(f32, f32)], bin: f32) -> Option<f32> {
 /// carrying the most area (binned by direction and offset, then refitted), kept when it is long,
 /// tall and has almost nothing of `points` behind it (a cabinet front has the wall behind it).
 fn find_walls(
-    vertical: &[(Vec3, Vec3, f32)],
+    vertical: &[Surfel],
     points: &[Vec3],
     up: Vec3,
     floor_height: f32,
