@@ -636,7 +636,10 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     if cad.conflicted.is_empty() {
                         "no physical conflicts".to_string()
                     } else {
-                        format!("still in conflict: {}", cad.conflicted.join(", "))
+                        format!(
+                            "in conflict, kept as segments: {}",
+                            cad.conflicted.join(", ")
+                        )
                     }
                 );
                 // Pulled apart by more than a voxel or two: the map's segmentation at fault.

@@ -354,11 +354,12 @@ const SEPARATION_GAP_M: f32 = 0.002;
 /// overlap as a contact to resolve at the first step, and MuJoCo's rest test counts over 1 mm
 /// as a start overlap (two books on a table shared 2 mm).
 const SEPARATION_TOLERANCE_M: f32 = 0.0005;
-/// A model reaching behind a wall by more than this (metres) is brought out of it. Walls are
-/// planes fitted to noisy depth, and a cabinet shrunk off a wall by a few millimetres squeezed
-/// its neighbours in a row of three (the rendered kitchen's imported cabinets) past what ten
-/// rounds of `separate_neighbours` undo: 1.1 cm left between two of them.
-const WALL_TOLERANCE_M: f32 = 0.5 * MAX_PENETRATION_M;
+/// A fixed model (a cabinet) reaching behind a wall by more than this (metres) is shrunk out of
+/// it; a movable one is moved out past `SEPARATION_TOLERANCE_M`. Walls are planes fitted to
+/// noisy depth, and a cabinet shrunk off a wall by a few millimetres squeezed its neighbours in
+/// a row of three (the rendered kitchen's imported cabinets) past what ten rounds of
+/// `separate_neighbours` undo: 1.1 cm left between two of them.
+const WALL_SHRINK_TOLERANCE_M: f32 = 0.5 * MAX_PENETRATION_M;
 
 /// Neighbours that interpenetrate side by side (by no more than the movable one's
 /// `separation_limit`, when one is movable) are pulled apart horizontally: along the contact
@@ -507,7 +508,12 @@ fn retreat_from_walls(
             let Some(pose) = poses[i] else { continue };
             let solid = PlacedSolid::new(model, &pose);
             let depth = layout_penetration(&solid, std::slice::from_ref(wall));
-            if depth <= WALL_TOLERANCE_M {
+            let tolerance = if movable[i] {
+                SEPARATION_TOLERANCE_M
+            } else {
+                WALL_SHRINK_TOLERANCE_M
+            };
+            if depth <= tolerance {
                 continue;
             }
             let Some(into_room) = wall.normal.with_z(0.0).try_normalize() else {

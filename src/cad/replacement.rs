@@ -191,7 +191,11 @@ pub struct ReplacementRecord {
 /// their supports, snaps them onto what holds them (as `graph`'s support edges say), and writes
 /// each placement into its node's `cad` (the scale there is the geometric mean; the per-axis
 /// scale is in `world_from_model`) with its alignment error measured again on `points` (the
-/// check moves models by millimetres to centimetres).
+/// check moves models by millimetres to centimetres). An object whose final placement still
+/// conflicts gets no `cad` and keeps its segment mesh, which every simulator holds still: a
+/// model left 10 cm inside a counter, or on nothing, would fly off at the first step (a chair
+/// in the knee space between two counters, a book on a chair-shaped segment of label
+/// bleeding, in 7-Scenes redkitchen). Its record is returned all the same, with the conflicts.
 pub fn check_and_place(
     graph: &mut ContactGraph,
     db: &CadDatabase,
@@ -299,12 +303,14 @@ pub fn check_and_place(
             .get(id)
             .and_then(|p| alignment_error(p, entry, &pose))
             .unwrap_or(a.alignment_error);
-        node.cad = Some(CadPlacement {
-            model: model.id.clone(),
-            world_from_model: Mat4::from(pose).to_cols_array(),
-            scale: scale.element_product().cbrt(),
-            alignment_error: error,
-        });
+        if check.conflicts == 0 {
+            node.cad = Some(CadPlacement {
+                model: model.id.clone(),
+                world_from_model: Mat4::from(pose).to_cols_array(),
+                scale: scale.element_product().cbrt(),
+                alignment_error: error,
+            });
+        }
         records.push(ReplacementRecord {
             id: id.clone(),
             model: model.id.clone(),

@@ -64,8 +64,11 @@ pub struct CadReport {
     pub mean_alignment_error_m: Option<f32>,
     /// Objects the physical check moved off their best alignment.
     pub swapped: usize,
-    /// Objects whose final placement still conflicts (penetration over 1 cm, support test).
+    /// Objects whose final placement still conflicts (penetration over 1 cm, layout
+    /// penetration, support test, tipping over): they keep their segment meshes.
     pub conflicted: Vec<String>,
+    /// Their placements as the check left them, with the conflicts.
+    pub unplaced: Vec<ReplacementRecord>,
 }
 
 /// Each entity id's observed surface points.
@@ -166,7 +169,10 @@ fn physical_check_stage(world: &mut World) {
         .iter()
         .filter(|n| n.kind != crate::classes::EntityKind::Layout)
         .count();
-    let replaced = check_and_place(&mut graph, &db, &ids, &options, &points);
+    let (replaced, unplaced): (Vec<_>, Vec<_>) =
+        check_and_place(&mut graph, &db, &ids, &options, &points)
+            .into_iter()
+            .partition(|r| r.check.conflicts == 0);
     let by_id: HashMap<String, Entity> = world
         .query::<(Entity, &SceneEntity)>()
         .iter(world)
@@ -191,11 +197,8 @@ fn physical_check_stage(world: &mut World) {
         rejected,
         objects: object_count,
         swapped: replaced.iter().filter(|r| r.check.chosen > 0).count(),
-        conflicted: replaced
-            .iter()
-            .filter(|r| r.check.conflicts > 0)
-            .map(|r| r.id.clone())
-            .collect(),
+        conflicted: unplaced.iter().map(|r| r.id.clone()).collect(),
+        unplaced,
         replaced,
         mean_alignment_error_m,
     });

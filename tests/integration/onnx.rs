@@ -98,6 +98,16 @@ fn the_survey_estimates_gravity_within_2_degrees_and_finds_the_floor() {
             w.plane.normal, w.plane.offset, w.span, w.heights
         );
     }
+    // The tiled wall behind the counter: 4.5 m long, seen from the floor (under the counter's
+    // knee space) to above the monitors.
+    assert!(
+        with_given
+            .walls
+            .iter()
+            .any(|w| w.span[1] - w.span[0] > 3.0 && w.heights[1] > 1.5),
+        "{:?}",
+        with_given.walls
+    );
     let frame = sequence.load_frame(0).expect("frame 0");
     let on_floor = (320 * 640..480 * 640)
         .filter(|&i| frame.depth[i] > 0.0)
@@ -156,6 +166,11 @@ fn the_kitchen_reconstructs_with_table_chairs_cups_and_a_counter_holding_the_mon
     let floor = of_class("floor");
     assert_eq!(floor.len(), 1);
     assert!(height(floor[0]) < 0.2, "the floor is flat: {}", floor[0]);
+    let walls = of_class("wall");
+    assert!(
+        !walls.is_empty() && walls.iter().all(|w| w["kind"] == "layout"),
+        "walls are layout nodes: {walls:?}"
+    );
     let tables = of_class("table");
     assert_eq!(tables.len(), 1, "one dining table");
     let table = tables[0]["id"].as_str().expect("id");

@@ -93,8 +93,7 @@ impl RoomLayout {
             .into_par_iter()
             .map(|i| {
                 let frame = sequence.load_frame(i)?;
-                let (depth, camera, pose) =
-                    (&frame.depth, &frame.camera, &frame.world_from_camera);
+                let (depth, camera, pose) = (&frame.depth, &frame.camera, &frame.world_from_camera);
                 Ok((
                     depth_grid_mesh(depth, camera, pose, params.stride),
                     depth_patches(depth, camera, pose, params.stride, params.patch),
@@ -618,6 +617,65 @@ mod tests {
         // The cabinet's front (y = 2.4) and the table top are neither.
         assert_eq!(at(Vec3::new(1.5, 2.4, 0.5)), None);
         assert_eq!(at(Vec3::new(1.5, 0.9, 0.75)), None);
+    }
+
+    #[test]
+    fn patches_of_a_far_wall_with_quantised_depth_are_upright_where_its_triangles_are_not() {
+        // A wall 3 m ahead, seen obliquely (30 degrees) by a camera pitched 20 degrees down,
+        // its depth quantised in a Kinect's disparity steps (2.85 mm x depth squared). The
+        // camera frame is the world's; its up is -y pitched.
+        let camera = Pinhole::KINECT;
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        let up = glam::Quat::from_rotation_x(-20f32.to_radians()) * -Vec3::Y;
+        let facing = glam::Quat::from_axis_angle(up, 30f32.to_radians())
+            * (Vec3::Z - up * Vec3::Z.dot(up)).normalize();
+        let wall = Plane::from_point_normal(Vec3::Z * 3.0, facing);
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let ray = camera.unproject((i % w) as f32, (i / w) as f32, 1.0);
+                let d = -wall.offset / wall.normal.dot(ray);
+                let step = 2.85e-3 * d * d;
+                if (0.5..8.0).contains(&d) {
+                    (d / step).round() * step
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let upright = |n: Vec3| n.dot(up).abs() <= 10f32.to_radians().sin();
+        let mesh = depth_grid_mesh(&depth, &camera, &Affine3A::IDENTITY, 4);
+        let (mut upright_area, mut area) = (0.0, 0.0);
+        for t in 0..mesh.triangles.len() {
+            let [a, b, c] = mesh.triangle(t);
+            let cross = (b - a).cross(c - a);
+            area += 0.5 * cross.length();
+            if cross.try_normalize().is_some_and(upright) {
+                upright_area += 0.5 * cross.length();
+            }
+        }
+        let triangles_upright = upright_area / area;
+        let patches = depth_patches(&depth, &camera, &Affine3A::IDENTITY, 4, 8);
+        assert!(patches.len() >= 250, "{} patches", patches.len());
+        let patch_area: f32 = patches.iter().map(|p| p.2).sum();
+        let patches_upright = patches
+            .iter()
+            .filter(|p| upright(p.1))
+            .map(|p| p.2)
+            .sum::<f32>()
+            / patch_area;
+        eprintln!(
+            "upright: {triangles_upright} of the triangles' area, {patches_upright} of the patches'"
+        );
+        assert!(
+            triangles_upright < 0.7 && patches_upright > 0.95,
+            "upright: {triangles_upright} of the triangles' area, {patches_upright} of the patches'"
+        );
+        // The patches cover the wall: its area seen, within 20 %.
+        let seen = area;
+        assert!(
+            (patch_area / seen - 1.0).abs() < 0.2,
+            "{patch_area} of {seen} m2"
+        );
     }
 
     #[test]
