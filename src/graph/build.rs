@@ -598,6 +598,33 @@ mod tests {
     }
 
     #[test]
+    fn a_counter_against_a_wall_stands_on_the_floor_not_on_the_wall() {
+        // A floor 4 x 3 m, a wall along its back edge 2 m high, and a counter seen as its top
+        // only (a 2 cm slab at 0.9 m, 2 x 0.6 m) against the wall: nothing holds the top from
+        // below, and it touches the wall.
+        let floor = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.02), Vec3::new(4.0, 3.0, 0.0));
+        let wall = TriMesh::cuboid(Vec3::new(0.0, 3.0, 0.0), Vec3::new(4.0, 3.02, 2.0));
+        let top = TriMesh::cuboid(Vec3::new(1.0, 2.4, 0.88), Vec3::new(3.0, 3.0, 0.9));
+        let entity = |id, class, kind, mesh| GraphEntity {
+            id,
+            class,
+            kind,
+            mesh,
+        };
+        let entities = [
+            entity("floor", "floor", EntityKind::Layout, &floor),
+            entity("wall_0", "wall", EntityKind::Layout, &wall),
+            entity("counter_1", COUNTER_CLASS, EntityKind::Rigid, &top),
+        ];
+        let graph = build_contact_graph(&entities, &ContactGraphParams::default());
+        assert_eq!(graph.parent_of("counter_1"), Some("floor"), "{graph:?}");
+        // Its box reaches down to the floor it stands on.
+        let node = graph.node("counter_1").expect("counter");
+        let bottom = node.bbox.center[2] - node.bbox.size[2] / 2.0;
+        assert!(bottom.abs() < 0.02, "{:?}", node.bbox);
+    }
+
+    #[test]
     fn a_cups_label_bled_onto_the_counter_leaves_its_box() {
         // An 8 cm cup standing on a counter at z = 0.9, and a 6 cm ring of counter top around its
         // base that took the cup's label.
