@@ -326,20 +326,11 @@ pub fn check_and_place(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{SceneSpec, SceneWorld};
     use glam::Affine3A;
-    use std::path::Path;
 
     /// The rendered kitchen's ground-truth contact graph, without its models.
     fn kitchen_graph() -> ContactGraph {
-        let spec = SceneSpec::parse(
-            include_str!("../../scenes/kitchen.json"),
-            Path::new("kitchen.json"),
-        )
-        .expect("spec");
-        let mut graph = SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
-            .expect("world")
-            .contact_graph();
+        let mut graph = crate::scene::kitchen_contact_graph();
         for node in &mut graph.nodes {
             node.cad = None;
         }

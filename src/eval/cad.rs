@@ -305,18 +305,9 @@ fn physical_figures(graph: &ContactGraph, db: &CadDatabase) -> PhysicalFigures {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{SceneSpec, SceneWorld};
-    use std::path::Path;
 
     fn kitchen_truth() -> ContactGraph {
-        let spec = SceneSpec::parse(
-            include_str!("../../scenes/kitchen.json"),
-            Path::new("kitchen.json"),
-        )
-        .expect("spec");
-        SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
-            .expect("world")
-            .contact_graph()
+        crate::scene::kitchen_contact_graph()
     }
 
     #[test]

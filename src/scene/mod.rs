@@ -7,3 +7,13 @@ pub mod world;
 
 pub use spec::SceneSpec;
 pub use world::{SceneWorld, Support};
+
+/// The built-in kitchen's ground-truth contact graph, for unit tests.
+#[cfg(test)]
+pub fn kitchen_contact_graph() -> crate::graph::ContactGraph {
+    let path = std::path::Path::new("kitchen.json");
+    let spec = SceneSpec::parse(include_str!("../../scenes/kitchen.json"), path).expect("spec");
+    SceneWorld::from_spec(&spec, path)
+        .expect("world")
+        .contact_graph()
+}

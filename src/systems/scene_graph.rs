@@ -162,18 +162,9 @@ pub fn attach_contact_graph(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{SceneSpec, SceneWorld};
-    use std::path::Path;
 
     fn kitchen_graph() -> ContactGraph {
-        let spec = SceneSpec::parse(
-            include_str!("../../scenes/kitchen.json"),
-            Path::new("kitchen.json"),
-        )
-        .expect("spec");
-        SceneWorld::from_spec(&spec, Path::new("kitchen.json"))
-            .expect("world")
-            .contact_graph()
+        crate::scene::kitchen_contact_graph()
     }
 
     fn kitchen_app() -> (App, HashMap<String, Entity>) {
