@@ -21,6 +21,7 @@ pub mod physical_check;
 pub mod placed_solid;
 pub mod replacement;
 pub mod seating;
+pub mod separation;
 pub mod sh3d;
 pub mod shape_filter;
 pub mod storage;
