@@ -7,6 +7,7 @@ use crate::cad::database::DatabaseModel;
 use crate::cad::physical_check::{Holder, MAX_PENETRATION_M};
 use crate::cad::placed_solid::{PlacedSolid, deepest_contact, layout_penetration};
 use crate::geometry::Plane;
+
 /// Side by side, neighbours overlapping by at most this much (metres) are pulled apart when one
 /// of them is movable; more is a segmentation fault (a cup's label over its neighbour) that
 /// moving it would hide. Two fixed neighbours (cabinets in a row) are shrunk apart however deep

@@ -8,8 +8,9 @@
 //! shape and weight; every export fixes them too. A counter seen from the front is a box 35 cm
 //! deep (7-Scenes redkitchen): as a dynamic body hundreds of times a cup's weight it shook the
 //! cup on it off its edge, while MuJoCo, which has it fixed, rests the cup to 0.02 mm. An
-//! articulated object's doors and drawers are locked to it at their current values. After the simulated time each object is judged by how far it
-//! moved and turned, and by how deep it started inside anything else.
+//! articulated object's doors and drawers are locked to it at their current values. After the
+//! simulated time each object is judged by how far it moved and turned, and by how deep it
+//! started inside anything else.
 
 use glam::Affine3A;
 use serde::Serialize;
