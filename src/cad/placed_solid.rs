@@ -216,6 +216,32 @@ pub fn deepest_contact(a: &PlacedSolid, b: &PlacedSolid) -> Option<(f32, Vec3)> 
     deepest
 }
 
+/// How far (metres, 0 when apart) `b` must move along unit `direction` for every convex piece of
+/// it to clear every piece of `a` it interpenetrates: the overlap of their projections on it.
+/// The contact depth is the shallowest way out, which may be up (two thin books lying half on
+/// each other); this is the way out along a chosen line.
+pub fn overlap_along(a: &PlacedSolid, b: &PlacedSolid, direction: Vec3) -> f32 {
+    let extent = |piece: &ConvexPolyhedron| {
+        piece
+            .points()
+            .iter()
+            .map(|p| p.dot(direction))
+            .fold((f32::MAX, f32::MIN), |(lo, hi), t| (lo.min(t), hi.max(t)))
+    };
+    let mut most = 0.0f32;
+    for (pa, _, _) in &a.pieces {
+        for (pb, _, _) in &b.pieces {
+            if let Ok(Some(contact)) =
+                parry3d::query::contact(&Pose::IDENTITY, pa, &Pose::IDENTITY, pb, 0.0)
+                && contact.dist < 0.0
+            {
+                most = most.max(extent(pa).1 - extent(pb).0);
+            }
+        }
+    }
+    most
+}
+
 fn overlap(alo: Vec3, ahi: Vec3, blo: Vec3, bhi: Vec3) -> bool {
     alo.cmple(bhi).all() && blo.cmple(ahi).all()
 }

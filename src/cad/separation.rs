@@ -5,7 +5,7 @@ use glam::{Affine3A, Vec3};
 
 use crate::cad::database::DatabaseModel;
 use crate::cad::physical_check::{Holder, MAX_PENETRATION_M};
-use crate::cad::placed_solid::{PlacedSolid, deepest_contact, layout_penetration};
+use crate::cad::placed_solid::{PlacedSolid, deepest_contact, layout_penetration, overlap_along};
 use crate::geometry::Plane;
 
 /// Side by side, neighbours overlapping by at most this much (metres) are pulled apart when one
@@ -81,7 +81,21 @@ pub(crate) fn separate_neighbours(
                 };
                 let obstacle = j >= n;
                 let b_movable = !obstacle && movable[j];
-                let push = depth + 2.0 * SEPARATION_GAP_M;
+                // Parting across the contact normal, the depth is not how far: two books lying
+                // 2 cm over each other's edge touch 2 mm deep, up.
+                let far = if direction.dot(normal) >= 0.9 {
+                    depth
+                } else {
+                    overlap_along(a, b, direction)
+                };
+                let too_far = [(movable[i], a), (b_movable, b)]
+                    .iter()
+                    .filter(|(m, _)| *m)
+                    .all(|(_, s)| far > separation_limit(s));
+                if (movable[i] || b_movable) && too_far {
+                    continue;
+                }
+                let push = far + 2.0 * SEPARATION_GAP_M;
                 let share = match (movable[i], b_movable) {
                     _ if obstacle => [1.0, 0.0],
                     (true, false) => [1.0, 0.0],
@@ -251,4 +265,47 @@ fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> 
         })
         .fold(f32::MIN, f32::max);
     Some(Affine3A::from_translation(away * (kept_before - kept_after)) * shrunk)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cad::database::CadDatabase;
+    use crate::cad::placed_solid::penetration_depth;
+
+    #[test]
+    fn two_books_lying_over_each_others_edge_are_parted_along_the_line_between_them() {
+        // Book B lies 8 cm over book A's edge, sunk 1 mm into its cover: the shallowest way out
+        // is up, 1 mm, but siblings part sideways, and 1 mm a round (ten rounds) was not enough.
+        let db = CadDatabase::parametric();
+        let book = db
+            .models()
+            .iter()
+            .find(|m| m.model.id == "book_01")
+            .expect("book model");
+        let size = book.model.size;
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let start = [Vec3::ZERO, Vec3::new(size.x - 0.08, 0.0, size.z - 0.001)];
+        let mut poses: Vec<Option<Affine3A>> = start
+            .iter()
+            .map(|&at| Some(Affine3A::from_translation(at)))
+            .collect();
+        let solid = |pose: &Option<Affine3A>| PlacedSolid::new(book, &pose.expect("placed"));
+        let before = penetration_depth(&solid(&poses[0]), &solid(&poses[1]));
+        assert!(before > 0.0005, "they start overlapping: {before}");
+        let separated = separate_neighbours(
+            &[Some(book), Some(book)],
+            &[Holder::Floor(floor), Holder::Floor(floor)],
+            &[true, true],
+            &[],
+            &mut poses,
+        );
+        let depth = penetration_depth(&solid(&poses[0]), &solid(&poses[1]));
+        assert!(depth <= SEPARATION_TOLERANCE_M, "{depth} m left");
+        // Apart along x by the overlap and the gap, no further.
+        let x = |pose: &Option<Affine3A>| pose.expect("placed").translation.x;
+        let parted = (x(&poses[1]) - x(&poses[0])) - (start[1].x - start[0].x);
+        assert!((0.08..0.09).contains(&parted), "parted by {parted} m");
+        assert!(separated.iter().all(|&s| s > 0.0), "{separated:?}");
+    }
 }

@@ -13,6 +13,7 @@ use crate::geometry::plane::fit_plane;
 use crate::geometry::ransac::{RansacParams, ransac_planes};
 use crate::geometry::{GravityBox, Plane, TriMesh};
 use crate::graph::proximal::{PROXIMAL_MARGIN, ProximalMargins, proximal_edges};
+use crate::graph::sparse_ends::keep_dense_extent;
 use crate::graph::support::{SupportChoice, SupportEntity, SupportParams, infer_supports, rest_on};
 use crate::graph::{ContactGraph, GraphEdge, GraphNode};
 
@@ -53,6 +54,17 @@ pub struct ContactGraphParams {
     /// Likewise an object's points within this distance (metres) of the plane that supports it,
     /// facing up like it, are the parent's (tighter: a book lying on a table is 2 cm thick).
     pub support_band: f32,
+    /// Whether and how an object's sparse footprint ends are cut (`sparse_ends`): a map's
+    /// labels bleed along surfaces into the neighbour; exact meshes keep their extent.
+    pub sparse_ends: Option<SparseEnds>,
+}
+
+/// Footprint ends counted in bins `bin` metres wide are cut where they hold under `share` of the
+/// object's median bin.
+#[derive(Clone, Copy, Debug)]
+pub struct SparseEnds {
+    pub bin: f32,
+    pub share: f32,
 }
 
 impl ContactGraphParams {
@@ -67,6 +79,10 @@ impl ContactGraphParams {
                 objects: PROXIMAL_MARGIN - voxel,
                 wall: PROXIMAL_MARGIN,
             },
+            sparse_ends: Some(SparseEnds {
+                bin: voxel,
+                share: 0.2,
+            }),
             ..Self::default()
         }
     }
@@ -83,6 +99,7 @@ impl Default for ContactGraphParams {
             proximal_margins: ProximalMargins::EXACT,
             layout_band: 0.02,
             support_band: 0.01,
+            sparse_ends: None,
         }
     }
 }
@@ -448,6 +465,21 @@ fn object_shape(
         return None;
     }
     let bbox = GravityBox::minimal(&points)?;
+    let (points, normals, bbox) = match params.sparse_ends {
+        Some(ends) if largest_piece => {
+            let keep = keep_dense_extent(&points, bbox.yaw, ends.bin, ends.share);
+            let (points, normals): (Vec<Vec3>, Vec<Vec3>) = points
+                .into_iter()
+                .zip(normals)
+                .zip(keep)
+                .filter(|(_, k)| *k)
+                .map(|(pn, _)| pn)
+                .unzip();
+            let bbox = GravityBox::minimal(&points)?;
+            (points, normals, bbox)
+        }
+        _ => (points, normals, bbox),
+    };
     let planes = ransac_planes(&points, &params.ransac)
         .into_iter()
         .map(|p| p.plane)

@@ -5,6 +5,7 @@ pub mod contact_graph;
 pub mod counters;
 pub mod gravity;
 pub mod proximal;
+pub mod sparse_ends;
 pub mod support;
 
 pub use contact_graph::{BoxJson, CadPlacement, ContactGraph, GraphEdge, GraphNode};
