@@ -82,19 +82,15 @@ pub(crate) fn separate_neighbours(
                 let obstacle = j >= n;
                 let b_movable = !obstacle && movable[j];
                 // Parting across the contact normal, the depth is not how far: two books lying
-                // 2 cm over each other's edge touch 2 mm deep, up.
-                let far = if direction.dot(normal) >= 0.9 {
-                    depth
-                } else {
-                    overlap_along(a, b, direction)
+                // 2 cm over each other's edge touch 2 mm deep, up, and rounds of 2 mm steps left
+                // them overlapping. Their overlap along the line is, up to `MAX_SEPARATED_M`;
+                // more (a chair under a table, overlapping it 40 cm along the line between
+                // their centres) is left to the rounds' steps, as before, which pull the chair
+                // partly out without moving the table by half of it.
+                let far = match overlap_along(a, b, direction) {
+                    along if direction.dot(normal) < 0.9 && along <= MAX_SEPARATED_M => along,
+                    _ => depth,
                 };
-                let too_far = [(movable[i], a), (b_movable, b)]
-                    .iter()
-                    .filter(|(m, _)| *m)
-                    .all(|(_, s)| far > separation_limit(s));
-                if (movable[i] || b_movable) && too_far {
-                    continue;
-                }
                 let push = far + 2.0 * SEPARATION_GAP_M;
                 let share = match (movable[i], b_movable) {
                     _ if obstacle => [1.0, 0.0],

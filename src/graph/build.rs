@@ -60,7 +60,7 @@ pub struct ContactGraphParams {
 }
 
 /// Footprint ends counted in bins `bin` metres wide are cut where they hold under `share` of the
-/// object's median bin.
+/// object's lower-median bin.
 #[derive(Clone, Copy, Debug)]
 pub struct SparseEnds {
     pub bin: f32,
@@ -454,13 +454,7 @@ fn object_shape(
     } else {
         vec![true; points.len()]
     };
-    let (points, normals): (Vec<Vec3>, Vec<Vec3>) = points
-        .into_iter()
-        .zip(normals)
-        .zip(keep)
-        .filter(|(_, k)| *k)
-        .map(|(pn, _)| pn)
-        .unzip();
+    let (points, normals) = kept(points, normals, &keep);
     if points.len() < 3 {
         return None;
     }
@@ -468,15 +462,13 @@ fn object_shape(
     let (points, normals, bbox) = match params.sparse_ends {
         Some(ends) if largest_piece => {
             let keep = keep_dense_extent(&points, bbox.yaw, ends.bin, ends.share);
-            let (points, normals): (Vec<Vec3>, Vec<Vec3>) = points
-                .into_iter()
-                .zip(normals)
-                .zip(keep)
-                .filter(|(_, k)| *k)
-                .map(|(pn, _)| pn)
-                .unzip();
-            let bbox = GravityBox::minimal(&points)?;
-            (points, normals, bbox)
+            if keep.iter().filter(|k| **k).count() < 3 {
+                (points, normals, bbox)
+            } else {
+                let (points, normals) = kept(points, normals, &keep);
+                let bbox = GravityBox::minimal(&points)?;
+                (points, normals, bbox)
+            }
         }
         _ => (points, normals, bbox),
     };
@@ -490,6 +482,17 @@ fn object_shape(
         bbox,
         planes,
     })
+}
+
+/// The points and their normals where `keep` is true.
+fn kept(points: Vec<Vec3>, normals: Vec<Vec3>, keep: &[bool]) -> (Vec<Vec3>, Vec<Vec3>) {
+    points
+        .into_iter()
+        .zip(normals)
+        .zip(keep)
+        .filter(|(_, k)| **k)
+        .map(|(pn, _)| pn)
+        .unzip()
 }
 
 /// A wall's plane within this angle (degrees) of upright is made upright (more, and it is no

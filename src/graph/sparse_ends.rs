@@ -9,10 +9,11 @@ use glam::{Vec2, Vec3};
 /// Sparse ends shorter than this many bins are kept.
 const MIN_STRIP_BINS: usize = 2;
 
-/// Which points to keep: along each of the two floor axes at `yaw` (radians), the points are
-/// counted in bins `bin` metres wide, and the bins at either end holding fewer than `share` of
-/// the median count of the non-empty bins are cut off. The median adapts to the object: where
-/// sparse bins are most of its length (a monitor's stand behind its screen), nothing is cut.
+/// Which points to keep: along each of the two floor axes at `yaw` (radians), all the points are
+/// counted in bins `bin` metres wide, and the runs of bins at either end holding fewer than
+/// `share` of the lower median count of the non-empty bins are cut off when they are at least
+/// `MIN_STRIP_BINS` long. The median adapts to the object: where sparse bins are most of its
+/// length (a monitor's stand behind its screen), nothing is cut.
 pub fn keep_dense_extent(points: &[Vec3], yaw: f32, bin: f32, share: f32) -> Vec<bool> {
     let (s, c) = yaw.sin_cos();
     let mut keep = vec![true; points.len()];
