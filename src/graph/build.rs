@@ -44,8 +44,11 @@ pub struct ContactGraphParams {
     pub square_with_room_area: f32,
     /// Boxes closer than this (metres) are proximal: `PROXIMAL_MARGIN` for exact meshes. A map's
     /// object boxes grow by about a voxel where surfaces bleed past silhouettes, so two objects
-    /// need a voxel less (`for_voxel`); walls are exact planes, and the object points on them
-    /// go to the wall (`layout_band`), so the wall margin stays.
+    /// need a voxel less (`for_voxel`). Against a wall (an exact plane, which claims the object
+    /// points on it, `layout_band`) an object's surface stops about half a voxel short when it
+    /// touches, and a gap narrower than two voxels is not seen at all (the object's sides run
+    /// on into the wall): the wall margin is a voxel, at most `PROXIMAL_MARGIN`. With 2 cm voxels
+    /// a 1.8 cm and a 3.7 cm gap look alike; with 1 cm voxels they are told apart.
     pub proximal_margins: ProximalMargins,
     /// An object's surface points within this distance (metres) of a wall or the floor, facing
     /// the way that layout surface faces, are the layout's: segmentation bleeds an object's label
@@ -77,7 +80,7 @@ impl ContactGraphParams {
             cluster_cell: 2.0 * voxel,
             proximal_margins: ProximalMargins {
                 objects: PROXIMAL_MARGIN - voxel,
-                wall: PROXIMAL_MARGIN,
+                wall: voxel.min(PROXIMAL_MARGIN),
             },
             sparse_ends: Some(SparseEnds {
                 bin: voxel,

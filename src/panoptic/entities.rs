@@ -64,14 +64,15 @@ pub struct ExtractionParams {
     pub surface_band: f32,
     /// Voxels observed with less weight than this are left out.
     pub min_weight: f32,
-    /// Entities with fewer surface voxels are dropped...
-    pub min_surface_voxels: usize,
+    /// Entities with less surface than this (square metres, counted in surface voxels of the
+    /// map's size, so a finer map keeps the same entities) are dropped...
+    pub min_surface_area: f32,
     /// ...except small things (a class whose default size is below `small_object_size` metres in
-    /// every direction: a cup far away is a dozen voxels), which need this many...
-    pub min_small_object_voxels: usize,
+    /// every direction: a cup far away is a dozen 2 cm voxels), which need this much...
+    pub min_small_object_area: f32,
     pub small_object_size: f32,
-    /// ...and layout with fewer than this (a wall is large; a small piece is a misassigned one).
-    pub min_layout_voxels: usize,
+    /// ...and layout with less than this (a wall is large; a small piece is a misassigned one).
+    pub min_layout_area: f32,
     /// Metres: a wall instance whose voxels lie this close to a larger wall's plane joins it.
     pub coplanar_distance: f32,
     /// An instance with at most this share of the surface voxels of an instance of its class that
@@ -84,13 +85,27 @@ impl Default for ExtractionParams {
         Self {
             surface_band: 0.75,
             min_weight: 2.0,
-            min_surface_voxels: 40,
-            min_small_object_voxels: 12,
+            // 40, 12 and 400 voxels of 2 cm.
+            min_surface_area: 0.016,
+            min_small_object_area: 0.0048,
             small_object_size: 0.3,
-            min_layout_voxels: 400,
+            min_layout_area: 0.16,
             coplanar_distance: 0.05,
             fragment_share: 0.05,
         }
+    }
+}
+
+impl ExtractionParams {
+    /// The fewest surface voxels of `voxel_size` metres an entity of `kind` needs to be kept
+    /// (`small`: a small-object class).
+    pub fn min_surface_voxels(&self, kind: EntityKind, small: bool, voxel_size: f32) -> usize {
+        let area = match kind {
+            EntityKind::Layout => self.min_layout_area,
+            _ if small => self.min_small_object_area,
+            _ => self.min_surface_area,
+        };
+        (area / (voxel_size * voxel_size)).round() as usize
     }
 }
 
@@ -345,12 +360,7 @@ pub fn extract_entities(
         let info = table.get(&class);
         let kind = info.map_or(EntityKind::Rigid, |c| c.kind);
         let small = info.is_some_and(|c| c.size.max_element() < params.small_object_size);
-        let min = match kind {
-            EntityKind::Layout => params.min_layout_voxels,
-            _ if small => params.min_small_object_voxels,
-            _ => params.min_surface_voxels,
-        };
-        if g.voxels < min {
+        if g.voxels < params.min_surface_voxels(kind, small, map.voxel_size) {
             continue;
         }
         let n = per_class_count.entry(class.clone()).or_default();
@@ -443,6 +453,19 @@ mod tests {
         assert!(groups.contains_key(&(1, 3)), "a touching twin stays whole");
         assert!(groups.contains_key(&(2, 4)), "another class stays");
         assert!(groups.contains_key(&(9, 5)), "layout is left alone");
+    }
+
+    #[test]
+    fn the_smallest_entity_kept_has_the_same_area_at_any_voxel_size() {
+        let params = ExtractionParams::default();
+        let rigid = |voxel| params.min_surface_voxels(EntityKind::Rigid, false, voxel);
+        let small = |voxel| params.min_surface_voxels(EntityKind::Rigid, true, voxel);
+        let layout = |voxel| params.min_surface_voxels(EntityKind::Layout, false, voxel);
+        assert_eq!((rigid(0.02), small(0.02), layout(0.02)), (40, 12, 400));
+        assert_eq!((rigid(0.01), small(0.01), layout(0.01)), (160, 48, 1600));
+        // A book's 14-voxel fragment at 1 cm (office, 2026-11-24) is 3.5 voxels' area at 2 cm,
+        // where it was always dropped: it is dropped at 1 cm too.
+        assert!(14 < small(0.01));
     }
 
     #[test]

@@ -107,17 +107,25 @@ fn the_kitchens_contact_graph_has_every_support_right() {
 }
 
 /// Every scene rendered without noise and mapped with ground-truth segmentation (every second
-/// frame): every entity is found and every support parent is right, and boxes reach issue 4's bar.
-/// Proximal pairs are not all right yet: furniture 3 to 7 cm from a wall or a neighbour touches
-/// it in a 2 cm map (measured at every second frame: 4, 2, 3 and 2 proximal edits; 5, 2, 3 and 3
-/// before sparse footprint ends were cut), so this asserts the measured bound, not the goal of
-/// none.
+/// frame) in 1 cm voxels: every entity is found, every support parent is right, and boxes reach
+/// issue 4's bar. In 1 cm voxels the office's and the living room's graphs are the scenes' own;
+/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (2, 3, 4 and
+/// 2 proximal edits there). What is left, measured on this run: the kitchen's dishwasher 0.8 cm
+/// off its wall is seen 1.5 cm off it (1 edit); in the bedroom the bed and the shelf 3 cm off
+/// their walls run into them (the side faces of what is never seen from behind continue into
+/// the gap) and a cup half hidden behind the monitor is seen 4 cm from it (3 edits). These are
+/// the bounds asserted; the goal is none.
 #[test]
-fn clean_renders_get_every_node_and_support_right() {
+fn clean_renders_in_1_cm_voxels_get_every_node_and_support_right() {
     let mut failures = Vec::new();
-    for name in ["kitchen", "office", "living_room", "bedroom"] {
+    for (name, measured_proximal_edits) in [
+        ("kitchen", 1),
+        ("office", 0),
+        ("living_room", 0),
+        ("bedroom", 3),
+    ] {
         let dir = tempfile::tempdir().expect("tempdir");
-        let (seq, out) = common::render_and_map_every_second_frame(name, dir.path(), true);
+        let (seq, out) = common::render_and_map_every_second_frame(name, dir.path(), true, 0.01);
         let eval = evaluate_reconstruction(&out, &seq).expect("eval");
         let contact = eval.contact_graph.expect("contact-graph metrics");
         eprintln!(
@@ -125,7 +133,7 @@ fn clean_renders_get_every_node_and_support_right() {
             eval.panoptic.pq, contact.obb_map50, contact.ged, contact.unseen_truth
         );
         let parts = contact.ged.parts;
-        if parts.nodes != 0 || parts.support != 0 || parts.proximal > 4 {
+        if parts.nodes != 0 || parts.support != 0 || parts.proximal > measured_proximal_edits {
             failures.push(format!("{name}: edits {parts:?}"));
         }
         if contact.obb_map50 < 0.8 {

@@ -97,16 +97,17 @@ pub fn render_scene(scene: &str, out: &Path, frames: usize, no_noise: bool) {
 }
 
 /// Renders `scene` (300 frames) into `dir` and reconstructs every second frame with the oracle
-/// segmentation at 2 cm; returns the sequence and output folders.
+/// segmentation in `voxel` metres voxels; returns the sequence and output folders.
 pub fn render_and_map_every_second_frame(
     scene: &str,
     dir: &Path,
     no_noise: bool,
+    voxel: f32,
 ) -> (std::path::PathBuf, std::path::PathBuf) {
     let seq = dir.join("seq");
     render_scene(scene, &seq, 300, no_noise);
     let out = dir.join("out");
-    map_every_second_frame(&seq, &out, None);
+    reconstruct_every_second_frame(&seq, &out, None, iscene::pipeline::AlignMethod::Lm, voxel);
     (seq, out)
 }
 
@@ -123,11 +124,21 @@ pub fn map_every_second_frame_aligning(
     cad: Option<PathBuf>,
     align: iscene::pipeline::AlignMethod,
 ) {
+    reconstruct_every_second_frame(seq, out, cad, align, 0.02);
+}
+
+fn reconstruct_every_second_frame(
+    seq: &Path,
+    out: &Path,
+    cad: Option<PathBuf>,
+    align: iscene::pipeline::AlignMethod,
+    voxel: f32,
+) {
     iscene::pipeline::reconstruct(&iscene::pipeline::ReconstructOptions {
         input: Some(seq.to_path_buf()),
         out: out.to_path_buf(),
         frames: Some((0, None, 2)),
-        voxel: 0.02,
+        voxel,
         segmentation: iscene::pipeline::SegmentationChoice::Oracle,
         segment_every: 1,
         models: None,
@@ -165,7 +176,7 @@ pub fn shared_noisy_map(scene: &str) -> (PathBuf, PathBuf) {
             std::fs::remove_dir_all(&dir).expect("clear an earlier run's map");
         }
         std::fs::create_dir_all(&dir).expect("map folder");
-        render_and_map_every_second_frame(scene, &dir, false)
+        render_and_map_every_second_frame(scene, &dir, false, 0.02)
     })
     .clone()
 }
