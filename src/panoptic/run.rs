@@ -29,10 +29,13 @@ pub fn map_sequence(
             .map(|i| -> Result<_, IsceneError> {
                 let frame = sequence.load_frame(i)?;
                 let geometry = segment_depth(&frame.depth, &frame.camera, &params.geometric);
-                let masks = service
-                    .filter(|_| i % params.segment_every.max(1) == 0)
-                    .map(|s| s.segment(&frame, &geometry))
-                    .transpose()?;
+                let masks = match service {
+                    Some(s) if i % params.segment_every.max(1) == 0 => {
+                        Some(s.segment(&frame, &geometry)?)
+                    }
+                    Some(s) => s.segment_without_networks(&frame, &geometry),
+                    None => None,
+                };
                 let segmented = segment_frame(
                     &MapperFrame {
                         depth: &frame.depth,

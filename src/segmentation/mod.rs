@@ -41,6 +41,17 @@ pub trait SegmentationService: Send + Sync {
         geometry: &crate::panoptic::geometric::GeometricSegmentation,
     ) -> Result<PanopticFrame, crate::error::IsceneError>;
 
+    /// The masks this service gives without running its networks, for the frames between
+    /// those it segments (`--segment-every`): the surveyed floor and walls, which cost a plane
+    /// test per pixel. `None`: the frame is fused with its geometric segments only.
+    fn segment_without_networks(
+        &self,
+        _frame: &crate::io::Frame,
+        _geometry: &crate::panoptic::geometric::GeometricSegmentation,
+    ) -> Option<PanopticFrame> {
+        None
+    }
+
     /// Classes whose masks follow the true boundary (layout found from planes, not a network's
     /// blurred outline): the fusion cuts geometric segments to them instead of extending them
     /// over whole segments.

@@ -78,6 +78,53 @@ fn frame_500_masks_are_deterministic_and_separate_the_two_cups_from_the_table() 
     assert!(pixels("table")[0] > 20_000);
 }
 
+/// A frame the networks skip (`--segment-every`) still gets the surveyed floor and walls: the
+/// pixels a segmented frame gives them, and those the objects' masks were painted over.
+#[test]
+fn frame_500_without_networks_has_the_floor_and_walls_of_the_segmented_frame() {
+    let sequence = kitchen();
+    let onnx = backend(&sequence);
+    let frame = sequence.load_frame(500).expect("frame 500");
+    let geometry = segment_depth(&frame.depth, &frame.camera, &GeometricParams::default());
+    let segmented = onnx.segment(&frame, &geometry).expect("segment");
+    let layout_only = onnx
+        .segment_without_networks(&frame, &geometry)
+        .expect("the onnx backend knows the layout without its networks");
+    let class_of = |f: &iscene::segmentation::PanopticFrame, pixel: usize| {
+        let id = f.segment_of_pixel[pixel];
+        f.segments
+            .iter()
+            .find(|s| s.id == id)
+            .map(|s| s.class.clone())
+    };
+    assert!(
+        layout_only
+            .segments
+            .iter()
+            .all(|s| s.class == "floor" || s.class == "wall"),
+        "{:?}",
+        layout_only.segments
+    );
+    let mut layout_pixels = 0;
+    for pixel in 0..segmented.segment_of_pixel.len() {
+        let class = class_of(&segmented, pixel);
+        if matches!(class.as_deref(), Some("floor" | "wall")) {
+            assert_eq!(class_of(&layout_only, pixel), class, "pixel {pixel}");
+            layout_pixels += 1;
+        }
+    }
+    let layout_only_pixels = layout_only
+        .segment_of_pixel
+        .iter()
+        .filter(|&&id| id != 0)
+        .count();
+    assert!(
+        layout_pixels > 10_000,
+        "{layout_pixels} floor and wall pixels"
+    );
+    assert!(layout_only_pixels >= layout_pixels);
+}
+
 #[test]
 fn the_survey_estimates_gravity_within_2_degrees_and_finds_the_floor() {
     let mut sequence = kitchen();

@@ -324,6 +324,29 @@ impl SegmentationService for OnnxSegmentation {
         let semantic = self.run_semantic(&mut networks.semantic, &image);
         self.give_back(networks);
         let detections = self.classify(detections?);
+        Ok(self.masks(frame, geometry, &semantic?, &detections))
+    }
+
+    fn segment_without_networks(
+        &self,
+        frame: &Frame,
+        geometry: &GeometricSegmentation,
+    ) -> Option<PanopticFrame> {
+        // No detections: the semantic labels, which only shape objects' masks, are not read.
+        Some(self.masks(frame, geometry, &[], &[]))
+    }
+}
+
+impl OnnxSegmentation {
+    /// The frame's panoptic masks: the survey's floor and walls, then the detected objects.
+    fn masks(
+        &self,
+        frame: &Frame,
+        geometry: &GeometricSegmentation,
+        semantic: &[u8],
+        detections: &[ObjectDetection],
+    ) -> PanopticFrame {
+        let camera = &frame.camera;
         let layout: Vec<_> = (0..frame.depth.len())
             .into_par_iter()
             .map(|i| {
@@ -344,7 +367,7 @@ impl SegmentationService for OnnxSegmentation {
         for &g in &geometry.segment_of_pixel {
             geometric_sizes[g as usize] += 1;
         }
-        Ok(panoptic_masks(
+        panoptic_masks(
             &MaskInputs {
                 geometric: &geometry.segment_of_pixel,
                 geometric_sizes: &geometric_sizes,
@@ -352,11 +375,11 @@ impl SegmentationService for OnnxSegmentation {
                 height: camera.height,
                 depth: &frame.depth,
                 fx: camera.fx,
-                semantic: &semantic?,
+                semantic,
                 layout: &layout,
             },
-            &detections,
+            detections,
             &self.params.masks,
-        ))
+        )
     }
 }
