@@ -109,8 +109,8 @@ fn the_kitchens_contact_graph_has_every_support_right() {
 /// Every scene rendered without noise and mapped with ground-truth segmentation (every second
 /// frame) in 1 cm voxels: every entity is found, every support parent is right, and boxes reach
 /// issue 4's bar. In 1 cm voxels the office's and the living room's graphs are the scenes' own;
-/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (2, 3, 4 and
-/// 2 proximal edits there). What is left, measured on this run: the kitchen's dishwasher 0.8 cm
+/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (4, 2, 3 and
+/// 2 proximal edits there, in the order below). What is left, measured on this run: the kitchen's dishwasher 0.8 cm
 /// off its wall is seen 1.5 cm off it (1 edit); in the bedroom the bed and the shelf 3 cm off
 /// their walls run into them (the side faces of what is never seen from behind continue into
 /// the gap) and a cup half hidden behind the monitor is seen 4 cm from it (3 edits). These are
