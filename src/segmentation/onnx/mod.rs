@@ -4,6 +4,7 @@
 
 pub mod bench;
 pub mod deeplab;
+pub mod depth_surface;
 pub mod layout;
 pub mod masks;
 pub mod runtime;
