@@ -50,6 +50,28 @@ impl TriMesh {
         out
     }
 
+    /// The triangles whose three vertices `keep` (one flag per vertex) holds, with only the
+    /// vertices they use (in first-use order).
+    pub fn with_vertices(&self, keep: &[bool]) -> TriMesh {
+        let mut new_index = vec![u32::MAX; self.positions.len()];
+        let mut out = TriMesh::default();
+        for tri in &self.triangles {
+            if !tri.iter().all(|&v| keep[v as usize]) {
+                continue;
+            }
+            let mut new = [0u32; 3];
+            for (slot, &v) in new.iter_mut().zip(tri) {
+                if new_index[v as usize] == u32::MAX {
+                    new_index[v as usize] = out.positions.len() as u32;
+                    out.positions.push(self.positions[v as usize]);
+                }
+                *slot = new_index[v as usize];
+            }
+            out.triangles.push(new);
+        }
+        out
+    }
+
     /// The mesh simplified by vertex clustering (Rossignac and Borrel): the vertices in each cube
     /// of a `cell`-sized grid merge into their mean, and triangles that collapse or repeat are
     /// dropped. The shape moves by at most a cell; a dense mesh keeps a few triangles per cell.

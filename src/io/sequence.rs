@@ -91,6 +91,20 @@ impl Sequence {
             .collect();
     }
 
+    /// Frame `i`'s depth image (metres, 0 = none), for passes that need no colour or labels.
+    pub fn load_depth(&self, i: usize) -> Result<Vec<f32>, InputError> {
+        let Some(record) = self.frames.get(i) else {
+            return Err(InputError::invalid(
+                &self.root,
+                format!(
+                    "frame {i} requested but the sequence has {} frames",
+                    self.frames.len()
+                ),
+            ));
+        };
+        read_depth(&record.depth, &self.camera, self.depth_scale)
+    }
+
     /// Loads and checks frame `i` of the (selected) frame list.
     pub fn load_frame(&self, i: usize) -> Result<Frame, InputError> {
         let Some(record) = self.frames.get(i) else {

@@ -2,6 +2,7 @@
 //! labelled marching cubes that turns it into meshes.
 
 pub mod agreement;
+pub mod free_space;
 pub mod mesh;
 pub mod tsdf;
 

@@ -2,6 +2,7 @@
 //! segmentation fused with panoptic masks, association to global segment labels, joint
 //! instance fusion Phi(l, c, p), regularisation, and extraction of scene entities.
 
+pub mod carve;
 pub mod entities;
 pub mod fusion;
 pub mod geometric;
@@ -9,6 +10,7 @@ pub mod instances;
 pub mod mapper;
 pub mod run;
 
+pub use carve::carve_objects;
 pub use entities::{ClassIds, ExtractionParams, PanopticEntity, PanopticScene, extract_entities};
 pub use instances::InstanceFusion;
 pub use mapper::{MapperFrame, MapperParams, PanopticMapper, SegmentedFrame, segment_frame};

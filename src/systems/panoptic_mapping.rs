@@ -6,9 +6,10 @@ use bevy::prelude::*;
 
 use crate::components::{Panoptic, SceneEntity, SegmentMesh};
 use crate::error::InputError;
+use crate::map::free_space::FreeSpaceParams;
 use crate::panoptic::{
-    ClassIds, ExtractionParams, MapperParams, PanopticEntity, PanopticMapper, extract_entities,
-    map_sequence,
+    ClassIds, ExtractionParams, MapperParams, PanopticEntity, PanopticMapper, carve_objects,
+    extract_entities, map_sequence,
 };
 use crate::segmentation::onnx::{OnnxModels, OnnxParams, OnnxSegmentation};
 use crate::segmentation::oracle::OracleSegmentation;
@@ -108,6 +109,8 @@ fn spawn_entities(
     mut commands: Commands,
     map: Option<Res<PanopticMap>>,
     segmenter: Option<Res<Segmenter>>,
+    sequence: Res<InputSequence>,
+    mut error: ResMut<StageError>,
 ) {
     let Some(map) = map else {
         return;
@@ -124,6 +127,11 @@ fn spawn_entities(
                 e.mesh = part;
             }
         }
+    }
+    let params = FreeSpaceParams::for_voxel(map.0.tsdf.voxel_size);
+    if let Err(e) = carve_objects(&mut scene.entities, &sequence.0, &params) {
+        error.0 = Some(e.into());
+        return;
     }
     for e in &scene.entities {
         commands.spawn((
