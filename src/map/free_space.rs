@@ -31,21 +31,26 @@ pub struct FreeSpaceParams {
 
 impl FreeSpaceParams {
     /// For a map of `voxel_size`: the fused surface lies within half a voxel of the truth, so a
-    /// point is carved when the frames see past it by three quarters of a voxel on average, and
-    /// by two standard errors of the noise (measured on the rendered rooms at 2 cm: half a
-    /// voxel cut the true back edges of cabinets 1.8 cm off their wall, a whole voxel kept more
-    /// of the run-on; see the README).
+    /// point is carved when the frames see past it by three quarters of a voxel on average (at
+    /// least `MIN_MEAN_RESIDUAL_M`), and by two standard errors of the noise. Measured on the
+    /// rendered rooms at 2 cm: half a voxel cut the true back edges of cabinets 1.8 cm off
+    /// their wall, a whole voxel kept more of the run-on (README, contact graph).
     pub fn for_voxel(voxel_size: f32) -> Self {
         Self {
             occlusion_margin: voxel_size,
             occlusion_sigmas: 3.0,
             max_residual: 0.1,
             min_frames: 3,
-            min_mean_residual: 0.75 * voxel_size,
+            min_mean_residual: (0.75 * voxel_size).max(MIN_MEAN_RESIDUAL_M),
             significance: 2.0,
         }
     }
 }
+
+/// The least mean residual that carves, at any voxel size (metres): a true edge is seen past by
+/// the gap behind it, and at 1 cm three quarters of a voxel cut the top edges of objects 1 to
+/// 2 cm before their wall (the rendered living room's bottle lost its contact with the monitor).
+const MIN_MEAN_RESIDUAL_M: f32 = 0.015;
 
 /// Axial depth noise (metres, one sigma) of a Kinect-class structured-light sensor at depth `z`
 /// (Nguyen, Izadi and Lovell 2012; the renderer's noise model uses the same curve).

@@ -1,7 +1,8 @@
 """Loads a URDF or MJCF in MuJoCo and rests it for 2 s; prints one JSON object.
 
 {"bodies": n, "joints": n, "start_overlaps": [[depth_m, body_a, body_b], ...] (deeper than 1 mm),
- "free_moved": {"<joint>": metres}, "limit_overlaps": [[joint, value, depth_m, a, b], ...] (new overlaps with a joint at a limit)}
+ "free_moved": {"<joint>": metres}, "limit_overlaps": [[joint, value, depth_m, a, b], ...] (new overlaps with a joint at a limit that
+ opening the other moving part involved does not clear)}
 Exit code 0 when the file loads; a load failure prints the error and exits 1.
 """
 import json
@@ -22,6 +23,34 @@ def overlaps(m, d):
     return sorted(set(map(tuple, out)), reverse=True)
 
 
+def limited_joints(m):
+    return [j for j in range(m.njnt)
+            if m.jnt_limited[j] and int(m.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))]
+
+
+def pose_with(m, d, values):
+    d.qpos[:] = m.qpos0
+    for j, value in values:
+        d.qpos[m.jnt_qposadr[j]] = value
+    mujoco.mj_forward(m, d)
+
+
+def cleared_by_opening(m, d, j, value, a, b):
+    """Whether the overlap of bodies a and b with joint j at value goes when a moving part it
+    meets is opened too: a dishwasher's rack slides out through where its closed door is, and in
+    use the door is opened first (in a simulation the closed door stops the rack)."""
+    for k in limited_joints(m):
+        if k == j or m.body(m.jnt_bodyid[k]).name not in (a, b):
+            continue
+        for other in m.jnt_range[k]:
+            if other == 0.0:
+                continue
+            pose_with(m, d, [(j, value), (k, other)])
+            if not any((a, b) == (x[1], x[2]) for x in overlaps(m, d)):
+                return True
+    return False
+
+
 def main(path):
     try:
         m = mujoco.MjModel.from_xml_path(path)
@@ -32,15 +61,14 @@ def main(path):
     mujoco.mj_forward(m, d)
     start = overlaps(m, d)
     limit_overlaps = []
-    for j in range(m.njnt):
-        if m.jnt_limited[j] and int(m.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
-            for value in m.jnt_range[j]:
-                d.qpos[:] = m.qpos0
-                d.qpos[m.jnt_qposadr[j]] = value
-                mujoco.mj_forward(m, d)
-                for depth, a, b in overlaps(m, d):
-                    if not any((a, b) == (x[1], x[2]) for x in start):
-                        limit_overlaps.append([m.joint(j).name, float(value), depth, a, b])
+    for j in limited_joints(m):
+        for value in m.jnt_range[j]:
+            pose_with(m, d, [(j, value)])
+            new = [(depth, a, b) for depth, a, b in overlaps(m, d)
+                   if not any((a, b) == (x[1], x[2]) for x in start)]
+            for depth, a, b in new:
+                if not cleared_by_opening(m, d, j, value, a, b):
+                    limit_overlaps.append([m.joint(j).name, float(value), depth, a, b])
     mujoco.mj_resetData(m, d)
     free = [j for j in range(m.njnt) if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
     q0 = {j: d.qpos[m.jnt_qposadr[j]:m.jnt_qposadr[j] + 3].copy() for j in free}
