@@ -31,32 +31,21 @@ impl TriMesh {
 
     /// The triangles `keep` accepts, with only the vertices they use (in first-use order).
     pub fn filtered(&self, keep: impl Fn([Vec3; 3]) -> bool) -> TriMesh {
-        let mut new_index = vec![u32::MAX; self.positions.len()];
-        let mut out = TriMesh::default();
-        for (t, tri) in self.triangles.iter().enumerate() {
-            if !keep(self.triangle(t)) {
-                continue;
-            }
-            let mut new = [0u32; 3];
-            for (slot, &v) in new.iter_mut().zip(tri) {
-                if new_index[v as usize] == u32::MAX {
-                    new_index[v as usize] = out.positions.len() as u32;
-                    out.positions.push(self.positions[v as usize]);
-                }
-                *slot = new_index[v as usize];
-            }
-            out.triangles.push(new);
-        }
-        out
+        self.with_triangles(|t| keep(self.triangle(t)))
     }
 
     /// The triangles whose three vertices `keep` (one flag per vertex) holds, with only the
     /// vertices they use (in first-use order).
     pub fn with_vertices(&self, keep: &[bool]) -> TriMesh {
+        self.with_triangles(|t| self.triangles[t].iter().all(|&v| keep[v as usize]))
+    }
+
+    /// The triangles (by index) `keep` accepts, with only the vertices they use.
+    fn with_triangles(&self, keep: impl Fn(usize) -> bool) -> TriMesh {
         let mut new_index = vec![u32::MAX; self.positions.len()];
         let mut out = TriMesh::default();
-        for tri in &self.triangles {
-            if !tri.iter().all(|&v| keep[v as usize]) {
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if !keep(t) {
                 continue;
             }
             let mut new = [0u32; 3];
