@@ -32,9 +32,8 @@ pub struct FreeSpaceParams {
 impl FreeSpaceParams {
     /// For a map of `voxel_size`: the fused surface lies within half a voxel of the truth, so a
     /// point is carved when the frames see past it by three quarters of a voxel on average (at
-    /// least `MIN_MEAN_RESIDUAL_M`), and by two standard errors of the noise. Measured on the
-    /// rendered rooms at 2 cm: half a voxel cut the true back edges of cabinets 1.8 cm off
-    /// their wall, a whole voxel kept more of the run-on (README, contact graph).
+    /// least `MIN_MEAN_RESIDUAL_M`), and by two standard errors of the noise (README, contact
+    /// graph, for the thresholds tried).
     pub fn for_voxel(voxel_size: f32) -> Self {
         Self {
             occlusion_margin: voxel_size,
@@ -47,10 +46,12 @@ impl FreeSpaceParams {
     }
 }
 
-/// The least mean residual that carves, at any voxel size (metres): a true edge is seen past by
-/// the gap behind it, and at 1 cm three quarters of a voxel cut the top edges of objects 1 to
-/// 2 cm before their wall (the rendered living room's bottle lost its contact with the monitor).
-const MIN_MEAN_RESIDUAL_M: f32 = 0.015;
+/// The least mean residual that carves, at any voxel size (metres): the distance at which two
+/// boxes stop touching. A true edge is seen past by the gap behind it, so a vertex seen past by
+/// less is as likely an edge in contact as run-on, and carving it could only part a touching
+/// pair (at 1.5 cm the noisy kitchen's cabinet 1.8 cm off its wall lost its back edge; at 1 cm,
+/// three quarters of a voxel cut a bottle's contact with a monitor 1.3 cm away).
+const MIN_MEAN_RESIDUAL_M: f32 = crate::graph::proximal::PROXIMAL_MARGIN;
 
 /// Axial depth noise (metres, one sigma) of a Kinect-class structured-light sensor at depth `z`
 /// (Nguyen, Izadi and Lovell 2012; the renderer's noise model uses the same curve).
