@@ -1,6 +1,7 @@
 //! The panoptic mapping stages: choose the segmentation service (Segment), fuse every frame
 //! into the panoptic map (Integrate), and spawn one scene entity per object and layout piece
-//! with its panoptic identity and segment mesh (Extract).
+//! with its panoptic identity and segment mesh, objects' meshes carved with the frames'
+//! free-space evidence (Extract).
 
 use bevy::prelude::*;
 
