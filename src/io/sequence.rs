@@ -91,31 +91,28 @@ impl Sequence {
             .collect();
     }
 
-    /// Frame `i`'s depth image (metres, 0 = none), for passes that need no colour or labels.
-    pub fn load_depth(&self, i: usize) -> Result<Vec<f32>, InputError> {
-        let Some(record) = self.frames.get(i) else {
-            return Err(InputError::invalid(
+    /// Frame `i`'s record, or an error naming the sequence.
+    fn record(&self, i: usize) -> Result<&FrameRecord, InputError> {
+        self.frames.get(i).ok_or_else(|| {
+            InputError::invalid(
                 &self.root,
                 format!(
                     "frame {i} requested but the sequence has {} frames",
                     self.frames.len()
                 ),
-            ));
-        };
+            )
+        })
+    }
+
+    /// Frame `i`'s depth image (metres, 0 = none), for passes that need no colour or labels.
+    pub fn load_depth(&self, i: usize) -> Result<Vec<f32>, InputError> {
+        let record = self.record(i)?;
         read_depth(&record.depth, &self.camera, self.depth_scale)
     }
 
     /// Loads and checks frame `i` of the (selected) frame list.
     pub fn load_frame(&self, i: usize) -> Result<Frame, InputError> {
-        let Some(record) = self.frames.get(i) else {
-            return Err(InputError::invalid(
-                &self.root,
-                format!(
-                    "frame {i} requested but the sequence has {} frames",
-                    self.frames.len()
-                ),
-            ));
-        };
+        let record = self.record(i)?;
         let depth = read_depth(&record.depth, &self.camera, self.depth_scale)?;
         let color = read_color(&record.color, &self.camera)?;
         let labels = record
