@@ -18,6 +18,10 @@ use crate::geometry::Plane;
 
 /// Deeper interpenetration than this (metres) is a conflict (the bar).
 pub const MAX_PENETRATION_M: f32 = 0.01;
+/// A model still this deep (metres) in an obstacle after separation is a conflict: an obstacle
+/// neither moves nor shrinks, so what separation could not part from it (a chair squeezed
+/// between two counters) would start the simulation overlapping it.
+const MAX_OBSTACLE_PENETRATION_M: f32 = 0.001;
 /// A child must stand on at least this share of its bottom rectangle (the contact graph's
 /// stable-support bar).
 pub const MIN_SUPPORT_AREA: f32 = 0.5;
@@ -229,6 +233,10 @@ pub fn check_placements(
                 .chain(obstacles)
                 .map(|o| penetration_depth(me, o))
                 .fold(0.0f32, f32::max);
+            let obstacle_penetration_m = obstacles
+                .iter()
+                .map(|o| penetration_depth(me, o))
+                .fold(0.0f32, f32::max);
             let layout_penetration_m = layout_penetration(me, layout);
             let held_area = match holders[i] {
                 Holder::Object(p) => finals[p].as_ref().map(|parent| support_area(me, parent)),
@@ -242,6 +250,7 @@ pub fn check_placements(
                 .count();
             let tips_over = holders[i] != Holder::Other && !me.stands();
             let conflicts = usize::from(max_penetration_m > MAX_PENETRATION_M)
+                + usize::from(obstacle_penetration_m > MAX_OBSTACLE_PENETRATION_M)
                 + usize::from(layout_penetration_m > MAX_PENETRATION_M)
                 + usize::from(held_area.is_some_and(|a| a < MIN_SUPPORT_AREA))
                 + usize::from(tips_over)

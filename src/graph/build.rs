@@ -45,10 +45,10 @@ pub struct ContactGraphParams {
     /// Boxes closer than this (metres) are proximal: `PROXIMAL_MARGIN` for exact meshes. A map's
     /// object boxes grow by about a voxel where surfaces bleed past silhouettes, so two objects
     /// need a voxel less (`for_voxel`). Against a wall (an exact plane, which claims the object
-    /// points on it, `layout_band`) an object's surface stops about half a voxel short when it
-    /// touches, and a gap narrower than two voxels is not seen at all (the object's sides run
-    /// on into the wall): the wall margin is a voxel, at most `PROXIMAL_MARGIN`. With 2 cm voxels
-    /// a 1.8 cm and a 3.7 cm gap look alike; with 1 cm voxels they are told apart.
+    /// points on it, `layout_band`) the margin is the exact one: what the frames saw as the wall
+    /// is carved off the object's mesh (`panoptic::carve`), so its box ends at its last surface
+    /// vertex, within a voxel of its true face either way. With 2 cm voxels a 1.8 cm and a
+    /// 3.7 cm gap still look alike.
     pub proximal_margins: ProximalMargins,
     /// An object's surface points within this distance (metres) of a wall or the floor, facing
     /// the way that layout surface faces, are the layout's: segmentation bleeds an object's label
@@ -80,7 +80,7 @@ impl ContactGraphParams {
             cluster_cell: 2.0 * voxel,
             proximal_margins: ProximalMargins {
                 objects: PROXIMAL_MARGIN - voxel,
-                wall: voxel.min(PROXIMAL_MARGIN),
+                wall: PROXIMAL_MARGIN,
             },
             sparse_ends: Some(SparseEnds {
                 bin: voxel,
@@ -255,6 +255,24 @@ pub fn build_contact_graph_with_surfaces(
             SupportChoice::Wall { parent } => parent,
         };
         support_edges.push((parent, child));
+    }
+
+    // The floor runs on under everything standing on it: a floor seen only in part would end
+    // under a chair's legs, and the simulator's floor slab with it (7-Scenes redkitchen: a chair
+    // by the map's edge tipped over the slab's edge).
+    if let Some(floor) = floor {
+        let under = boxes[floor];
+        let mut corners: Vec<Vec3> = under.corners().to_vec();
+        for &(parent, child) in &support_edges {
+            if parent == floor {
+                corners.extend(boxes[child].footprint().map(|q| q.extend(under.center.z)));
+            }
+        }
+        if let Some(mut grown) = GravityBox::enclosing(&corners, under.yaw) {
+            grown.center.z = under.center.z;
+            grown.size.z = under.size.z;
+            boxes[floor] = grown;
+        }
     }
 
     let id = |k: usize| entities[shaped[k].0].id;

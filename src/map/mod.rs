@@ -2,10 +2,12 @@
 //! labelled marching cubes that turns it into meshes.
 
 pub mod agreement;
+pub mod frame_labels;
 pub mod free_space;
 pub mod mesh;
 pub mod tsdf;
 
+pub use frame_labels::FrameLabels;
 pub use mesh::{LabelledMesh, extract_mesh};
 pub use tsdf::{BLOCK_SIDE, SegmentLabel, TsdfFrame, TsdfMap, Voxel};
 

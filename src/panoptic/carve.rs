@@ -1,25 +1,30 @@
-//! Carving the objects' meshes with the frames' free-space evidence (map/free_space.rs): the
-//! run-on of tops and sides over a gap, which the TSDF's band behind grazing hits leaves, goes
-//! before boxes are fitted and models aligned. Layout is left whole: a wall is seen past at its
-//! openings, and its extent is surveyed from planes anyway.
+//! Carving the objects' meshes with the frames' evidence (map/free_space.rs): the run-on of tops
+//! and sides over a gap, which the TSDF's band behind grazing hits leaves, and the wall behind a
+//! gap that the map labelled as the object in front, go before boxes are fitted and models
+//! aligned. Layout is left whole: a wall is seen past at its openings, and its extent is
+//! surveyed from planes anyway.
+
+use std::collections::BTreeMap;
 
 use glam::Vec3;
 
 use crate::classes::EntityKind;
 use crate::error::InputError;
 use crate::io::Sequence;
-use crate::map::free_space::{FreeSpaceParams, Sightings, sequence_sightings};
-use crate::panoptic::PanopticEntity;
+use crate::map::free_space::{EntityLabels, FreeSpaceParams, Sightings, sequence_sightings};
+use crate::panoptic::{PanopticEntity, PanopticMapper};
 
 fn is_object(e: &PanopticEntity) -> bool {
     e.kind != EntityKind::Layout
 }
 
-/// Removes from every object's mesh the vertices `sequence`'s frames saw past, and the
-/// triangles using them.
+/// Removes from every object's mesh the vertices `sequence`'s frames saw past or, by the label
+/// images `mapper` kept of them, saw as another entity's, and the triangles using them.
+/// `entities` are the ones extracted from `mapper`'s map, whose frames are `sequence`'s.
 pub fn carve_objects(
     entities: &mut [PanopticEntity],
     sequence: &Sequence,
+    mapper: &PanopticMapper,
     params: &FreeSpaceParams,
 ) -> Result<(), InputError> {
     let points: Vec<Vec3> = entities
@@ -27,7 +32,30 @@ pub fn carve_objects(
         .filter(|e| is_object(e))
         .flat_map(|e| e.mesh.positions.iter().copied())
         .collect();
-    let sightings = sequence_sightings(sequence, &points, params)?;
+    // Entities are numbered from 1 in slice order; 0 is none.
+    let point_entity: Vec<u32> = entities
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| is_object(e))
+        .flat_map(|(k, e)| std::iter::repeat_n(k as u32 + 1, e.mesh.positions.len()))
+        .collect();
+    let entity_of_map_label: BTreeMap<_, u32> = entities
+        .iter()
+        .enumerate()
+        .flat_map(|(k, e)| e.labels.iter().map(move |&l| (l, k as u32 + 1)))
+        .collect();
+    let entity_of_label: Vec<u32> = (0..mapper.label_count())
+        .map(|l| {
+            let now = mapper.label_now(l);
+            entity_of_map_label.get(&now).copied().unwrap_or(0)
+        })
+        .collect();
+    let labels = (mapper.frame_labels().len() == sequence.frames.len()).then_some(EntityLabels {
+        frames: mapper.frame_labels(),
+        entity_of_label: &entity_of_label,
+        point_entity: &point_entity,
+    });
+    let sightings = sequence_sightings(sequence, &points, labels.as_ref(), params)?;
     carve_with(entities, &sightings, params);
     Ok(())
 }
@@ -40,7 +68,7 @@ fn carve_with(entities: &mut [PanopticEntity], sightings: &[Sightings], params: 
         let n = e.mesh.positions.len();
         let keep: Vec<bool> = sightings[offset..offset + n]
             .iter()
-            .map(|s| !s.in_free_space(params))
+            .map(|s| !s.in_free_space(params) && !s.labelled_other(params))
             .collect();
         offset += n;
         let carved = e.mesh.with_vertices(&keep);
@@ -86,6 +114,7 @@ mod tests {
             seen: 10,
             residual_sum: 0,
             variance_sum: 10 * 100,
+            ..Sightings::default()
         };
         let seen_past = Sightings {
             residual_sum: 10 * 50_000,
@@ -104,6 +133,31 @@ mod tests {
         );
     }
 
+    /// A vertex on the surface, but where most frames that saw it saw another entity: it goes.
+    #[test]
+    fn vertices_the_frames_saw_as_anothers_go() {
+        let quad = TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+        };
+        let mut entities = vec![entity("shelf_1", EntityKind::Rigid, quad)];
+        let params = FreeSpaceParams::for_voxel(0.02);
+        let own = Sightings {
+            seen: 6,
+            variance_sum: 6 * 100,
+            own_label: 5,
+            other_label: 1,
+            ..Sightings::default()
+        };
+        let wall = Sightings {
+            own_label: 2,
+            other_label: 4,
+            ..own
+        };
+        carve_with(&mut entities, &[own, own, own, wall], &params);
+        assert_eq!(entities[0].mesh.triangles, vec![[0, 1, 2]]);
+    }
+
     /// Every vertex seen past: the mesh stays whole.
     #[test]
     fn an_object_seen_past_everywhere_keeps_its_mesh() {
@@ -117,6 +171,7 @@ mod tests {
             seen: 10,
             residual_sum: 10 * 100_000,
             variance_sum: 10 * 100,
+            ..Sightings::default()
         };
         carve_with(&mut entities, &[seen_past; 3], &params);
         assert_eq!(entities[0].mesh, tri);

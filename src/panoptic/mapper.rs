@@ -8,7 +8,7 @@ use glam::Affine3A;
 use rayon::prelude::*;
 
 use crate::geometry::Pinhole;
-use crate::map::{SegmentLabel, TsdfFrame, TsdfMap};
+use crate::map::{FrameLabels, SegmentLabel, TsdfFrame, TsdfMap};
 use crate::panoptic::fusion::{FusedFrame, FusionParams, cut_to_exact_masks, fuse_masks};
 use crate::panoptic::geometric::{GeometricParams, GeometricSegmentation};
 use crate::panoptic::instances::{ClassId, InstanceCounts, InstanceFusion, MaskObservation};
@@ -141,6 +141,10 @@ pub struct PanopticMapper {
     pub tsdf: TsdfMap,
     pub instances: InstanceCounts,
     next_label: SegmentLabel,
+    /// Every label's label now (merges relabel the map's voxels; frames keep the old labels).
+    label_now: Vec<SegmentLabel>,
+    /// Each integrated frame's label image, in order: what the frame said each pixel was.
+    frame_labels: Vec<FrameLabels>,
     /// How often a segment overlapped both labels of a pair (smaller label first).
     pair_counts: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     frames: usize,
@@ -156,6 +160,8 @@ impl PanopticMapper {
             instances: InstanceCounts::new(params.fusion),
             params,
             next_label: 1,
+            label_now: Vec::new(),
+            frame_labels: Vec::new(),
             pair_counts: BTreeMap::new(),
             frames: 0,
             label_merges: 0,
@@ -166,6 +172,22 @@ impl PanopticMapper {
 
     pub fn frames(&self) -> usize {
         self.frames
+    }
+
+    /// The label images of the frames integrated, in order.
+    pub fn frame_labels(&self) -> &[FrameLabels] {
+        &self.frame_labels
+    }
+
+    /// The map's label now for label `l` of a frame (labels merged since carry the one they
+    /// merged into).
+    pub fn label_now(&self, l: SegmentLabel) -> SegmentLabel {
+        self.label_now.get(l as usize).copied().unwrap_or(l)
+    }
+
+    /// One more than the largest label given out.
+    pub fn label_count(&self) -> SegmentLabel {
+        self.next_label
     }
 
     /// Associates, fuses instances and integrates one segmented frame.
@@ -215,6 +237,11 @@ impl PanopticMapper {
                 })
                 .collect()
         });
+        self.frame_labels.push(FrameLabels::encode(
+            &label_image,
+            frame.camera.width,
+            frame.camera.height,
+        ));
         self.tsdf.integrate(&TsdfFrame {
             depth: frame.depth,
             color: frame.color,
@@ -357,6 +384,9 @@ impl PanopticMapper {
                 }
             }
             self.tsdf.relabel(&roots);
+            self.label_now = (0..self.next_label)
+                .map(|l| roots[self.label_now(l) as usize])
+                .collect();
             let old = std::mem::take(&mut self.pair_counts);
             for ((a, b), n) in old {
                 let (ra, rb) = (roots[a as usize], roots[b as usize]);

@@ -130,7 +130,7 @@ fn spawn_entities(
         }
     }
     let params = FreeSpaceParams::for_voxel(map.0.tsdf.voxel_size);
-    if let Err(e) = carve_objects(&mut scene.entities, &sequence.0, &params) {
+    if let Err(e) = carve_objects(&mut scene.entities, &sequence.0, &map.0, &params) {
         error.0 = Some(e.into());
         return;
     }
