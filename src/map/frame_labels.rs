@@ -114,6 +114,10 @@ mod tests {
         assert_eq!(encoded.at(320, 230), 7);
         assert_eq!(encoded.at(10, 300), 3);
         assert_eq!(encoded.at(639, 0), 1);
-        assert!(encoded.heap_bytes() < 12_000, "{} bytes", encoded.heap_bytes());
+        assert!(
+            encoded.heap_bytes() < 12_000,
+            "{} bytes",
+            encoded.heap_bytes()
+        );
     }
 }

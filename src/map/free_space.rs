@@ -173,7 +173,12 @@ pub fn observe_frame(
         s.seen = s.seen.saturating_add(1);
         s.residual_sum += (residual.min(params.max_residual) * RESIDUAL_UNITS_PER_M).round() as i64;
         s.variance_sum += (sigma * sigma * VARIANCE_UNITS_PER_M2).round() as i64;
-        if let Some((labels, frame)) = labels {
+        // A frame whose depth there is nearer than the point by more than its noise saw what
+        // is in front of it, not it (a cup half hidden behind a monitor's stand).
+        let in_front = residual < -(0.5 * params.occlusion_margin).max(2.0 * sigma);
+        if let Some((labels, frame)) = labels
+            && !in_front
+        {
             // Every frame that saw the point counts, at the pixel it projects into: a pixel or
             // three either side (masks' boundaries are no better) took the back edges of the
             // noisy kitchen's cabinets for undecided and left the shelves' run-on onto their

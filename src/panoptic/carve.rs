@@ -66,11 +66,20 @@ fn carve_with(entities: &mut [PanopticEntity], sightings: &[Sightings], params: 
     let mut offset = 0;
     for e in entities.iter_mut().filter(|e| is_object(e)) {
         let n = e.mesh.positions.len();
-        let keep: Vec<bool> = sightings[offset..offset + n]
-            .iter()
-            .map(|s| !s.in_free_space(params) && !s.labelled_other(params))
-            .collect();
+        let seen = &sightings[offset..offset + n];
         offset += n;
+        let labelled_other = seen
+            .iter()
+            .filter(|s| !s.in_free_space(params) && s.labelled_other(params))
+            .count();
+        // When the frames saw most of an object as something else, they disagree with the map
+        // about what it is, not about where it ends (a cup half hidden behind a monitor, its
+        // sliver under the monitor's bleeding mask): it keeps those vertices.
+        let by_labels = 2 * labelled_other <= n;
+        let keep: Vec<bool> = seen
+            .iter()
+            .map(|s| !s.in_free_space(params) && !(by_labels && s.labelled_other(params)))
+            .collect();
         let carved = e.mesh.with_vertices(&keep);
         if !carved.triangles.is_empty() {
             e.mesh = carved;

@@ -109,13 +109,12 @@ fn the_kitchens_contact_graph_has_every_support_right() {
 /// Every scene rendered without noise and mapped with ground-truth segmentation (every second
 /// frame) in 1 cm voxels: every entity is found, every support parent is right, and boxes reach
 /// issue 4's bar. In 1 cm voxels the kitchen's and the living room's graphs are the scenes' own;
-/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (4, 0, 1 and
+/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (3, 0, 1 and
 /// 2 proximal edits there, in the order below). What is left, measured on this run: the office's
-/// cabinet 3.8 cm off its wall is seen 1.5 cm off it (1 edit); in the bedroom the bed and two
-/// cabinets 3 to 3.7 cm off their wall are seen 1.5 cm off it (the side faces of what is never
-/// seen from behind continue into the gap, seen only at grazing angles) and a cup half hidden
-/// behind the monitor is seen 3.7 cm from it (4 edits). These are the bounds asserted; the goal
-/// is none.
+/// cabinet 3.8 cm off its wall is seen 1.5 cm off it (1 edit); in the bedroom furniture 3 to
+/// 3.7 cm off its wall is seen 1.5 cm off it (the side faces of what is never seen from behind
+/// continue into the gap, seen only at grazing angles) and a cup half hidden behind the monitor
+/// is seen 3.7 cm from it (3 edits). These are the bounds asserted; the goal is none.
 #[test]
 fn clean_renders_in_1_cm_voxels_get_every_node_and_support_right() {
     let mut failures = Vec::new();
@@ -123,7 +122,7 @@ fn clean_renders_in_1_cm_voxels_get_every_node_and_support_right() {
         ("kitchen", 0),
         ("office", 1),
         ("living_room", 0),
-        ("bedroom", 4),
+        ("bedroom", 3),
     ] {
         let dir = tempfile::tempdir().expect("tempdir");
         let (seq, out) = common::render_and_map_every_second_frame(name, dir.path(), true, 0.01);
