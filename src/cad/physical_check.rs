@@ -535,6 +535,43 @@ mod tests {
     }
 
     #[test]
+    fn a_chair_squeezed_between_two_obstacles_is_in_conflict() {
+        let db = CadDatabase::parametric();
+        let chair = model_of(&db, "chair_01");
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let width = chair.model.size.x;
+        // Two counters 0.6 m deep whose gap is 6 mm narrower than the chair, the chair in it: too
+        // little overlap for a conflict of its own (`MAX_PENETRATION_M`), and none that parts.
+        let counter = |x0: f32, x1: f32| {
+            let corners: Vec<Vec3> = (0..8)
+                .map(|k| {
+                    Vec3::new(
+                        [x0, x1][k & 1],
+                        [0.0, 0.6][(k >> 1) & 1],
+                        [0.0, 0.9][k >> 2],
+                    )
+                })
+                .collect();
+            PlacedSolid::from_hull(&corners).expect("a box spans volume")
+        };
+        let counters = [counter(0.0, 1.0), counter(1.0 + width - 0.006, 2.0 + width)];
+        let squeezed = Affine3A::from_translation(Vec3::new(1.0 + width / 2.0 - 0.003, 0.3, 0.0));
+        let checked = check_placements(
+            &[vec![(chair, squeezed)]],
+            &[Holder::Floor(floor)],
+            &[true],
+            &[floor],
+            &counters,
+        );
+        let check = checked.checks[0].as_ref().expect("check");
+        assert!(
+            (MAX_OBSTACLE_PENETRATION_M..MAX_PENETRATION_M).contains(&check.max_penetration_m),
+            "{check:?}"
+        );
+        assert!(check.conflicts > 0, "{check:?}");
+    }
+
+    #[test]
     fn chairs_overlapping_a_table_are_pulled_away_rather_than_the_table_swapped_for_a_worse_fit() {
         let db = CadDatabase::parametric();
         let model = |id: &str| model_of(&db, id);

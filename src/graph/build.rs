@@ -681,6 +681,32 @@ mod tests {
     }
 
     #[test]
+    fn the_floor_runs_on_under_what_stands_on_it() {
+        // A floor seen 2 x 2 m, and a 0.5 m cube standing on it half off its seen edge.
+        let floor = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.02), Vec3::new(2.0, 2.0, 0.0));
+        let cube = TriMesh::cuboid(Vec3::new(1.75, 0.5, 0.0), Vec3::new(2.25, 1.0, 0.5));
+        let entities = [
+            GraphEntity {
+                id: "floor",
+                class: "floor",
+                kind: EntityKind::Layout,
+                mesh: &floor,
+            },
+            GraphEntity {
+                id: "box_1",
+                class: "box",
+                kind: EntityKind::Rigid,
+                mesh: &cube,
+            },
+        ];
+        let graph = build_contact_graph(&entities, &ContactGraphParams::default());
+        assert_eq!(graph.parent_of("box_1"), Some("floor"), "{graph:?}");
+        let b = &graph.node("floor").expect("floor").bbox;
+        let (lo, hi) = (b.center[0] - b.size[0] / 2.0, b.center[0] + b.size[0] / 2.0);
+        assert!(lo < 0.01 && (hi - 2.25).abs() < 0.01, "{b:?}");
+    }
+
+    #[test]
     fn a_cups_label_bled_onto_the_counter_leaves_its_box() {
         // An 8 cm cup standing on a counter at z = 0.9, and a 6 cm ring of counter top around its
         // base that took the cup's label.

@@ -68,7 +68,7 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// Every pixel reads back; runs of a few labels make a small image.
+        /// Every pixel reads back, and outside the image is 0.
         #[test]
         fn every_pixel_reads_back(
             width in 1u32..40,

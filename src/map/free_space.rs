@@ -179,10 +179,10 @@ pub fn observe_frame(
         if let Some((labels, frame)) = labels
             && !in_front
         {
-            // Every frame that saw the point counts, at the pixel it projects into: a pixel or
-            // three either side (masks' boundaries are no better) took the back edges of the
-            // noisy kitchen's cabinets for undecided and left the shelves' run-on onto their
-            // walls (README, contact graph).
+            // The label is read at the pixel the point projects into: looking a pixel or three
+            // either side for its own (masks' boundaries are no better) took the back edges of
+            // the noisy kitchen's cabinets for undecided and left the shelves' run-on onto
+            // their walls (README, contact graph).
             match labels.entity_at(frame, u as u32, v as u32) {
                 0 => {}
                 e if e == labels.point_entity[k] => s.own_label = s.own_label.saturating_add(1),

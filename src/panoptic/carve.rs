@@ -50,6 +50,7 @@ pub fn carve_objects(
             entity_of_map_label.get(&now).copied().unwrap_or(0)
         })
         .collect();
+    // A map of other frames than these has nothing to say about them.
     let labels = (mapper.frame_labels().len() == sequence.frames.len()).then_some(EntityLabels {
         frames: mapper.frame_labels(),
         entity_of_label: &entity_of_label,
