@@ -79,7 +79,10 @@ fn carve_with(entities: &mut [PanopticEntity], sightings: &[Sightings], params: 
         let by_labels = 2 * labelled_other <= n;
         let keep: Vec<bool> = seen
             .iter()
-            .map(|s| !s.in_free_space(params) && !(by_labels && s.labelled_other(params)))
+            .map(|s| {
+                let goes = s.in_free_space(params) || (by_labels && s.labelled_other(params));
+                !goes
+            })
             .collect();
         let carved = e.mesh.with_vertices(&keep);
         if !carved.triangles.is_empty() {
