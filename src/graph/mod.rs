@@ -4,6 +4,7 @@ pub mod build;
 pub mod contact_graph;
 pub mod counters;
 pub mod gravity;
+pub mod layout_plane;
 pub mod proximal;
 pub mod sparse_ends;
 pub mod support;
