@@ -319,12 +319,11 @@ fn physics_validation_stage(world: &mut World) {
     world.insert_resource(report);
 }
 
-/// Narrows each joint whose sweep hit something partway to the range it moves freely in, in the
+/// Narrows each joint whose sweep met something partway to the range it moves freely in, in the
 /// ECS and in the tree the exports write: a door that meets the wall at 80 degrees opens to 80.
 fn narrow_blocked_joints(world: &mut World, sweeps: &[JointSweep]) {
     let blocked: Vec<(&str, (f32, f32))> = sweeps
         .iter()
-        .filter(|s| !s.free)
         .filter_map(|s| s.reachable.map(|r| (s.link.as_str(), r)))
         .collect();
     if blocked.is_empty() {
