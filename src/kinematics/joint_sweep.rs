@@ -248,6 +248,14 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
             .any(|((d, r), counts)| *counts && *d > r.max(0.0) + LIMIT_CONTACT_M)
     };
     let mut worst: Option<(f32, usize, f32)> = None;
+    let mut note_worst = |depths: &[f32], still: &[usize], value: f32| {
+        for (p, &depth) in depths.iter().enumerate() {
+            if worst.is_none_or(|(d, _, _)| depth > d) {
+                worst = Some((depth, still[p % still.len()], value));
+            }
+        }
+    };
+    note_worst(&at_rest, &pose.still, rest);
     let mut stops = [lo, hi];
     for (end, stop) in [lo, hi].into_iter().zip(stops.iter_mut()) {
         // As many samples either way as the part of the range it covers.
@@ -262,11 +270,7 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
         for k in 1..=steps {
             let value = rest + (end - rest) * k as f32 / steps as f32;
             let depths = pose.depths(value);
-            for (p, &depth) in depths.iter().enumerate() {
-                if worst.is_none_or(|(d, _, _)| depth > d) {
-                    worst = Some((depth, pose.still[p % pose.still.len()], value));
-                }
-            }
+            note_worst(&depths, &pose.still, value);
             if stopped {
                 continue;
             }
