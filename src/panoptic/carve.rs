@@ -163,6 +163,23 @@ mod tests {
         );
     }
 
+    /// Six frames saw a vertex on the surface: mostly as its own entity's, or mostly as another's.
+    fn own_and_anothers() -> (Sightings, Sightings) {
+        let own = Sightings {
+            seen: 6,
+            variance_sum: 6 * 100,
+            own_label: 5,
+            other_label: 1,
+            ..Sightings::default()
+        };
+        let anothers = Sightings {
+            own_label: 2,
+            other_label: 4,
+            ..own
+        };
+        (own, anothers)
+    }
+
     /// A vertex on the surface, but where most frames that saw it saw another entity: it goes.
     #[test]
     fn vertices_the_frames_saw_as_anothers_go() {
@@ -172,18 +189,7 @@ mod tests {
         };
         let mut entities = vec![entity("shelf_1", EntityKind::Rigid, quad)];
         let params = FreeSpaceParams::for_voxel(0.02);
-        let own = Sightings {
-            seen: 6,
-            variance_sum: 6 * 100,
-            own_label: 5,
-            other_label: 1,
-            ..Sightings::default()
-        };
-        let wall = Sightings {
-            own_label: 2,
-            other_label: 4,
-            ..own
-        };
+        let (own, wall) = own_and_anothers();
         carve_with(&mut entities, &[own, own, own, wall], &params);
         assert_eq!(entities[0].mesh.triangles, vec![[0, 1, 2]]);
     }
@@ -213,18 +219,7 @@ mod tests {
                 .collect(),
         };
         let params = FreeSpaceParams::for_voxel(0.02);
-        let own = Sightings {
-            seen: 6,
-            variance_sum: 6 * 100,
-            own_label: 5,
-            other_label: 1,
-            ..Sightings::default()
-        };
-        let anothers = Sightings {
-            own_label: 2,
-            other_label: 4,
-            ..own
-        };
+        let (own, anothers) = own_and_anothers();
         let seen = [own, own, own, own, own, anothers, anothers, anothers];
         let mut entities = vec![
             entity("shelf_1", EntityKind::Rigid, strip(1.0)),
