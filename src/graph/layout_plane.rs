@@ -14,14 +14,14 @@ const WALL_UPRIGHT_MAX_DEG: f32 = 5.0;
 /// towards the room's centre.
 pub fn layout_plane(class: &str, points: &[Vec3], room_center: Vec3) -> Option<Plane> {
     let plane = fit_plane(points)?;
+    let centroid = points.iter().copied().sum::<Vec3>() / points.len() as f32;
     // The aligned frame was levelled to the floor where they disagreed by more than the fit's
     // noise; what is left is noise, and a simulator's floor tilted by it makes everything on it
     // creep (0.17 degrees on 7-Scenes redkitchen: every chair moved 2 mm in 2 s).
     let level = class == "floor"
         && plane.normal.z.abs() >= crate::graph::gravity::LEVEL_MIN_DEG.to_radians().cos();
     if level {
-        let height = points.iter().map(|p| p.z).sum::<f32>() / points.len() as f32;
-        return Some(Plane::from_point_normal(Vec3::Z * height, Vec3::Z));
+        return Some(Plane::from_point_normal(Vec3::Z * centroid.z, Vec3::Z));
     }
     // A wall stands upright. A plane fitted to a wall seen 1.6 m high from one side leans by
     // noise (half a degree on 7-Scenes redkitchen), and the upright slab enclosing it then
@@ -30,19 +30,13 @@ pub fn layout_plane(class: &str, points: &[Vec3], room_center: Vec3) -> Option<P
     let upright =
         class == "wall" && plane.normal.z.abs() <= WALL_UPRIGHT_MAX_DEG.to_radians().sin();
     let plane = match plane.normal.with_z(0.0).try_normalize() {
-        Some(normal) if upright => {
-            let centroid = points.iter().copied().sum::<Vec3>() / points.len() as f32;
-            Plane::from_point_normal(centroid, normal)
-        }
+        Some(normal) if upright => Plane::from_point_normal(centroid, normal),
         _ => plane,
     };
     let facing = match class {
         "floor" => Vec3::Z,
         "ceiling" => -Vec3::Z,
-        _ => {
-            let centroid = points.iter().copied().sum::<Vec3>() / points.len() as f32;
-            (room_center - centroid).with_z(0.0)
-        }
+        _ => (room_center - centroid).with_z(0.0),
     };
     Some(if plane.normal.dot(facing) < 0.0 {
         Plane {

@@ -109,7 +109,7 @@ fn the_kitchens_contact_graph_has_every_support_right() {
 /// Every scene rendered without noise and mapped with ground-truth segmentation (every second
 /// frame) in 1 cm voxels: every entity is found, every support parent is right, and boxes reach
 /// issue 4's bar. In 1 cm voxels the kitchen's and the living room's graphs are the scenes' own;
-/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (3, 0, 1 and
+/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (3, 0, 0 and
 /// 2 proximal edits there, in the order below). What is left, measured on this run: the office's
 /// cabinet 3.8 cm off its wall is seen 1.5 cm off it (1 edit); in the bedroom furniture 3 to
 /// 3.7 cm off its wall is seen 1.5 cm off it (the side faces of what is never seen from behind
