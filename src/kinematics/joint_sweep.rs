@@ -176,18 +176,52 @@ fn open_value(tree: &KinematicTree, link: usize) -> f32 {
 }
 
 /// The moving and the still links of one joint's sweep, and the tree posed as it goes.
-struct SweepPose<'a> {
+pub(crate) struct SweepPose<'a> {
     posed: KinematicTree,
     joint: usize,
-    moving: Vec<usize>,
-    still: Vec<usize>,
+    /// The joint's link and what it carries.
+    pub moving: Vec<usize>,
+    /// Every other link with a solid.
+    pub still: Vec<usize>,
     solids: &'a [LinkSolids],
 }
 
-impl SweepPose<'_> {
+impl<'a> SweepPose<'a> {
+    /// Joint `joint` of `tree` (links' solids `solids`) to be swept, the joints `open` set to
+    /// their open ends.
+    pub(crate) fn new(
+        tree: &KinematicTree,
+        solids: &'a [LinkSolids],
+        joint: usize,
+        open: &[usize],
+    ) -> Self {
+        let moving: Vec<usize> = (0..tree.links.len())
+            .filter(|&i| descends_from(tree, i, joint))
+            .collect();
+        let still: Vec<usize> = (0..tree.links.len())
+            .filter(|i| !moving.contains(i) && !solids[*i].is_empty())
+            .collect();
+        let mut posed = tree.clone();
+        for &o in open {
+            posed.links[o].value = open_value(tree, o);
+        }
+        Self {
+            posed,
+            joint,
+            moving,
+            still,
+            solids,
+        }
+    }
+
+    /// The still link that overlap `index` of [`depths`](Self::depths) is with.
+    pub(crate) fn still_of(&self, index: usize) -> usize {
+        self.still[index % self.still.len()]
+    }
+
     /// The overlap of every moving link with every still one (moving-major) at joint value
     /// `value`, metres.
-    fn depths(&mut self, value: f32) -> Vec<f32> {
+    pub(crate) fn depths(&mut self, value: f32) -> Vec<f32> {
         self.posed.links[self.joint].value = value;
         let poses = self.posed.world_from_links();
         let mut depths = Vec::with_capacity(self.moving.len() * self.still.len());
@@ -210,34 +244,19 @@ impl SweepPose<'_> {
 /// object (or the room) deeper than `LIMIT_CONTACT_M` more than it does at rest.
 fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usize]) -> JointSweep {
     let (lo, hi) = tree.links[j].joint.limits.unwrap_or((0.0, 0.0));
-    let moving: Vec<usize> = (0..tree.links.len())
-        .filter(|&i| descends_from(tree, i, j))
-        .collect();
-    let still: Vec<usize> = (0..tree.links.len())
-        .filter(|i| !moving.contains(i) && !solids[*i].is_empty())
-        .collect();
+    let mut pose = SweepPose::new(tree, solids, j, open);
     // The object's own parts are the library's business (its doors clear their cabinet by
     // construction; a rack behind a closed door is what `after_opening` is for).
     let node = tree.links[j].node.as_ref();
-    let counts_for_limit: Vec<bool> = moving
+    let counts_for_limit: Vec<bool> = pose
+        .moving
         .iter()
         .flat_map(|_| {
-            still
+            pose.still
                 .iter()
                 .map(|&s| node.is_none() || tree.links[s].node.as_ref() != node)
         })
         .collect();
-    let mut posed = tree.clone();
-    for &o in open {
-        posed.links[o].value = open_value(tree, o);
-    }
-    let mut pose = SweepPose {
-        posed,
-        joint: j,
-        moving,
-        still,
-        solids,
-    };
     let rest = tree.links[j].value.clamp(lo, hi);
     let at_rest = pose.depths(rest);
     let touches_anew = |depths: &[f32]| {

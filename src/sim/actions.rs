@@ -6,7 +6,7 @@
 use glam::{Affine3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, link_penetration};
+use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, SweepPose};
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::navigation::{NavGoal, NavGrid};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
@@ -477,40 +477,21 @@ fn sweep(view: &SceneView, joint: usize, target: f32) -> Result<(), (String, f32
     let tree = view.tree;
     let from = tree.links[joint].value;
     let steps = ((target - from).abs() / SWEEP_STEP).ceil().max(1.0) as usize;
-    let moving: Vec<usize> = (0..tree.links.len())
-        .filter(|&i| view.descends_from(i, joint))
-        .collect();
     let solids: Vec<LinkSolids> = (0..tree.links.len())
         .map(|i| LinkSolids::of(tree, i))
         .collect();
-    let still: Vec<usize> = (0..tree.links.len())
-        .filter(|i| !moving.contains(i) && !solids[*i].is_empty())
-        .collect();
+    let mut pose = SweepPose::new(tree, &solids, joint, &[]);
     // What already touches at the start (a door against its own frame) is contact.
-    let mut at_start: Vec<f32> = Vec::with_capacity(moving.len() * still.len());
-    for &m in &moving {
-        for &s in &still {
-            at_start.push(link_penetration(
-                &solids[m],
-                &view.poses[m],
-                &solids[s],
-                &view.poses[s],
-            ));
-        }
-    }
-    let mut posed = tree.clone();
+    let at_start = pose.depths(from);
     for k in 1..=steps {
         let value = from + (target - from) * k as f32 / steps as f32;
-        posed.links[joint].value = value;
-        let poses = posed.world_from_links();
-        for (mi, &m) in moving.iter().enumerate() {
-            for (si, &s) in still.iter().enumerate() {
-                let depth = link_penetration(&solids[m], &poses[m], &solids[s], &poses[s]);
-                let before = at_start[mi * still.len() + si];
-                if depth > SWEEP_TOLERANCE_M.max(before + TOUCH_M) {
-                    return Err((tree.links[s].name.clone(), value));
-                }
-            }
+        let depths = pose.depths(value);
+        let hit = depths
+            .iter()
+            .zip(&at_start)
+            .position(|(&depth, &before)| depth > SWEEP_TOLERANCE_M.max(before + TOUCH_M));
+        if let Some(p) = hit {
+            return Err((tree.links[pose.still_of(p)].name.clone(), value));
         }
     }
     Ok(())
