@@ -115,19 +115,6 @@ pub fn link_penetration(
     deepest
 }
 
-/// Whether `link` is `ancestor` or hangs below it.
-fn descends_from(tree: &KinematicTree, mut link: usize, ancestor: usize) -> bool {
-    loop {
-        if link == ancestor {
-            return true;
-        }
-        match tree.links[link].parent {
-            Some(p) => link = p,
-            None => return false,
-        }
-    }
-}
-
 /// Sweeps every revolute and prismatic joint of `tree` (the others stay at their values).
 pub fn sweep_joints(tree: &KinematicTree) -> Vec<JointSweep> {
     let solids: Vec<LinkSolids> = (0..tree.links.len())
@@ -159,8 +146,8 @@ pub fn sweep_joints(tree: &KinematicTree) -> Vec<JointSweep> {
                 .filter(|&o| {
                     o != j
                         && tree.links[o].node == tree.links[j].node
-                        && !descends_from(tree, j, o)
-                        && !descends_from(tree, o, j)
+                        && !tree.descends_from(j, o)
+                        && !tree.descends_from(o, j)
                 })
                 .collect();
             let opened = sweep_one(tree, &solids, j, &others);
@@ -196,7 +183,7 @@ impl<'a> SweepPose<'a> {
         open: &[usize],
     ) -> Self {
         let moving: Vec<usize> = (0..tree.links.len())
-            .filter(|&i| descends_from(tree, i, joint))
+            .filter(|&i| tree.descends_from(i, joint))
             .collect();
         let still: Vec<usize> = (0..tree.links.len())
             .filter(|i| !moving.contains(i) && !solids[*i].is_empty())

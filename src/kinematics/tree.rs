@@ -85,6 +85,19 @@ pub struct KinematicTree {
 }
 
 impl KinematicTree {
+    /// Whether `link` is `ancestor` or hangs below it.
+    pub fn descends_from(&self, mut link: usize, ancestor: usize) -> bool {
+        loop {
+            if link == ancestor {
+                return true;
+            }
+            match self.links[link].parent {
+                Some(p) => link = p,
+                None => return false,
+            }
+        }
+    }
+
     /// Every link's pose in the world at the current joint values.
     pub fn world_from_links(&self) -> Vec<Affine3A> {
         let mut poses: Vec<Affine3A> = Vec::with_capacity(self.links.len());

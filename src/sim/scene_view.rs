@@ -71,16 +71,8 @@ impl<'a> SceneView<'a> {
     }
 
     /// Whether `link` hangs below `ancestor` (or is it).
-    pub fn descends_from(&self, mut link: usize, ancestor: usize) -> bool {
-        loop {
-            if link == ancestor {
-                return true;
-            }
-            match self.tree.links[link].parent {
-                Some(p) => link = p,
-                None => return false,
-            }
-        }
+    pub fn descends_from(&self, link: usize, ancestor: usize) -> bool {
+        self.tree.descends_from(link, ancestor)
     }
 
     /// The links of node `id` that move with its own link (its body and fixed parts).
