@@ -253,15 +253,16 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
             .zip(&counts_for_limit)
             .any(|((d, r), counts)| *counts && *d > r.max(0.0) + LIMIT_CONTACT_M)
     };
+    // The deepest overlap: its depth, its index in `depths`, the joint's value.
     let mut worst: Option<(f32, usize, f32)> = None;
-    let mut note_worst = |depths: &[f32], still: &[usize], value: f32| {
+    let mut note_worst = |depths: &[f32], value: f32| {
         for (p, &depth) in depths.iter().enumerate() {
             if worst.is_none_or(|(d, _, _)| depth > d) {
-                worst = Some((depth, still[p % still.len()], value));
+                worst = Some((depth, p, value));
             }
         }
     };
-    note_worst(&at_rest, &pose.still, rest);
+    note_worst(&at_rest, rest);
     let mut stops = [lo, hi];
     for (end, stop) in [lo, hi].into_iter().zip(stops.iter_mut()) {
         // As many samples either way as the part of the range it covers.
@@ -276,7 +277,7 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
         for k in 1..=steps {
             let value = rest + (end - rest) * k as f32 / steps as f32;
             let depths = pose.depths(value);
-            note_worst(&depths, &pose.still, value);
+            note_worst(&depths, value);
             if stopped {
                 continue;
             }
@@ -307,7 +308,7 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
         max_penetration_m,
         hits: worst
             .filter(|(d, _, _)| *d > SWEEP_TOLERANCE_M)
-            .map(|(_, s, v)| (tree.links[s].name.clone(), v)),
+            .map(|(_, p, v)| (tree.links[pose.still_of(p)].name.clone(), v)),
         free: max_penetration_m <= SWEEP_TOLERANCE_M,
         reachable,
         after_opening: open.iter().map(|&o| tree.links[o].name.clone()).collect(),
