@@ -52,6 +52,7 @@ pub fn graph_entities<'a>(
             class: &e.class,
             kind: e.kind,
             mesh,
+            sighted: &[],
         })
         .collect()
 }

@@ -2,6 +2,7 @@
 //!
 //! A scene entity (a piece of layout or an object) carries its `SceneEntity` id and `Panoptic`
 //! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, the
+//! `SightedOutline` precise frames measured of it, the
 //! `ObservedSurface` the contact graph kept of it, once replaced its `CadModel`, and in the
 //! kinematic tree its `LinkBody`; each moving part of its model is a child entity with a
 //! `ModelPart`, a `LinkBody` and a `Joint`. Support is Bevy's `ChildOf`: the parent supports the child, and the
@@ -17,6 +18,7 @@ pub mod oriented_box;
 pub mod panoptic;
 pub mod proximal;
 pub mod segment_mesh;
+pub mod sighted_outline;
 pub mod surface_planes;
 
 pub use cad_model::CadModel;
@@ -28,4 +30,5 @@ pub use oriented_box::OrientedBox;
 pub use panoptic::{Panoptic, SceneEntity};
 pub use proximal::ProximalTo;
 pub use segment_mesh::SegmentMesh;
+pub use sighted_outline::SightedOutline;
 pub use surface_planes::SurfacePlanes;

@@ -13,6 +13,7 @@ use crate::geometry::ransac::{RansacParams, ransac_planes};
 use crate::geometry::{GravityBox, Plane, TriMesh};
 use crate::graph::layout_plane::layout_plane;
 use crate::graph::proximal::{PROXIMAL_MARGIN, ProximalMargins, proximal_edges};
+use crate::graph::sighted_extent::reach_sighted;
 use crate::graph::sparse_ends::keep_dense_extent;
 use crate::graph::support::{SupportChoice, SupportEntity, SupportParams, infer_supports, rest_on};
 use crate::graph::{ContactGraph, GraphEdge, GraphNode};
@@ -27,6 +28,9 @@ pub struct GraphEntity<'a> {
     pub kind: EntityKind,
     /// World frame, z up.
     pub mesh: &'a TriMesh,
+    /// What precise frames measured of its outline, a list per frame (`panoptic::sighted`),
+    /// world frame; empty for most.
+    pub sighted: &'a [Vec<Vec3>],
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -60,6 +64,10 @@ pub struct ContactGraphParams {
     /// Whether and how an object's sparse footprint ends are cut (`sparse_ends`): a map's
     /// labels bleed along surfaces into the neighbour; exact meshes keep their extent.
     pub sparse_ends: Option<SparseEnds>,
+    /// What the frames measured of an object's outline within this distance (metres) of a wall
+    /// or the floor is the layout's (`sighted_extent`): a quarter voxel, well above the noise of
+    /// the depth that measures outlines at all, below the gap of an object standing off a wall.
+    pub sighted_layout_band: f32,
 }
 
 /// Footprint ends counted in bins `bin` metres wide are cut where they hold under `share` of the
@@ -86,6 +94,7 @@ impl ContactGraphParams {
                 bin: voxel,
                 share: 0.2,
             }),
+            sighted_layout_band: voxel / 4.0,
             ..Self::default()
         }
     }
@@ -103,6 +112,7 @@ impl Default for ContactGraphParams {
             layout_band: 0.02,
             support_band: 0.01,
             sparse_ends: None,
+            sighted_layout_band: 0.005,
         }
     }
 }
@@ -255,6 +265,17 @@ pub fn build_contact_graph_with_surfaces(
             SupportChoice::Wall { parent } => parent,
         };
         support_edges.push((parent, child));
+    }
+
+    for (k, (i, _)) in shaped.iter().enumerate() {
+        if entities[*i].kind != EntityKind::Layout {
+            boxes[k] = reach_sighted(
+                &boxes[k],
+                entities[*i].sighted,
+                &claiming,
+                params.sighted_layout_band,
+            );
+        }
     }
 
     // The floor runs on under everything standing on it: a floor seen only in part would end
@@ -572,6 +593,7 @@ mod tests {
             class,
             kind,
             mesh,
+            sighted: &[],
         };
         let entities = [
             entity("floor", "floor", EntityKind::Layout, &floor),
@@ -597,12 +619,14 @@ mod tests {
                 class: "floor",
                 kind: EntityKind::Layout,
                 mesh: &floor,
+                sighted: &[],
             },
             GraphEntity {
                 id: "box_1",
                 class: "box",
                 kind: EntityKind::Rigid,
                 mesh: &cube,
+                sighted: &[],
             },
         ];
         let graph = build_contact_graph(&entities, &ContactGraphParams::default());

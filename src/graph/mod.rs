@@ -6,6 +6,7 @@ pub mod counters;
 pub mod gravity;
 pub mod layout_plane;
 pub mod proximal;
+pub mod sighted_extent;
 pub mod sparse_ends;
 pub mod support;
 

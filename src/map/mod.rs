@@ -2,6 +2,7 @@
 //! labelled marching cubes that turns it into meshes.
 
 pub mod agreement;
+pub mod depth_precision;
 pub mod frame_labels;
 pub mod free_space;
 pub mod mesh;

@@ -49,17 +49,7 @@ pub fn carve_objects(
         .filter(|(_, e)| is_object(e))
         .flat_map(|(k, e)| std::iter::repeat_n(k as u32 + 1, e.mesh.positions.len()))
         .collect();
-    let entity_of_map_label: BTreeMap<_, u32> = entities
-        .iter()
-        .enumerate()
-        .flat_map(|(k, e)| e.labels.iter().map(move |&l| (l, k as u32 + 1)))
-        .collect();
-    let entity_of_label: Vec<u32> = (0..mapper.label_count())
-        .map(|l| {
-            let now = mapper.label_now(l);
-            entity_of_map_label.get(&now).copied().unwrap_or(0)
-        })
-        .collect();
+    let entity_of_label = entity_of_frame_label(entities, mapper);
     // A map of other frames than these has nothing to say about them.
     let labels = (mapper.frame_labels().len() == sequence.frames.len()).then_some(EntityLabels {
         frames: mapper.frame_labels(),
@@ -69,6 +59,25 @@ pub fn carve_objects(
     let sightings = sequence_sightings(sequence, &points, labels.as_ref(), params)?;
     carve_with(entities, &sightings, params);
     Ok(())
+}
+
+/// The entity (numbered from 1 in `entities`' order; 0 is none) each label of `mapper`'s frames
+/// went to: labels merged since go where the label they merged into went.
+pub(crate) fn entity_of_frame_label(
+    entities: &[PanopticEntity],
+    mapper: &PanopticMapper,
+) -> Vec<u32> {
+    let entity_of_map_label: BTreeMap<_, u32> = entities
+        .iter()
+        .enumerate()
+        .flat_map(|(k, e)| e.labels.iter().map(move |&l| (l, k as u32 + 1)))
+        .collect();
+    (0..mapper.label_count())
+        .map(|l| {
+            let now = mapper.label_now(l);
+            entity_of_map_label.get(&now).copied().unwrap_or(0)
+        })
+        .collect()
 }
 
 /// `sightings` holds the objects' vertices in entity order. An object whose every triangle

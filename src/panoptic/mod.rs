@@ -9,6 +9,7 @@ pub mod geometric;
 pub mod instances;
 pub mod mapper;
 pub mod run;
+pub mod sighted;
 
 pub use carve::carve_objects;
 pub use entities::{ClassIds, ExtractionParams, PanopticEntity, PanopticScene, extract_entities};

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use bevy::prelude::*;
 use glam::Affine3A;
 
-use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh};
+use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh, SightedOutline};
 use crate::graph::ContactGraph;
 use crate::graph::build::{
     COUNTER_CLASS, ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces,
@@ -42,6 +42,15 @@ fn contact_graph_stage(world: &mut World) {
         .iter(world)
         .map(|(e, id, p, m)| (e, id.0.clone(), p.clone(), m.0.clone()))
         .collect();
+    let outlines: Vec<Vec<Vec<glam::Vec3>>> = entities
+        .iter()
+        .map(|(e, ..)| {
+            world
+                .get::<SightedOutline>(*e)
+                .map(|o| o.0.clone())
+                .unwrap_or_default()
+        })
+        .collect();
     let Some(map) = world.get_resource::<PanopticMap>() else {
         return;
     };
@@ -69,14 +78,32 @@ fn contact_graph_stage(world: &mut World) {
         .iter()
         .map(|(_, _, _, m)| m.transformed(&aligned_from_world))
         .collect();
+    // Counters spawned above have no outline.
+    let aligned_outlines: Vec<Vec<Vec<glam::Vec3>>> = outlines
+        .iter()
+        .map(|frames| {
+            frames
+                .iter()
+                .map(|points| {
+                    points
+                        .iter()
+                        .map(|&p| aligned_from_world.transform_point3(p))
+                        .collect()
+                })
+                .collect()
+        })
+        .collect();
+    let no_outline = Vec::new();
     let graph_entities: Vec<GraphEntity> = entities
         .iter()
         .zip(&aligned)
-        .map(|((_, id, p, _), mesh)| GraphEntity {
+        .enumerate()
+        .map(|(k, ((_, id, p, _), mesh))| GraphEntity {
             id,
             class: &p.class,
             kind: p.kind,
             mesh,
+            sighted: aligned_outlines.get(k).unwrap_or(&no_outline),
         })
         .collect();
     let built = build_contact_graph_with_surfaces(

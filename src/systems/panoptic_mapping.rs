@@ -1,13 +1,14 @@
 //! The panoptic mapping stages: choose the segmentation service (Segment), fuse every frame
 //! into the panoptic map (Integrate), and spawn one scene entity per object and layout piece
 //! with its panoptic identity and segment mesh, objects' meshes carved with the frames'
-//! free-space evidence (Extract).
+//! free-space evidence and their outlines as precise frames measured them (Extract).
 
 use bevy::prelude::*;
 
-use crate::components::{Panoptic, SceneEntity, SegmentMesh};
+use crate::components::{Panoptic, SceneEntity, SegmentMesh, SightedOutline};
 use crate::error::InputError;
 use crate::map::free_space::FreeSpaceParams;
+use crate::panoptic::sighted::{SightedParams, sighted_outlines};
 use crate::panoptic::{
     ClassIds, ExtractionParams, MapperParams, PanopticEntity, PanopticMapper, carve_objects,
     extract_entities, map_sequence,
@@ -134,7 +135,15 @@ fn spawn_entities(
         error.0 = Some(e.into());
         return;
     }
-    for e in &scene.entities {
+    let sighted = SightedParams::for_voxel(map.0.tsdf.voxel_size);
+    let outlines = match sighted_outlines(&scene.entities, &sequence.0, &map.0, &sighted) {
+        Ok(outlines) => outlines,
+        Err(e) => {
+            error.0 = Some(e.into());
+            return;
+        }
+    };
+    for (e, outline) in scene.entities.iter().zip(outlines) {
         commands.spawn((
             SceneEntity(e.id.clone()),
             Panoptic {
@@ -143,6 +152,7 @@ fn spawn_entities(
                 kind: e.kind,
             },
             SegmentMesh(e.mesh.clone()),
+            SightedOutline(outline),
         ));
     }
     commands.insert_resource(PanopticSurface {

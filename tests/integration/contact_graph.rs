@@ -49,6 +49,7 @@ fn the_graph_of_ground_truth_meshes_is_the_scenes_graph() {
                     class: &node.class,
                     kind: node.kind,
                     mesh,
+                    sighted: &[],
                 }
             })
             .collect();

@@ -1,0 +1,131 @@
+//! An object's box grown to what the frames measured of its outline (`panoptic::sighted`): the
+//! map's mesh ends at its last voxel column, up to a voxel short of a top's unseen back edge,
+//! which decides whether the object touches the wall behind it. Each side of the footprint
+//! reaches as far as `MIN_FRAMES` frames measured it: one frame's stray boundary pixel does not
+//! move it. Boxes only grow, and only across the floor: heights come from the mesh, whose
+//! horizontal surfaces sit at their interpolated crossings anyway.
+
+use glam::Vec3;
+
+use crate::geometry::{GravityBox, Plane};
+
+/// A side of the footprint moves out to the extent this many frames reached at least.
+pub const MIN_FRAMES: usize = 3;
+
+/// `bbox` (z up) with its footprint grown to the extent that `MIN_FRAMES` of `frames` (each
+/// frame's outline points, same frame as the box) reached on each side; points outside the
+/// box's height (what stands on it, the floor under it) or within `band` metres of a `layout`
+/// plane (the wall behind, which a frame's labels bleed onto) are left out.
+pub fn reach_sighted(
+    bbox: &GravityBox,
+    frames: &[Vec<Vec3>],
+    layout: &[Plane],
+    band: f32,
+) -> GravityBox {
+    if frames.len() < MIN_FRAMES {
+        return *bbox;
+    }
+    let box_from_world = bbox.world_from_box().inverse();
+    let half = bbox.size * 0.5;
+    // Per frame, the farthest reach along +x, -x, +y, -y of the box.
+    let mut reaches: [Vec<f32>; 4] = Default::default();
+    for points in frames {
+        let mut reach = [f32::NEG_INFINITY; 4];
+        for p in points {
+            let local = box_from_world.transform_point3(*p);
+            if local.z.abs() > half.z || layout.iter().any(|l| l.signed_distance(*p).abs() < band) {
+                continue;
+            }
+            for (r, along) in reach.iter_mut().zip([local.x, -local.x, local.y, -local.y]) {
+                *r = r.max(along);
+            }
+        }
+        for (all, r) in reaches.iter_mut().zip(reach) {
+            if r.is_finite() {
+                all.push(r);
+            }
+        }
+    }
+    let extent = |all: &mut Vec<f32>, half: f32| {
+        if all.len() < MIN_FRAMES {
+            return half;
+        }
+        all.sort_by(|a, b| b.total_cmp(a));
+        all[MIN_FRAMES - 1].max(half)
+    };
+    let [px, nx, py, ny] = &mut reaches;
+    let (px, nx) = (extent(px, half.x), extent(nx, half.x));
+    let (py, ny) = (extent(py, half.y), extent(ny, half.y));
+    let shift =
+        bbox.world_from_box()
+            .transform_vector3(Vec3::new(0.5 * (px - nx), 0.5 * (py - ny), 0.0));
+    GravityBox {
+        center: bbox.center + shift,
+        yaw: bbox.yaw,
+        size: Vec3::new(px + nx, py + ny, bbox.size.z),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cabinet() -> GravityBox {
+        // 80 x 58 x 88 cm, turned 30 degrees.
+        GravityBox {
+            center: Vec3::new(1.0, 2.0, 0.44),
+            yaw: 30f32.to_radians(),
+            size: Vec3::new(0.8, 0.58, 0.88),
+        }
+    }
+
+    /// Points along the box's local +y side at `reach` metres from its centre, top height.
+    fn back_edge(b: &GravityBox, reach: f32) -> Vec<Vec3> {
+        (0..20)
+            .map(|k| {
+                let local = Vec3::new(-0.35 + 0.035 * k as f32, reach, 0.43);
+                b.world_from_box().transform_point3(local)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_back_grows_to_what_three_frames_measured_and_no_further() {
+        let b = cabinet();
+        // Five frames saw the back edge 1.2 cm past the box; one stray frame 5 cm past.
+        let mut frames = vec![back_edge(&b, 0.302); 5];
+        frames.push(back_edge(&b, 0.34));
+        let grown = reach_sighted(&b, &frames, &[], 0.005);
+        assert!(
+            (grown.size.y - 0.592).abs() < 1e-4,
+            "depth {}",
+            grown.size.y
+        );
+        assert!((grown.size.x - 0.8).abs() < 1e-5 && (grown.size.z - 0.88).abs() < 1e-6);
+        // The front stayed where it was: the centre moved back by half the growth.
+        let front = |g: &GravityBox| {
+            g.world_from_box()
+                .transform_point3(Vec3::new(0.0, -0.5 * g.size.y, 0.0))
+        };
+        assert!(front(&grown).distance(front(&b)) < 1e-4);
+        assert!((grown.yaw - b.yaw).abs() < 1e-6);
+    }
+
+    #[test]
+    fn too_few_frames_points_inside_or_above_change_nothing() {
+        let b = cabinet();
+        assert_eq!(
+            reach_sighted(&b, &vec![back_edge(&b, 0.31); 2], &[], 0.005),
+            b
+        );
+        assert_eq!(
+            reach_sighted(&b, &vec![back_edge(&b, 0.2); 5], &[], 0.005),
+            b
+        );
+        let above: Vec<Vec3> = back_edge(&b, 0.31)
+            .into_iter()
+            .map(|p| p + Vec3::Z * 0.1)
+            .collect();
+        assert_eq!(reach_sighted(&b, &vec![above; 5], &[], 0.005), b);
+    }
+}
