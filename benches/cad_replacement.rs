@@ -32,7 +32,8 @@ const DATABASE_MODELS: usize = 200;
 fn mapped_scene(scene: &str, dir: &Path) -> (ContactGraph, HashMap<String, Vec<Vec3>>) {
     let (found, meshes) = common::mapped_entities(scene, dir);
     let entities = common::graph_entities(&found, &meshes);
-    let built = build_contact_graph_with_surfaces(&entities, &ContactGraphParams::for_voxel(0.02));
+    let built =
+        build_contact_graph_with_surfaces(&entities, &ContactGraphParams::for_voxel(0.02, false));
     let points = built
         .graph
         .nodes

@@ -11,7 +11,7 @@ fn contact_graph(c: &mut Criterion) {
     let dir = tempfile::tempdir().expect("tempdir");
     let (found, meshes) = common::mapped_entities("office", dir.path());
     let entities = common::graph_entities(&found, &meshes);
-    let params = ContactGraphParams::for_voxel(0.02);
+    let params = ContactGraphParams::for_voxel(0.02, false);
     let name = format!("contact_graph_office_{}_entities", entities.len());
     c.bench_function(&name, |b| {
         b.iter(|| build_contact_graph(&entities, &params))

@@ -48,7 +48,8 @@ pub struct ContactGraphParams {
     pub square_with_room_area: f32,
     /// Boxes closer than this (metres) are proximal: `PROXIMAL_MARGIN` for exact meshes. A map's
     /// object boxes grow by about a voxel where surfaces bleed past silhouettes, so two objects
-    /// need a voxel less (`for_voxel`). Against a wall (an exact plane, which claims the object
+    /// need a voxel less (`for_voxel`), unless precise depth carved the bleeding and measured
+    /// the outlines (`panoptic::sighted`): then the boxes are as exact as the truth's. Against a wall (an exact plane, which claims the object
     /// points on it, `layout_band`) the margin is the exact one: what the frames saw as the wall
     /// is carved off the object's mesh (`panoptic::carve`), so its box ends at its last surface
     /// vertex, within a voxel of its true face either way. With 2 cm voxels a 1.8 cm and a
@@ -79,16 +80,21 @@ pub struct SparseEnds {
 }
 
 impl ContactGraphParams {
-    /// Parameters for entities out of a map with `voxel` metres voxels.
-    pub fn for_voxel(voxel: f32) -> Self {
+    /// Parameters for entities out of a map with `voxel` metres voxels, from depth that was
+    /// `precise` or not (`panoptic::sighted`).
+    pub fn for_voxel(voxel: f32, precise: bool) -> Self {
         Self {
             // A map's mesh has a vertex every voxel or so: sampling inside its triangles would
             // multiply the points (and the stage's time) for no new surface.
             sample_spacing: (2.0 * voxel).max(Self::default().sample_spacing),
             cluster_cell: 2.0 * voxel,
-            proximal_margins: ProximalMargins {
-                objects: PROXIMAL_MARGIN - voxel,
-                wall: PROXIMAL_MARGIN,
+            proximal_margins: if precise {
+                ProximalMargins::EXACT
+            } else {
+                ProximalMargins {
+                    objects: PROXIMAL_MARGIN - voxel,
+                    wall: PROXIMAL_MARGIN,
+                }
             },
             sparse_ends: Some(SparseEnds {
                 bin: voxel,

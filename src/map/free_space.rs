@@ -34,6 +34,9 @@ pub struct FreeSpaceParams {
     /// A point is another's surface when at least `min_frames` of the frames that saw it put
     /// another entity's label there, and more than this many times as many as put its own.
     pub other_label_ratio: f32,
+    /// The sequence's depth noise as a multiple of `axial_sigma` (1 for a Kinect-class sensor;
+    /// measured, `map::depth_precision`).
+    pub noise_scale: f32,
 }
 
 impl FreeSpaceParams {
@@ -50,6 +53,7 @@ impl FreeSpaceParams {
             min_mean_residual: (0.75 * voxel_size).max(MIN_MEAN_RESIDUAL_M),
             significance: 2.0,
             other_label_ratio: 1.0,
+            noise_scale: 1.0,
         }
     }
 }
@@ -165,7 +169,7 @@ pub fn observe_frame(
         if measured <= 0.0 {
             continue;
         }
-        let sigma = axial_sigma(q.z);
+        let sigma = params.noise_scale * axial_sigma(q.z);
         let residual = measured - q.z;
         if residual < -params.occlusion_margin.max(params.occlusion_sigmas * sigma) {
             continue;

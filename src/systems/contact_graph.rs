@@ -73,6 +73,9 @@ fn contact_graph_stage(world: &mut World) {
     let aligned_from_world =
         Affine3A::from_mat4(glam::Mat4::from_cols_array(&gravity.aligned_from_world));
     let voxel_size = map.0.tsdf.voxel_size;
+    let precise_depth = world
+        .get_resource::<PanopticSurface>()
+        .is_some_and(|s| s.precise_depth.is_some());
     entities.extend(spawn_counters(world, aligned_from_world, &entities));
     let aligned: Vec<crate::geometry::TriMesh> = entities
         .iter()
@@ -108,7 +111,7 @@ fn contact_graph_stage(world: &mut World) {
         .collect();
     let built = build_contact_graph_with_surfaces(
         &graph_entities,
-        &ContactGraphParams::for_voxel(voxel_size),
+        &ContactGraphParams::for_voxel(voxel_size, precise_depth),
     );
     let graph = built.graph;
     let by_id: HashMap<String, Entity> = entities

@@ -8,7 +8,7 @@ use bevy::prelude::*;
 use crate::components::{Panoptic, SceneEntity, SegmentMesh, SightedOutline};
 use crate::error::InputError;
 use crate::map::free_space::FreeSpaceParams;
-use crate::panoptic::sighted::{SightedParams, sighted_outlines};
+use crate::panoptic::sighted::{SightedParams, precise_depth, sighted_outlines};
 use crate::panoptic::{
     ClassIds, ExtractionParams, MapperParams, PanopticEntity, PanopticMapper, carve_objects,
     extract_entities, map_sequence,
@@ -54,6 +54,9 @@ pub struct PanopticMap(pub PanopticMapper);
 pub struct PanopticSurface {
     pub entities: Vec<PanopticEntity>,
     pub voxels: Vec<(Vec3, u32)>,
+    /// The depth's noise as a multiple of the Kinect curve when it is precise enough to measure
+    /// the objects' outlines (`panoptic::sighted`), `None` otherwise.
+    pub precise_depth: Option<f32>,
 }
 
 fn choose_segmenter(
@@ -130,13 +133,24 @@ fn spawn_entities(
             }
         }
     }
-    let params = FreeSpaceParams::for_voxel(map.0.tsdf.voxel_size);
+    let sighted = SightedParams::for_voxel(map.0.tsdf.voxel_size);
+    let precise = match precise_depth(&sequence.0, &sighted) {
+        Ok(precise) => precise,
+        Err(e) => {
+            error.0 = Some(e.into());
+            return;
+        }
+    };
+    // Depth far more precise than a Kinect's is carved by its own noise, not the Kinect curve's.
+    let params = FreeSpaceParams {
+        noise_scale: precise.unwrap_or(1.0),
+        ..FreeSpaceParams::for_voxel(map.0.tsdf.voxel_size)
+    };
     if let Err(e) = carve_objects(&mut scene.entities, &sequence.0, &map.0, &params) {
         error.0 = Some(e.into());
         return;
     }
-    let sighted = SightedParams::for_voxel(map.0.tsdf.voxel_size);
-    let outlines = match sighted_outlines(&scene.entities, &sequence.0, &map.0, &sighted) {
+    let outlines = match sighted_outlines(&scene.entities, &sequence.0, &map.0, precise, &sighted) {
         Ok(outlines) => outlines,
         Err(e) => {
             error.0 = Some(e.into());
@@ -158,6 +172,7 @@ fn spawn_entities(
     commands.insert_resource(PanopticSurface {
         entities: scene.entities,
         voxels: scene.surface_voxels,
+        precise_depth: precise,
     });
 }
 
