@@ -1,5 +1,5 @@
 //! What precise depth frames measured of the entity's outline (`panoptic::sighted`): the points
-//! on its mask's boundary, one list per frame that saw it, world frame. Empty for layout and
+//! on its silhouette, one list per frame that saw it, world frame. Empty for layout and
 //! whenever the depth is too noisy to place an edge within a voxel.
 
 use bevy::prelude::*;

@@ -69,6 +69,9 @@ pub struct ContactGraphParams {
     /// or the floor is the layout's (`sighted_extent`): a quarter voxel, well above the noise of
     /// the depth that measures outlines at all, below the gap of an object standing off a wall.
     pub sighted_layout_band: f32,
+    /// A box side may reach this far (metres) past the outline the frames measured before it
+    /// is moved in to it (`sighted_extent`): half a voxel, the mesh's own precision.
+    pub sighted_slack: f32,
 }
 
 /// Footprint ends counted in bins `bin` metres wide are cut where they hold under `share` of the
@@ -101,6 +104,7 @@ impl ContactGraphParams {
                 share: 0.2,
             }),
             sighted_layout_band: voxel / 4.0,
+            sighted_slack: voxel / 2.0,
             ..Self::default()
         }
     }
@@ -119,6 +123,7 @@ impl Default for ContactGraphParams {
             support_band: 0.01,
             sparse_ends: None,
             sighted_layout_band: 0.005,
+            sighted_slack: 0.01,
         }
     }
 }
@@ -280,6 +285,7 @@ pub fn build_contact_graph_with_surfaces(
                 entities[*i].sighted,
                 &claiming,
                 params.sighted_layout_band,
+                params.sighted_slack,
             );
         }
     }

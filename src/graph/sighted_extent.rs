@@ -1,9 +1,10 @@
-//! An object's box grown to what the frames measured of its outline (`panoptic::sighted`): the
+//! An object's box fitted to what the frames measured of its outline (`panoptic::sighted`): the
 //! map's mesh ends at its last voxel column, up to a voxel short of a top's unseen back edge,
-//! which decides whether the object touches the wall behind it. Each side of the footprint
-//! reaches as far as `MIN_FRAMES` frames measured it: one frame's stray boundary pixel does not
-//! move it. Boxes only grow, and only across the floor: heights come from the mesh, whose
-//! horizontal surfaces sit at their interpolated crossings anyway.
+//! which decides whether the object touches the wall behind it, and a stray vertex of run-on
+//! over a gap can stick out a voxel past a side. Each side of the footprint goes to the extent
+//! `MIN_FRAMES` frames measured it (one frame's stray boundary pixel does not move it): out to
+//! it, or in to it where the mesh reaches more than `slack` past it. Only across the floor:
+//! heights come from the mesh, whose horizontal surfaces sit at their interpolated crossings.
 
 use glam::Vec3;
 
@@ -12,8 +13,9 @@ use crate::geometry::{GravityBox, Plane};
 /// A side of the footprint moves out to the extent this many frames reached at least.
 pub const MIN_FRAMES: usize = 3;
 
-/// `bbox` (z up) with its footprint grown to the extent that `MIN_FRAMES` of `frames` (each
-/// frame's outline points, same frame as the box) reached on each side; points outside the
+/// `bbox` (z up) with each side of its footprint moved to the extent that `MIN_FRAMES` of
+/// `frames` (each frame's outline points, same frame as the box) reached: out to it, or in to
+/// `slack` metres past it where the box reaches further than that; points outside the
 /// box's height (what stands on it, the floor under it) or within `band` metres of a `layout`
 /// plane (the wall behind, which a frame's labels bleed onto) are left out.
 pub fn reach_sighted(
@@ -21,6 +23,7 @@ pub fn reach_sighted(
     frames: &[Vec<Vec3>],
     layout: &[Plane],
     band: f32,
+    slack: f32,
 ) -> GravityBox {
     if frames.len() < MIN_FRAMES {
         return *bbox;
@@ -51,7 +54,8 @@ pub fn reach_sighted(
             return half;
         }
         all.sort_by(|a, b| b.total_cmp(a));
-        all[MIN_FRAMES - 1].max(half)
+        let measured = all[MIN_FRAMES - 1];
+        half.min(measured + slack).max(measured)
     };
     let [px, nx, py, ny] = &mut reaches;
     let (px, nx) = (extent(px, half.x), extent(nx, half.x));
@@ -95,7 +99,7 @@ mod tests {
         // Five frames saw the back edge 1.2 cm past the box; one stray frame 5 cm past.
         let mut frames = vec![back_edge(&b, 0.302); 5];
         frames.push(back_edge(&b, 0.34));
-        let grown = reach_sighted(&b, &frames, &[], 0.005);
+        let grown = reach_sighted(&b, &frames, &[], 0.005, 0.01);
         assert!(
             (grown.size.y - 0.592).abs() < 1e-4,
             "depth {}",
@@ -115,17 +119,17 @@ mod tests {
     fn too_few_frames_points_inside_or_above_change_nothing() {
         let b = cabinet();
         assert_eq!(
-            reach_sighted(&b, &vec![back_edge(&b, 0.31); 2], &[], 0.005),
+            reach_sighted(&b, &vec![back_edge(&b, 0.31); 2], &[], 0.005, 0.01),
             b
         );
         assert_eq!(
-            reach_sighted(&b, &vec![back_edge(&b, 0.2); 5], &[], 0.005),
+            reach_sighted(&b, &vec![back_edge(&b, 0.28); 5], &[], 0.005, 0.01),
             b
         );
         let above: Vec<Vec3> = back_edge(&b, 0.31)
             .into_iter()
             .map(|p| p + Vec3::Z * 0.1)
             .collect();
-        assert_eq!(reach_sighted(&b, &vec![above; 5], &[], 0.005), b);
+        assert_eq!(reach_sighted(&b, &vec![above; 5], &[], 0.005, 0.01), b);
     }
 }

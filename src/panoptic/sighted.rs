@@ -3,8 +3,8 @@
 //! at best, and the labels blur there (the wall behind claims the top's last voxels): with 2 cm
 //! voxels, cabinets 0.8, 1.8 and 3.8 cm off their wall all came out 2.9 cm off. Depth precise
 //! to well under a millimetre (rendered depth, structured-light scanners at close range) places
-//! the edge itself: the points on each object's mask boundary, frame by frame, go to the contact
-//! graph, which grows the object's box to the extent several frames measured
+//! the edge itself: the points on each object's silhouette, frame by frame, go to the contact
+//! graph, which fits the object's box to the extent several frames measured
 //! (`graph::sighted_extent`). Noisier depth would grow boxes by its noise, so only points whose
 //! estimated noise is a small fraction of a voxel count; a Kinect's contribute nothing.
 
@@ -34,6 +34,9 @@ pub struct SightedParams {
     /// A point counts for an object within about this distance (metres) of its mesh: a few
     /// pixels of a mask's boundary fall on the surface behind it.
     pub near_mesh: f32,
+    /// A neighbouring pixel this much deeper (metres) shows what lies behind the object: the
+    /// object's silhouette.
+    pub silhouette_step: f32,
     /// Frames sampled to estimate the sequence's depth noise.
     pub noise_frames: usize,
 }
@@ -46,6 +49,7 @@ impl SightedParams {
             max_sigma: voxel / 20.0,
             stride: 2,
             near_mesh: 2.0 * voxel,
+            silhouette_step: voxel / 4.0,
             noise_frames: 8,
         }
     }
@@ -78,7 +82,7 @@ pub fn precise_depth(
 }
 
 /// Per entity of `entities` (layout and entities no frame saw precisely get none): for each
-/// frame that saw it, the points on its mask's boundary there, world frame; none unless the
+/// frame that saw it, the points on its silhouette there, world frame; none unless the
 /// depth is precise, with a noise of `noise_scale` times `axial_sigma` (`precise_depth`).
 /// `entities` are the ones extracted from `mapper`'s map, whose frames are `sequence`'s.
 pub fn sighted_outlines(
@@ -144,10 +148,19 @@ pub fn sighted_outlines(
                     if scale * axial_sigma(d) > params.max_sigma {
                         continue;
                     }
-                    let inside = [(s, 0), (-s, 0), (0, s), (0, -s)]
-                        .iter()
-                        .all(|&(du, dv)| entity_at(u + du, v + dv) == e);
-                    if inside {
+                    // On the silhouette: a neighbour shows what lies behind the object, or
+                    // nothing. Not where the image ends or something in front hides it: there
+                    // the mask ends short of the object.
+                    let silhouette = [(s, 0), (-s, 0), (0, s), (0, -s)].iter().any(|&(du, dv)| {
+                        let (x, y) = (u + du, v + dv);
+                        if x < 0 || y < 0 || x >= w || y >= h {
+                            return false;
+                        }
+                        let behind = depth[(y * w + x) as usize];
+                        behind <= 0.0
+                            || (entity_at(x, y) != e && behind > d + params.silhouette_step)
+                    });
+                    if !silhouette {
                         continue;
                     }
                     let p =
