@@ -83,22 +83,33 @@ mod tests {
         }
     }
 
-    /// Points along the box's local +y side at `reach` metres from its centre, top height.
-    fn back_edge(b: &GravityBox, reach: f32) -> Vec<Vec3> {
-        (0..20)
-            .map(|k| {
-                let local = Vec3::new(-0.35 + 0.035 * k as f32, reach, 0.43);
-                b.world_from_box().transform_point3(local)
-            })
+    /// A frame's silhouette of the top: a rectangle at top height reaching `right` along the
+    /// box's +x and `back` along its +y from the centre, and as far as the box on the other
+    /// sides.
+    fn top_outline(b: &GravityBox, right: f32, back: f32) -> Vec<Vec3> {
+        let (left, front) = (-0.5 * b.size.x, -0.5 * b.size.y);
+        let along =
+            |from: f32, to: f32| (0..=10).map(move |k| from + (to - from) * k as f32 / 10.0);
+        along(left, right)
+            .flat_map(|x| [Vec3::new(x, front, 0.43), Vec3::new(x, back, 0.43)])
+            .chain(
+                along(front, back)
+                    .flat_map(|y| [Vec3::new(left, y, 0.43), Vec3::new(right, y, 0.43)]),
+            )
+            .map(|local| b.world_from_box().transform_point3(local))
             .collect()
+    }
+
+    fn side(g: &GravityBox, local: Vec3) -> Vec3 {
+        g.world_from_box().transform_point3(local * 0.5 * g.size)
     }
 
     #[test]
     fn the_back_grows_to_what_three_frames_measured_and_no_further() {
         let b = cabinet();
         // Five frames saw the back edge 1.2 cm past the box; one stray frame 5 cm past.
-        let mut frames = vec![back_edge(&b, 0.302); 5];
-        frames.push(back_edge(&b, 0.34));
+        let mut frames = vec![top_outline(&b, 0.4, 0.302); 5];
+        frames.push(top_outline(&b, 0.4, 0.34));
         let grown = reach_sighted(&b, &frames, &[], 0.005, 0.01);
         assert!(
             (grown.size.y - 0.592).abs() < 1e-4,
@@ -106,30 +117,39 @@ mod tests {
             grown.size.y
         );
         assert!((grown.size.x - 0.8).abs() < 1e-5 && (grown.size.z - 0.88).abs() < 1e-6);
-        // The front stayed where it was: the centre moved back by half the growth.
-        let front = |g: &GravityBox| {
-            g.world_from_box()
-                .transform_point3(Vec3::new(0.0, -0.5 * g.size.y, 0.0))
-        };
-        assert!(front(&grown).distance(front(&b)) < 1e-4);
+        // The front stayed where it was.
+        assert!(side(&grown, -Vec3::Y).distance(side(&b, -Vec3::Y)) < 1e-4);
         assert!((grown.yaw - b.yaw).abs() < 1e-6);
     }
 
     #[test]
-    fn too_few_frames_points_inside_or_above_change_nothing() {
+    fn a_side_the_mesh_ran_on_past_moves_in_to_the_slack_past_the_outline() {
         let b = cabinet();
+        // The frames saw the right side 3 cm inside the box: it moves in to 1 cm past that.
+        let moved = reach_sighted(&b, &vec![top_outline(&b, 0.37, 0.29); 4], &[], 0.005, 0.01);
+        assert!((moved.size.x - 0.78).abs() < 1e-4, "width {}", moved.size.x);
+        assert!(side(&moved, -Vec3::X).distance(side(&b, -Vec3::X)) < 1e-4);
+        // Within the slack it stays.
+        let kept = reach_sighted(&b, &vec![top_outline(&b, 0.395, 0.29); 4], &[], 0.005, 0.01);
+        assert!((kept.size.x - 0.8).abs() < 1e-5, "width {}", kept.size.x);
+    }
+
+    #[test]
+    fn too_few_frames_and_points_above_or_on_the_layout_change_nothing() {
+        let b = cabinet();
+        let far = top_outline(&b, 0.45, 0.35);
         assert_eq!(
-            reach_sighted(&b, &vec![back_edge(&b, 0.31); 2], &[], 0.005, 0.01),
+            reach_sighted(&b, &vec![far.clone(); 2], &[], 0.005, 0.01),
             b
         );
-        assert_eq!(
-            reach_sighted(&b, &vec![back_edge(&b, 0.28); 5], &[], 0.005, 0.01),
-            b
-        );
-        let above: Vec<Vec3> = back_edge(&b, 0.31)
-            .into_iter()
-            .map(|p| p + Vec3::Z * 0.1)
-            .collect();
+        let above: Vec<Vec3> = far.iter().map(|p| *p + Vec3::Z * 0.1).collect();
         assert_eq!(reach_sighted(&b, &vec![above; 5], &[], 0.005, 0.01), b);
+        // The wall 6 cm behind the box claims what was measured on it.
+        let wall_point = side(&b, Vec3::Y) + b.world_from_box().transform_vector3(Vec3::Y * 0.06);
+        let wall =
+            Plane::from_point_normal(wall_point, -b.world_from_box().transform_vector3(Vec3::Y));
+        let onto_wall = top_outline(&b, 0.4, 0.35);
+        let grown = reach_sighted(&b, &vec![onto_wall; 5], &[wall], 0.005, 0.01);
+        assert!((grown.size.y - 0.58).abs() < 1e-4, "depth {}", grown.size.y);
     }
 }
