@@ -41,6 +41,8 @@ pub struct ContactGraphParams {
     /// triangles larger than this (a CAD table top is two triangles).
     pub sample_spacing: f32,
     /// Grid cell (metres) of the clustering that keeps an object's largest connected piece.
+    /// A map's: two voxels, at least 4 cm (in a 1 cm map a monitor's neck, a voxel or two
+    /// thick, parted its stand from its screen on a 2 cm grid, and its box lost the stand).
     pub cluster_cell: f32,
     /// An object's box turns to the room's axes when that makes its footprint at most this
     /// factor larger than the minimal one: a box fitted to a partial, noisy view picks up a
@@ -72,6 +74,10 @@ pub struct ContactGraphParams {
     /// A box side may reach this far (metres) past the outline the frames measured before it
     /// is moved in to it (`sighted_extent`): half a voxel, the mesh's own precision.
     pub sighted_slack: f32,
+    /// ...by at most this much (metres): a voxel, the mesh's own precision. A mesh reaching
+    /// further past every silhouette is surface that no silhouette shows (something lying flat
+    /// on its support, seen only against it), not run-on.
+    pub sighted_max_shrink: f32,
 }
 
 /// Footprint ends counted in bins `bin` metres wide are cut where they hold under `share` of the
@@ -90,7 +96,7 @@ impl ContactGraphParams {
             // A map's mesh has a vertex every voxel or so: sampling inside its triangles would
             // multiply the points (and the stage's time) for no new surface.
             sample_spacing: (2.0 * voxel).max(Self::default().sample_spacing),
-            cluster_cell: 2.0 * voxel,
+            cluster_cell: (2.0 * voxel).max(0.04),
             proximal_margins: if precise {
                 ProximalMargins::EXACT
             } else {
@@ -105,6 +111,7 @@ impl ContactGraphParams {
             }),
             sighted_layout_band: voxel / 4.0,
             sighted_slack: voxel / 2.0,
+            sighted_max_shrink: voxel,
             ..Self::default()
         }
     }
@@ -124,6 +131,7 @@ impl Default for ContactGraphParams {
             sparse_ends: None,
             sighted_layout_band: 0.005,
             sighted_slack: 0.01,
+            sighted_max_shrink: 0.02,
         }
     }
 }
@@ -286,6 +294,7 @@ pub fn build_contact_graph_with_surfaces(
                 &claiming,
                 params.sighted_layout_band,
                 params.sighted_slack,
+                params.sighted_max_shrink,
             );
         }
     }

@@ -3,8 +3,11 @@
 //! which decides whether the object touches the wall behind it, and a stray vertex of run-on
 //! over a gap can stick out a voxel past a side. Each side of the footprint goes to the extent
 //! `MIN_FRAMES` frames measured it (one frame's stray boundary pixel does not move it): out to
-//! it, or in to it where the mesh reaches more than `slack` past it. Only across the floor:
-//! heights come from the mesh, whose horizontal surfaces sit at their interpolated crossings.
+//! it, or in towards it where the mesh reaches more than `slack` past it, by at most
+//! `max_shrink`: the mesh is within a voxel of the surface, and what reaches further than the
+//! silhouettes is surface no silhouette shows (something lying flat on its support, seen only
+//! against it). Only across the floor: heights come from the mesh, whose horizontal surfaces
+//! sit at their interpolated crossings.
 
 use glam::Vec3;
 
@@ -15,15 +18,16 @@ pub const MIN_FRAMES: usize = 3;
 
 /// `bbox` (z up) with each side of its footprint moved to the extent that `MIN_FRAMES` of
 /// `frames` (each frame's outline points, same frame as the box) reached: out to it, or in to
-/// `slack` metres past it where the box reaches further than that; points outside the
-/// box's height (what stands on it, the floor under it) or within `band` metres of a `layout`
-/// plane (the wall behind, which a frame's labels bleed onto) are left out.
+/// `slack` metres past it (by at most `max_shrink`) where the box reaches further; points
+/// outside the box's height (what stands on it, the floor under it) or within `band` metres of
+/// a `layout` plane (the wall behind, which a frame's labels bleed onto) are left out.
 pub fn reach_sighted(
     bbox: &GravityBox,
     frames: &[Vec<Vec3>],
     layout: &[Plane],
     band: f32,
     slack: f32,
+    max_shrink: f32,
 ) -> GravityBox {
     if frames.len() < MIN_FRAMES {
         return *bbox;
@@ -55,7 +59,8 @@ pub fn reach_sighted(
         }
         all.sort_by(|a, b| b.total_cmp(a));
         let measured = all[MIN_FRAMES - 1];
-        half.min(measured + slack).max(measured)
+        half.min((measured + slack).max(half - max_shrink))
+            .max(measured)
     };
     let [px, nx, py, ny] = &mut reaches;
     let (px, nx) = (extent(px, half.x), extent(nx, half.x));
@@ -110,7 +115,7 @@ mod tests {
         // Five frames saw the back edge 1.2 cm past the box; one stray frame 5 cm past.
         let mut frames = vec![top_outline(&b, 0.4, 0.302); 5];
         frames.push(top_outline(&b, 0.4, 0.34));
-        let grown = reach_sighted(&b, &frames, &[], 0.005, 0.01);
+        let grown = reach_sighted(&b, &frames, &[], 0.005, 0.01, 0.02);
         assert!(
             (grown.size.y - 0.592).abs() < 1e-4,
             "depth {}",
@@ -126,11 +131,40 @@ mod tests {
     fn a_side_the_mesh_ran_on_past_moves_in_to_the_slack_past_the_outline() {
         let b = cabinet();
         // The frames saw the right side 3 cm inside the box: it moves in to 1 cm past that.
-        let moved = reach_sighted(&b, &vec![top_outline(&b, 0.37, 0.29); 4], &[], 0.005, 0.01);
+        let moved = reach_sighted(
+            &b,
+            &vec![top_outline(&b, 0.37, 0.29); 4],
+            &[],
+            0.005,
+            0.01,
+            0.02,
+        );
         assert!((moved.size.x - 0.78).abs() < 1e-4, "width {}", moved.size.x);
         assert!(side(&moved, -Vec3::X).distance(side(&b, -Vec3::X)) < 1e-4);
+        // Frames that miss most of a side (surface no silhouette shows) move it in by no more
+        // than the limit.
+        let limited = reach_sighted(
+            &b,
+            &vec![top_outline(&b, 0.2, 0.29); 4],
+            &[],
+            0.005,
+            0.01,
+            0.02,
+        );
+        assert!(
+            (limited.size.x - 0.78).abs() < 1e-4,
+            "width {}",
+            limited.size.x
+        );
         // Within the slack it stays.
-        let kept = reach_sighted(&b, &vec![top_outline(&b, 0.395, 0.29); 4], &[], 0.005, 0.01);
+        let kept = reach_sighted(
+            &b,
+            &vec![top_outline(&b, 0.395, 0.29); 4],
+            &[],
+            0.005,
+            0.01,
+            0.02,
+        );
         assert!((kept.size.x - 0.8).abs() < 1e-5, "width {}", kept.size.x);
     }
 
@@ -139,17 +173,20 @@ mod tests {
         let b = cabinet();
         let far = top_outline(&b, 0.45, 0.35);
         assert_eq!(
-            reach_sighted(&b, &vec![far.clone(); 2], &[], 0.005, 0.01),
+            reach_sighted(&b, &vec![far.clone(); 2], &[], 0.005, 0.01, 0.02),
             b
         );
         let above: Vec<Vec3> = far.iter().map(|p| *p + Vec3::Z * 0.1).collect();
-        assert_eq!(reach_sighted(&b, &vec![above; 5], &[], 0.005, 0.01), b);
+        assert_eq!(
+            reach_sighted(&b, &vec![above; 5], &[], 0.005, 0.01, 0.02),
+            b
+        );
         // The wall 6 cm behind the box claims what was measured on it.
         let wall_point = side(&b, Vec3::Y) + b.world_from_box().transform_vector3(Vec3::Y * 0.06);
         let wall =
             Plane::from_point_normal(wall_point, -b.world_from_box().transform_vector3(Vec3::Y));
         let onto_wall = top_outline(&b, 0.4, 0.35);
-        let grown = reach_sighted(&b, &vec![onto_wall; 5], &[wall], 0.005, 0.01);
+        let grown = reach_sighted(&b, &vec![onto_wall; 5], &[wall], 0.005, 0.01, 0.02);
         assert!((grown.size.y - 0.58).abs() < 1e-4, "depth {}", grown.size.y);
     }
 }

@@ -107,35 +107,27 @@ fn the_kitchens_contact_graph_has_every_support_right() {
     assert!(contact.obb_map50 >= 0.8, "box mAP {:.3}", contact.obb_map50);
 }
 
-/// Every scene rendered without noise and mapped with ground-truth segmentation (every second
-/// frame) in 1 cm voxels: every entity is found, every support parent is right, and boxes reach
-/// issue 4's bar. In 1 cm voxels the kitchen's and the living room's graphs are the scenes' own;
-/// a 2 cm map cannot tell furniture touching a wall from furniture 3 to 7 cm off it (3, 0, 0 and
-/// 2 proximal edits there, in the order below). What is left, measured on this run: the office's
-/// cabinet 3.8 cm off its wall is seen 1.5 cm off it (1 edit); in the bedroom furniture 3 to
-/// 3.7 cm off its wall is seen 1.5 cm off it (the side faces of what is never seen from behind
-/// continue into the gap, seen only at grazing angles) and a cup half hidden behind the monitor
-/// is seen 3.7 cm from it (3 edits). These are the bounds asserted; the goal is none.
+/// Issue 4's bar: every scene rendered without noise and mapped with ground-truth segmentation
+/// (every second frame, 2 cm voxels, the default) gets the scene's own contact graph, every
+/// entity, support parent and proximal pair, and boxes at mAP@0.5 >= 0.8. The map alone cannot
+/// do it: its boxes end at a voxel column, and furniture 0.8, 1.8 and 3.8 cm off a wall all
+/// measured 2.9 cm off (3, 0, 0 and 2 proximal edits before the frames' outlines, README).
+/// Noise-free depth is measured as such (`map::depth_precision`), so the objects' boxes are
+/// fitted to their silhouettes in the frames (`panoptic::sighted`).
 #[test]
-fn clean_renders_in_1_cm_voxels_get_every_node_and_support_right() {
+fn clean_renders_get_the_scenes_own_contact_graph() {
     let mut failures = Vec::new();
-    for (name, measured_proximal_edits) in [
-        ("kitchen", 0),
-        ("office", 1),
-        ("living_room", 0),
-        ("bedroom", 3),
-    ] {
+    for name in ["kitchen", "office", "living_room", "bedroom"] {
         let dir = tempfile::tempdir().expect("tempdir");
-        let (seq, out) = common::render_and_map_every_second_frame(name, dir.path(), true, 0.01);
+        let (seq, out) = common::render_and_map_every_second_frame(name, dir.path(), true, 0.02);
         let eval = evaluate_reconstruction(&out, &seq).expect("eval");
         let contact = eval.contact_graph.expect("contact-graph metrics");
         eprintln!(
             "{name}: PQ {:.3}, obb mAP {:.3}, GED {:?}, unseen {:?}",
             eval.panoptic.pq, contact.obb_map50, contact.ged, contact.unseen_truth
         );
-        let parts = contact.ged.parts;
-        if parts.nodes != 0 || parts.support != 0 || parts.proximal > measured_proximal_edits {
-            failures.push(format!("{name}: edits {parts:?}"));
+        if contact.ged.cost != 0 {
+            failures.push(format!("{name}: edits {:?}", contact.ged.parts));
         }
         if contact.obb_map50 < 0.8 {
             failures.push(format!("{name}: box mAP {:.3}", contact.obb_map50));
