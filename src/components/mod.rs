@@ -2,12 +2,11 @@
 //!
 //! A scene entity (a piece of layout or an object) carries its `SceneEntity` id and `Panoptic`
 //! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, the
-//! `SightedOutline` precise frames measured of it, the
-//! `ObservedSurface` the contact graph kept of it, once replaced its `CadModel`, and in the
-//! kinematic tree its `LinkBody`; each moving part of its model is a child entity with a
-//! `ModelPart`, a `LinkBody` and a `Joint`. Support is Bevy's `ChildOf`: the parent supports the child, and the
-//! child's `Joint` says how it may move relative to it. `ProximalTo` lists its proximal
-//! neighbours.
+//! `SightedOutline` precise frames measured of it, the `ObservedSurface` the contact graph kept
+//! of it, once replaced its `CadModel`, and in the kinematic tree its `LinkBody`; each moving
+//! part of its model is a child entity with a `ModelPart`, a `LinkBody` and a `Joint`. Support
+//! is Bevy's `ChildOf`: the parent supports the child, and the child's `Joint` says how it may
+//! move relative to it. `ProximalTo` lists its proximal neighbours.
 
 pub mod cad_model;
 pub mod joint;

@@ -51,11 +51,12 @@ pub struct ContactGraphParams {
     /// Boxes closer than this (metres) are proximal: `PROXIMAL_MARGIN` for exact meshes. A map's
     /// object boxes grow by about a voxel where surfaces bleed past silhouettes, so two objects
     /// need a voxel less (`for_voxel`), unless precise depth carved the bleeding and measured
-    /// the outlines (`panoptic::sighted`): then the boxes are as exact as the truth's. Against a wall (an exact plane, which claims the object
-    /// points on it, `layout_band`) the margin is the exact one: what the frames saw as the wall
-    /// is carved off the object's mesh (`panoptic::carve`), so its box ends at its last surface
-    /// vertex, within a voxel of its true face either way. With 2 cm voxels a 1.8 cm and a
-    /// 3.7 cm gap still look alike.
+    /// the outlines (`panoptic::sighted`): then the boxes are as exact as the truth's. Against a
+    /// wall (an exact plane, which claims the object points on it, `layout_band`) the margin is
+    /// the exact one: what the frames saw as the wall is carved off the object's mesh
+    /// (`panoptic::carve`), so its box ends at its last surface vertex, within a voxel of its
+    /// true face either way. With 2 cm voxels and noisy depth a 1.8 cm and a 3.7 cm gap still
+    /// look alike.
     pub proximal_margins: ProximalMargins,
     /// An object's surface points within this distance (metres) of a wall or the floor, facing
     /// the way that layout surface faces, are the layout's: segmentation bleeds an object's label

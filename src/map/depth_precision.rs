@@ -100,8 +100,8 @@ mod tests {
     fn depth_edges_and_holes_do_not_count() {
         let camera = Pinhole::KINECT;
         let w = camera.width as usize;
-        // A clean plane cut by a step every 7 columns and a hole every 5: the median ignores
-        // the edges.
+        // A clean plane cut by a step every 7 columns and a hole every 5: triples across them
+        // are left out.
         let depth: Vec<f32> = slanted_plane(&camera)
             .iter()
             .enumerate()
