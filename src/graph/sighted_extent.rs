@@ -109,6 +109,11 @@ mod tests {
         g.world_from_box().transform_point3(local * 0.5 * g.size)
     }
 
+    /// `reach_sighted` with a 2 cm map's band, slack and limit, `count` copies of one frame.
+    fn reach(b: &GravityBox, frame: Vec<Vec3>, count: usize, layout: &[Plane]) -> GravityBox {
+        reach_sighted(b, &vec![frame; count], layout, 0.005, 0.01, 0.02)
+    }
+
     #[test]
     fn the_back_grows_to_what_three_frames_measured_and_no_further() {
         let b = cabinet();
@@ -131,40 +136,19 @@ mod tests {
     fn a_side_the_mesh_ran_on_past_moves_in_to_the_slack_past_the_outline() {
         let b = cabinet();
         // The frames saw the right side 3 cm inside the box: it moves in to 1 cm past that.
-        let moved = reach_sighted(
-            &b,
-            &vec![top_outline(&b, 0.37, 0.29); 4],
-            &[],
-            0.005,
-            0.01,
-            0.02,
-        );
+        let moved = reach(&b, top_outline(&b, 0.37, 0.29), 4, &[]);
         assert!((moved.size.x - 0.78).abs() < 1e-4, "width {}", moved.size.x);
         assert!(side(&moved, -Vec3::X).distance(side(&b, -Vec3::X)) < 1e-4);
         // Frames that miss most of a side (surface no silhouette shows) move it in by no more
         // than the limit.
-        let limited = reach_sighted(
-            &b,
-            &vec![top_outline(&b, 0.2, 0.29); 4],
-            &[],
-            0.005,
-            0.01,
-            0.02,
-        );
+        let limited = reach(&b, top_outline(&b, 0.2, 0.29), 4, &[]);
         assert!(
             (limited.size.x - 0.78).abs() < 1e-4,
             "width {}",
             limited.size.x
         );
         // Within the slack it stays.
-        let kept = reach_sighted(
-            &b,
-            &vec![top_outline(&b, 0.395, 0.29); 4],
-            &[],
-            0.005,
-            0.01,
-            0.02,
-        );
+        let kept = reach(&b, top_outline(&b, 0.395, 0.29), 4, &[]);
         assert!((kept.size.x - 0.8).abs() < 1e-5, "width {}", kept.size.x);
     }
 
@@ -172,21 +156,15 @@ mod tests {
     fn too_few_frames_and_points_above_or_on_the_layout_change_nothing() {
         let b = cabinet();
         let far = top_outline(&b, 0.45, 0.35);
-        assert_eq!(
-            reach_sighted(&b, &vec![far.clone(); 2], &[], 0.005, 0.01, 0.02),
-            b
-        );
+        assert_eq!(reach(&b, far.clone(), 2, &[]), b);
         let above: Vec<Vec3> = far.iter().map(|p| *p + Vec3::Z * 0.1).collect();
-        assert_eq!(
-            reach_sighted(&b, &vec![above; 5], &[], 0.005, 0.01, 0.02),
-            b
-        );
+        assert_eq!(reach(&b, above, 5, &[]), b);
         // The wall 6 cm behind the box claims what was measured on it.
         let wall_point = side(&b, Vec3::Y) + b.world_from_box().transform_vector3(Vec3::Y * 0.06);
         let wall =
             Plane::from_point_normal(wall_point, -b.world_from_box().transform_vector3(Vec3::Y));
         let onto_wall = top_outline(&b, 0.4, 0.35);
-        let grown = reach_sighted(&b, &vec![onto_wall; 5], &[wall], 0.005, 0.01, 0.02);
+        let grown = reach(&b, onto_wall, 5, &[wall]);
         assert!((grown.size.y - 0.58).abs() < 1e-4, "depth {}", grown.size.y);
     }
 }
