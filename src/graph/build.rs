@@ -20,6 +20,9 @@ use crate::graph::{ContactGraph, GraphEdge, GraphNode};
 
 /// Layout boxes are slabs this thick behind their surface (as in the ground truth).
 pub const LAYOUT_THICKNESS: f32 = 0.1;
+/// A map's clustering cell is at least this (metres): in a 1 cm map a monitor's neck, a voxel
+/// or two thick, parted its stand from its screen on a 2 cm grid, and its box lost the stand.
+const MIN_MAP_CLUSTER_CELL_M: f32 = 0.04;
 
 /// One scene entity as the contact graph sees it.
 pub struct GraphEntity<'a> {
@@ -41,8 +44,7 @@ pub struct ContactGraphParams {
     /// triangles larger than this (a CAD table top is two triangles).
     pub sample_spacing: f32,
     /// Grid cell (metres) of the clustering that keeps an object's largest connected piece.
-    /// A map's: two voxels, at least 4 cm (in a 1 cm map a monitor's neck, a voxel or two
-    /// thick, parted its stand from its screen on a 2 cm grid, and its box lost the stand).
+    /// A map's: two voxels, at least `MIN_MAP_CLUSTER_CELL_M`.
     pub cluster_cell: f32,
     /// An object's box turns to the room's axes when that makes its footprint at most this
     /// factor larger than the minimal one: a box fitted to a partial, noisy view picks up a
@@ -97,7 +99,7 @@ impl ContactGraphParams {
             // A map's mesh has a vertex every voxel or so: sampling inside its triangles would
             // multiply the points (and the stage's time) for no new surface.
             sample_spacing: (2.0 * voxel).max(Self::default().sample_spacing),
-            cluster_cell: (2.0 * voxel).max(0.04),
+            cluster_cell: (2.0 * voxel).max(MIN_MAP_CLUSTER_CELL_M),
             proximal_margins: if precise {
                 ProximalMargins::EXACT
             } else {
