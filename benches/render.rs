@@ -73,6 +73,7 @@ fn whole_sequence(c: &mut Criterion) {
                     frames: Some(300),
                     no_noise: false,
                     progress: false,
+                    ..Default::default()
                 },
             )
             .expect("render")

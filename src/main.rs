@@ -36,6 +36,10 @@ enum Command {
         /// Turn every noise model off.
         #[arg(long)]
         no_noise: bool,
+        /// Replace an earlier output of another iscene command at --out (a folder iscene did
+        /// not write is never replaced).
+        #[arg(long)]
+        force: bool,
     },
     /// Reconstruct a scene from a specification (rendered first), a sequence folder or a TUM folder.
     Reconstruct(ReconstructArgs),
@@ -54,6 +58,10 @@ enum Command {
         task: PathBuf,
         #[arg(long)]
         out: PathBuf,
+        /// Replace an earlier output of another iscene command at --out (a folder iscene did
+        /// not write is never replaced).
+        #[arg(long)]
+        force: bool,
     },
     /// Look at a scene folder (a reconstruction, or a rendered sequence's gt/) in a window, or
     /// render it off screen into a PNG (built with `--features viewer`).
@@ -139,6 +147,10 @@ struct ReconstructArgs {
     /// and ICP over yaw, floor position and width and depth scales (Sivananda et al.).
     #[arg(long, value_enum, default_value_t = Align::Lm)]
     align: Align,
+    /// Replace an earlier output of another iscene command at --out (a folder iscene did not
+    /// write is never replaced).
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -323,6 +335,7 @@ fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<Pat
         cad: None,
         align: Default::default(),
         progress,
+        force: false,
     })?;
     eprintln!(
         "reconstructed {} into {}; replaying it",
@@ -365,6 +378,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
             out,
             frames,
             no_noise,
+            force,
         }) => {
             let parsed = SceneSpec::load(&spec)?;
             let s = render_sequence(
@@ -375,6 +389,8 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     frames,
                     no_noise,
                     progress: interactive,
+                    force,
+                    fingerprint: None,
                 },
             )?;
             println!(
@@ -388,11 +404,17 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 s.frames as f64 / s.seconds.max(1e-9)
             );
         }
-        Some(Command::Simulate { dir, task, out }) => {
+        Some(Command::Simulate {
+            dir,
+            task,
+            out,
+            force,
+        }) => {
             let summary = iscene::simulation::simulate(&iscene::simulation::SimulateOptions {
                 dir,
                 task,
                 out,
+                force,
             })?;
             if let Some(plan) = &summary.plan {
                 println!("plan ({} steps): {}", plan.len(), plan.join(" "));
@@ -425,6 +447,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
         Some(Command::Cad {
             command: CadCommand::Generate { into },
         }) => {
+            iscene::io::output_folder::check_database_folder(&into, None)?;
             let n = iscene::cad::export::write_library(&into)?;
             println!(
                 "wrote {n} parametric models (glb + json) and index.json into {}",
@@ -440,6 +463,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     scale,
                 },
         }) => {
+            iscene::io::output_folder::check_database_folder(&into, Some(&path))?;
             let summary = match format {
                 ImportFormat::Sh3d if scale.is_some() => {
                     return Err(iscene::error::InputError::invalid(
@@ -568,6 +592,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     estimate_gravity: false,
                     cad: None,
                     align: Align::Lm,
+                    force: false,
                 },
             };
             let out = args.out.unwrap_or_else(|| {
@@ -602,6 +627,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     Align::Icp => AlignMethod::Icp,
                 },
                 progress: interactive,
+                force: args.force,
             };
             let r = reconstruct(&options)?;
             println!(

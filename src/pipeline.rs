@@ -15,6 +15,7 @@ use crate::export::{write_augmented, write_occupancy, write_tree_exports};
 use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
 use crate::io::atomic::StagedDir;
+use crate::io::output_folder::{MARKER, OutputCommand, OutputTarget};
 use crate::io::panoptic_dir::{PanopticIndex, write_panoptic};
 use crate::io::sequence::SequenceFormat;
 use crate::io::write_sequence::write_text;
@@ -56,6 +57,8 @@ pub struct ReconstructOptions {
     /// How CAD candidates are chosen and aligned.
     pub align: AlignMethod,
     pub progress: bool,
+    /// Replace an earlier output of another iscene command at `out` (`--force`).
+    pub force: bool,
 }
 
 /// What a reconstruction did, for the summary the CLI prints.
@@ -125,6 +128,11 @@ fn spec_fingerprint(text: &str) -> String {
     digest.iter().take(8).map(|b| format!("{b:02x}")).collect()
 }
 
+/// Where a specification given to `reconstruct --out OUT` is rendered: `OUT.sequence`.
+pub fn rendered_input_dir(out: &Path) -> PathBuf {
+    PathBuf::from(format!("{}.sequence", out.display()))
+}
+
 /// Renders a specification next to the output folder (`OUT.sequence`), reusing an earlier
 /// rendering of the same specification.
 fn render_input(
@@ -135,10 +143,18 @@ fn render_input(
     timings: &mut Vec<(String, f64)>,
 ) -> Result<PathBuf, IsceneError> {
     let spec = SceneSpec::parse(spec_text, spec_path)?;
-    let sequence_dir = PathBuf::from(format!("{}.sequence", out.display()));
+    let sequence_dir = rendered_input_dir(out);
     let stamp = sequence_dir.join("gt").join("spec.fingerprint");
     let fingerprint = spec_fingerprint(spec_text);
-    if std::fs::read_to_string(&stamp).is_ok_and(|s| s.trim() == fingerprint) {
+    let ours = OutputTarget::claim(
+        "--out",
+        &sequence_dir,
+        OutputCommand::Render,
+        &[spec_path],
+        false,
+    )
+    .is_ok_and(|_| sequence_dir.join(MARKER).is_file());
+    if ours && std::fs::read_to_string(&stamp).is_ok_and(|s| s.trim() == fingerprint) {
         return Ok(sequence_dir);
     }
     let start = Instant::now();
@@ -150,12 +166,23 @@ fn render_input(
             frames: None,
             no_noise: false,
             progress,
+            force: false,
+            fingerprint: Some(fingerprint),
         },
-    )?;
-    write_text(
-        &summary.dir.join("gt").join("spec.fingerprint"),
-        &fingerprint,
-    )?;
+    )
+    .map_err(|e| match e {
+        IsceneError::Input(InputError::Invalid { path, problem }) if path == sequence_dir => {
+            InputError::invalid(
+                path,
+                format!(
+                    "(where the specification is rendered for --out {}): {problem}",
+                    out.display()
+                ),
+            )
+            .into()
+        }
+        e => e,
+    })?;
     timings.push(("render".into(), start.elapsed().as_secs_f64()));
     Ok(summary.dir)
 }
@@ -168,6 +195,20 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         )
         .into());
     }
+    let target = OutputTarget::claim(
+        "--out",
+        &options.out,
+        OutputCommand::Reconstruct,
+        &[
+            options.input.as_deref(),
+            options.cad.as_deref(),
+            options.models.as_deref(),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>(),
+        options.force,
+    )?;
     // Read before rendering or mapping, so a broken database fails at once.
     let cad_library = options
         .cad
@@ -252,7 +293,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     );
 
     let write_start = Instant::now();
-    let staged = StagedDir::new(&options.out)?;
+    let staged = StagedDir::new(&target)?;
     let mut outputs = vec!["report.json".to_string()];
     let mut panoptic = None;
     if let (Some(map), Some(surface)) = (

@@ -14,6 +14,7 @@ use crate::error::{InputError, IsceneError};
 use crate::export::write_tree_exports;
 use crate::graph::ContactGraph;
 use crate::io::atomic::StagedDir;
+use crate::io::output_folder::{OutputCommand, OutputTarget};
 use crate::io::write_sequence::write_text;
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::nav_grid;
@@ -40,6 +41,8 @@ pub struct SimulateOptions {
     pub dir: PathBuf,
     pub task: PathBuf,
     pub out: PathBuf,
+    /// Replace an earlier output of another iscene command at `out` (`--force`).
+    pub force: bool,
 }
 
 /// What `simulate` did, as trace.json holds it.
@@ -106,6 +109,7 @@ struct PreparedTask {
 fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneError> {
     let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
     let task = Task::load(task_path)?;
+    check_steps_name_movable_nodes(&task, &graph).map_err(|p| InputError::invalid(task_path, p))?;
     let db = CadDatabase::for_scene(dir)?;
     let mut app = simulation_app(&graph, &task, &db).map_err(IsceneError::Internal)?;
     let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
@@ -138,6 +142,30 @@ fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneEr
         db,
     };
     Ok((prepared, app))
+}
+
+/// A step that names a node the scene lacks, or would pick up or push the room's layout, is a
+/// wrong task file: refused before anything runs, not a step that fails.
+fn check_steps_name_movable_nodes(task: &Task, graph: &ContactGraph) -> Result<(), String> {
+    for (i, step) in task.steps.iter().enumerate() {
+        for id in step.node_ids() {
+            if !graph.nodes.iter().any(|n| n.id == id) {
+                return Err(format!(
+                    "steps[{i}] ({}): the scene has no node {id:?}",
+                    step.label()
+                ));
+            }
+        }
+        if let Some(id) = step.moved_object()
+            && crate::scene::spec::is_layout_id(id)
+        {
+            return Err(format!(
+                "steps[{i}] ({}): {id} is part of the room's layout and cannot be moved",
+                step.label()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The world of the scene in `dir` with the task's robot at its start, and the actions to run
@@ -173,6 +201,13 @@ fn run_actions(app: &mut App, actions: &[Action]) -> Vec<f64> {
 
 /// Runs `options.task` on the scene in `options.dir` and writes `options.out`.
 pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneError> {
+    let target = OutputTarget::claim(
+        "--out",
+        &options.out,
+        OutputCommand::Simulate,
+        &[&options.dir, &options.task],
+        options.force,
+    )?;
     let (prepared, mut app) = prepare(&options.dir, &options.task)?;
     let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
     let physics_before = step_physics(rest_physics(&before));
@@ -192,7 +227,7 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
         steps,
         output: options.out.clone(),
     };
-    write_outputs(&options.out, &prepared, &before, &after, &summary)?;
+    write_outputs(&target, &prepared, &before, &after, &summary)?;
     Ok(summary)
 }
 
@@ -285,7 +320,7 @@ pub fn bench_simulation(
 }
 
 fn write_outputs(
-    out: &Path,
+    out: &OutputTarget,
     prepared: &PreparedTask,
     before: &KinematicTree,
     after: &KinematicTree,

@@ -28,6 +28,7 @@ pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<Tri
         cad: None,
         align: Default::default(),
         progress: false,
+        force: false,
     })
     .expect("reconstruct");
     let (index, _) = read_panoptic(&out.join("panoptic")).expect("panoptic folder");

@@ -62,6 +62,58 @@ pub struct BodyTree {
     pub bodies: Vec<Body>,
 }
 
+/// The most bodies a model file may have: furniture has a few, a robot arm tens.
+pub const MAX_BODIES: usize = 512;
+/// The longest chain of bodies from a model's root.
+pub const MAX_CHAIN: usize = 64;
+/// The deepest nesting of elements in a model file (an MJCF body chain of [`MAX_CHAIN`] sits
+/// a few levels down).
+pub const MAX_XML_DEPTH: usize = MAX_CHAIN + 16;
+
+impl BodyTree {
+    /// Refuses a model past [`MAX_BODIES`] or [`MAX_CHAIN`], before anything walks it.
+    pub fn check_size(&self) -> Result<(), ModelFileError> {
+        if self.bodies.len() > MAX_BODIES {
+            return Err(ModelFileError::Malformed(format!(
+                "{} bodies, more than the {MAX_BODIES} a model may have",
+                self.bodies.len()
+            )));
+        }
+        let mut depth = vec![0usize; self.bodies.len()];
+        for (i, body) in self.bodies.iter().enumerate() {
+            if let Some(parent) = body.parent.filter(|&p| p < i) {
+                depth[i] = depth[parent] + 1;
+                if depth[i] > MAX_CHAIN {
+                    return Err(ModelFileError::Malformed(format!(
+                        "body {:?} is {} joints from the root, more than {MAX_CHAIN}",
+                        body.name, depth[i]
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Refuses XML nested deeper than [`MAX_XML_DEPTH`]: readers that recurse (serde's, ours) would
+/// run out of stack on it.
+pub fn check_xml_depth(document: &roxmltree::Document) -> Result<(), ModelFileError> {
+    let mut depth = vec![0usize; document.descendants().count() + 1];
+    for node in document.descendants() {
+        let d = node
+            .parent()
+            .map_or(0, |p| depth[p.id().get() as usize] + 1);
+        if d > MAX_XML_DEPTH {
+            return Err(ModelFileError::Malformed(format!(
+                "elements nested {d} deep at line {}, deeper than {MAX_XML_DEPTH}",
+                document.text_pos_at(node.range().start).row
+            )));
+        }
+        depth[node.id().get() as usize] = d;
+    }
+    Ok(())
+}
+
 /// How an imported model is sized.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ImportScale {

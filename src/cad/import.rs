@@ -123,10 +123,12 @@ impl ModelFormat {
     }
 
     fn read(self, path: &Path) -> Result<BodyTree, ModelFileError> {
-        match self {
+        let tree = match self {
             Self::Mjcf => read_mjcf(path),
             Self::Urdf => read_urdf(path),
-        }
+        }?;
+        tree.check_size()?;
+        Ok(tree)
     }
 }
 
@@ -165,7 +167,14 @@ pub fn import_model_files(
         };
         let id = imported_model_id(format.id_prefix(), &stem);
         match canonical_model(&tree, &id, class, scale) {
-            Ok(m) => imported.push(m),
+            Ok(m) => {
+                for part in &m.parts {
+                    part.joint.check().map_err(|e| {
+                        InputError::invalid(file, format!("part {}: joint: {e}", part.name))
+                    })?;
+                }
+                imported.push(m);
+            }
             Err(why) => summary.failed.push(format!("{}: {why}", file.display())),
         }
     }

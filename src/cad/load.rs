@@ -8,14 +8,20 @@ use crate::cad::export::{DatabaseIndex, ModelMetadata, visual_node_name};
 use crate::cad::model::{CadModel, CadPart};
 use crate::error::InputError;
 use crate::geometry::TriMesh;
+use crate::io::file_name::check_file_name;
 use glam::{Affine3A, Mat4, Vec3};
 
 /// The index of the database folder `dir`.
 pub fn read_index(dir: &Path) -> Result<DatabaseIndex, InputError> {
     let index_path = dir.join("index.json");
     let text = std::fs::read_to_string(&index_path).map_err(|e| InputError::io(&index_path, &e))?;
-    serde_json::from_str(&text)
-        .map_err(|e| InputError::invalid(&index_path, format!("not a CAD database index: {e}")))
+    let index: DatabaseIndex = serde_json::from_str(&text)
+        .map_err(|e| InputError::invalid(&index_path, format!("not a CAD database index: {e}")))?;
+    for entry in &index.models {
+        check_file_name(&entry.id)
+            .map_err(|e| InputError::invalid(&index_path, format!("models: {e}")))?;
+    }
+    Ok(index)
 }
 
 /// Every model of the database folder `dir`, in the order of its index.
@@ -29,6 +35,7 @@ pub fn read_database(dir: &Path) -> Result<Vec<CadModel>, InputError> {
 
 /// The model `id` of the database folder `dir`.
 pub fn read_model(dir: &Path, id: &str) -> Result<CadModel, InputError> {
+    check_file_name(id).map_err(|e| InputError::invalid(dir, e))?;
     let meta_path = dir.join(format!("{id}.json"));
     let text = std::fs::read_to_string(&meta_path).map_err(|e| InputError::io(&meta_path, &e))?;
     let meta: ModelMetadata = serde_json::from_str(&text)
@@ -39,6 +46,7 @@ pub fn read_model(dir: &Path, id: &str) -> Result<CadModel, InputError> {
             format!("holds model {:?}, not {id:?}", meta.id),
         ));
     }
+    check_file_name(&meta.glb).map_err(|e| InputError::invalid(&meta_path, format!("glb: {e}")))?;
     let glb_path = dir.join(&meta.glb);
     let bytes = std::fs::read(&glb_path).map_err(|e| InputError::io(&glb_path, &e))?;
     let meshes = part_meshes(&bytes).map_err(|e| InputError::invalid(&glb_path, e))?;
@@ -82,6 +90,11 @@ pub fn read_model(dir: &Path, id: &str) -> Result<CadModel, InputError> {
                 ),
             ));
         }
+        check_file_name(&part.name)
+            .map_err(|e| InputError::invalid(&meta_path, format!("part: {e}")))?;
+        part.joint.check().map_err(|e| {
+            InputError::invalid(&meta_path, format!("part {}: joint: {e}", part.name))
+        })?;
         parts.push(CadPart {
             name: part.name.clone(),
             parent,

@@ -24,10 +24,11 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 use roxmltree::Node;
 
-use crate::cad::body_tree::{Body, BodyJoint, BodyTree, ModelFileError};
+use crate::cad::body_tree::{Body, BodyJoint, BodyTree, ModelFileError, check_xml_depth};
 use crate::cad::mesh_files::read_mesh_file;
 use crate::cad::mjcf_xml::{at, elements, euler_order, numbers, parse_numbers, pose, vec3};
 use crate::geometry::TriMesh;
+use crate::io::file_name::inside_folder;
 use crate::kinematics::JointKind;
 
 /// Facets around primitives (spheres, capsules, cylinders).
@@ -38,6 +39,7 @@ const ROUND_SEGMENTS: u32 = 16;
 pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
     let document = roxmltree::Document::parse(&text).map_err(|e| format!("not XML: {e}"))?;
+    check_xml_depth(&document)?;
     let root = document.root_element();
     if root.tag_name().name() != "mujoco" {
         return Err(ModelFileError::Malformed(format!(
@@ -125,8 +127,9 @@ impl Reader {
         }
         let mut degrees = true;
         let mut euler = EulerRot::XYZ;
-        let mut meshdir = folder.to_path_buf();
-        let mut texturedir = folder.to_path_buf();
+        // Relative to `folder`; every file named is resolved inside it.
+        let mut meshdir = PathBuf::new();
+        let mut texturedir = PathBuf::new();
         for compiler in elements(root, "compiler") {
             if let Some(angle) = compiler.attribute("angle") {
                 degrees = match angle {
@@ -149,14 +152,14 @@ impl Reader {
                 })?;
             }
             if let Some(dir) = compiler.attribute("assetdir") {
-                meshdir = folder.join(dir);
-                texturedir = folder.join(dir);
+                meshdir = PathBuf::from(dir);
+                texturedir = PathBuf::from(dir);
             }
             if let Some(dir) = compiler.attribute("meshdir") {
-                meshdir = folder.join(dir);
+                meshdir = PathBuf::from(dir);
             }
             if let Some(dir) = compiler.attribute("texturedir") {
-                texturedir = folder.join(dir);
+                texturedir = PathBuf::from(dir);
             }
         }
         let mut reader = Self {
@@ -175,7 +178,7 @@ impl Reader {
             reader.read_default(default, "main")?;
         }
         for asset in elements(root, "asset") {
-            reader.read_assets(asset, &meshdir, &texturedir)?;
+            reader.read_assets(asset, folder, &meshdir, &texturedir)?;
         }
         Ok(reader)
     }
@@ -214,9 +217,14 @@ impl Reader {
     fn read_assets(
         &mut self,
         asset: Node,
+        folder: &Path,
         meshdir: &Path,
         texturedir: &Path,
     ) -> Result<(), ModelFileError> {
+        let inside = |node: Node, dir: &Path, file: &str| {
+            inside_folder(folder, &dir.join(file))
+                .map_err(|e| ModelFileError::Malformed(format!("{}: {e}", at(node))))
+        };
         for node in asset.children().filter(|c| c.is_element()) {
             match node.tag_name().name() {
                 "mesh" => {
@@ -238,7 +246,7 @@ impl Reader {
                     self.meshes.insert(
                         name,
                         MeshAsset {
-                            file: meshdir.join(file),
+                            file: inside(node, meshdir, file)?,
                             scale,
                             mesh: None,
                         },
@@ -273,7 +281,7 @@ impl Reader {
                     self.textures.insert(
                         name,
                         Texture {
-                            file: file.map(|f| texturedir.join(f)),
+                            file: file.map(|f| inside(node, texturedir, f)).transpose()?,
                             rgb1,
                             mean: None,
                         },

@@ -14,9 +14,12 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 
-use crate::cad::body_tree::{Body, BodyJoint, BodyTree, ModelFileError};
+use crate::cad::body_tree::{
+    Body, BodyJoint, BodyTree, MAX_BODIES, ModelFileError, check_xml_depth,
+};
 use crate::cad::mesh_files::read_mesh_file;
 use crate::geometry::TriMesh;
+use crate::io::file_name::inside_folder;
 use crate::kinematics::JointKind;
 
 /// Facets around cylinders, capsules and spheres.
@@ -26,7 +29,17 @@ const ROUND_SEGMENTS: u32 = 16;
 /// names it.
 pub fn read_urdf(path: &Path) -> Result<BodyTree, ModelFileError> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let document = roxmltree::Document::parse(&text).map_err(|e| format!("not XML: {e}"))?;
+    check_xml_depth(&document)?;
+    drop(document);
     let robot = urdf_rs::read_from_string(&text).map_err(|e| format!("not a URDF model: {e}"))?;
+    if robot.links.len() > MAX_BODIES {
+        return Err(format!(
+            "{} links, more than the {MAX_BODIES} a model may have",
+            robot.links.len()
+        )
+        .into());
+    }
     let folder = path.parent().unwrap_or(Path::new("."));
     let children: Vec<&str> = robot.joints.iter().map(|j| j.child.link.as_str()).collect();
     let roots: Vec<&urdf_rs::Link> = robot
@@ -233,11 +246,13 @@ fn geometry_mesh(geometry: &urdf_rs::Geometry, folder: &Path) -> Result<TriMesh,
 
 /// Where a mesh `filename` of a URDF file in `folder` is.
 fn mesh_path(filename: &str, folder: &Path) -> Result<PathBuf, String> {
+    // A package:// name is looked up in the folders around the file, as ROS would; any other
+    // name must lie inside the file's own folder.
     if let Some(path) = filename.strip_prefix("file://") {
-        return Ok(PathBuf::from(path));
+        return inside_folder(folder, Path::new(path));
     }
     let Some(rest) = filename.strip_prefix("package://") else {
-        return Ok(folder.join(filename));
+        return inside_folder(folder, Path::new(filename));
     };
     let (package, relative) = rest
         .split_once('/')

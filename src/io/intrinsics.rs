@@ -73,6 +73,19 @@ pub fn check(camera: Pinhole, path: &Path) -> Result<Pinhole, InputError> {
             ),
         ));
     }
+    // A field of view between about 5 and 170 degrees: a focal length of 1 px would spread a
+    // frame over a whole house and fill the map's memory.
+    let (lo, hi) = (0.05 * camera.width as f32, 25.0 * camera.width as f32);
+    if !(lo..=hi).contains(&camera.fx) || !(lo..=hi).contains(&camera.fy) {
+        return Err(InputError::invalid(
+            path,
+            format!(
+                "focal lengths fx {} and fy {} px are implausible for a {} px wide image \
+                 (expected {lo:.0}..{hi:.0} px)",
+                camera.fx, camera.fy, camera.width
+            ),
+        ));
+    }
     Ok(camera)
 }
 

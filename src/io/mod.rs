@@ -1,11 +1,13 @@
 //! Reading and writing files: RGB-D sequences in their several layouts, meshes, glTF, staged outputs.
 
 pub mod atomic;
+pub mod file_name;
 pub mod gltf_write;
 pub mod images;
 pub mod intrinsics;
 pub mod native;
 pub mod open3d_log;
+pub mod output_folder;
 pub mod panoptic_dir;
 pub mod ply;
 pub mod pose;

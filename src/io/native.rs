@@ -64,16 +64,19 @@ pub fn open(root: &Path) -> Result<Sequence, InputError> {
     let camera = intrinsics::read_matrix_file(&root.join("camera-intrinsics.txt"), width, height)?;
     let gravity = read_gravity(&root.join("gravity-direction.txt"))?;
     let labels_path = root.join("labels.json");
-    let labels =
-        if labels_path.is_file() {
-            let text = std::fs::read_to_string(&labels_path)
-                .map_err(|e| InputError::io(&labels_path, &e))?;
-            Some(serde_json::from_str::<Labels>(&text).map_err(|e| {
-                InputError::invalid(&labels_path, format!("invalid labels.json: {e}"))
-            })?)
-        } else {
-            None
-        };
+    let labels = if labels_path.is_file() {
+        let text =
+            std::fs::read_to_string(&labels_path).map_err(|e| InputError::io(&labels_path, &e))?;
+        let labels = serde_json::from_str::<Labels>(&text)
+            .map_err(|e| InputError::invalid(&labels_path, format!("invalid labels.json: {e}")))?;
+        for entry in labels.instances.values() {
+            crate::io::file_name::check_file_name(&entry.entity)
+                .map_err(|e| InputError::invalid(&labels_path, format!("entity: {e}")))?;
+        }
+        Some(labels)
+    } else {
+        None
+    };
     let mut frames = Vec::with_capacity(depth_files.len());
     for (index, depth) in depth_files {
         let stem = root.join(format!("frame-{index:06}"));

@@ -108,8 +108,13 @@ fn labelled_points_ply_bytes(points: &[(Vec3, u32)]) -> Result<Vec<u8>, IsceneEr
 pub fn read_index(dir: &Path) -> Result<PanopticIndex, InputError> {
     let index_path = dir.join("entities.json");
     let text = std::fs::read_to_string(&index_path).map_err(|e| InputError::io(&index_path, &e))?;
-    serde_json::from_str(&text)
-        .map_err(|e| InputError::invalid(&index_path, format!("not a panoptic index: {e}")))
+    let index: PanopticIndex = serde_json::from_str(&text)
+        .map_err(|e| InputError::invalid(&index_path, format!("not a panoptic index: {e}")))?;
+    for entity in &index.entities {
+        crate::io::file_name::check_file_name(&entity.id)
+            .map_err(|e| InputError::invalid(&index_path, format!("entities: {e}")))?;
+    }
+    Ok(index)
 }
 
 /// Reads every entity's segment mesh (`<id>.ply`) of a `panoptic/` folder, in the index's order.

@@ -6,6 +6,7 @@ use glam::{Quat, Vec3};
 
 use crate::error::InputError;
 use crate::geometry::Pinhole;
+use crate::io::file_name::inside_folder;
 use crate::io::intrinsics;
 use crate::io::pose::from_translation_quaternion;
 use crate::io::sequence::{FrameRecord, Sequence, SequenceFormat};
@@ -104,10 +105,14 @@ pub fn open(root: &Path) -> Result<Sequence, InputError> {
             &gt_path,
             &format!("pose at {t}"),
         )?;
+        let listed = |list: &str, name: &str| {
+            inside_folder(root, Path::new(name))
+                .map_err(|e| InputError::invalid(root.join(list), format!("at {t}: {e}")))
+        };
         frames.push(FrameRecord {
             index: frames.len(),
-            color: root.join(&c[0]),
-            depth: root.join(&d[0]),
+            color: listed("rgb.txt", &c[0])?,
+            depth: listed("depth.txt", &d[0])?,
             label: None,
             world_from_camera: pose,
         });

@@ -29,6 +29,11 @@ pub struct JointSpec {
     pub limits: Option<(f32, f32)>,
 }
 
+/// The widest a revolute joint may turn either way from rest: a full turn.
+pub const MAX_REVOLUTE_RAD: f32 = std::f32::consts::TAU;
+/// The farthest a prismatic joint may slide either way from rest, metres.
+pub const MAX_PRISMATIC_M: f32 = 3.0;
+
 impl JointSpec {
     pub const FIXED: JointSpec = JointSpec {
         kind: JointKind::Fixed,
@@ -54,6 +59,41 @@ impl JointSpec {
             kind: JointKind::Prismatic,
             axis: axis.normalize(),
             limits: Some((lower, upper)),
+        }
+    }
+
+    /// Checks what a file may have broken: a unit axis, and limits that are finite, in order and
+    /// within [`MAX_REVOLUTE_RAD`] or [`MAX_PRISMATIC_M`] of rest (a range of 1e30 would make
+    /// every sweep of the joint endless).
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.axis.is_finite() && (self.axis.length() - 1.0).abs() < 1e-3) {
+            return Err(format!(
+                "axis {:?} is not a unit vector",
+                self.axis.to_array()
+            ));
+        }
+        let max = match self.kind {
+            JointKind::Revolute => MAX_REVOLUTE_RAD,
+            JointKind::Prismatic => MAX_PRISMATIC_M,
+            JointKind::Fixed | JointKind::Floating => return Ok(()),
+        };
+        match self.limits {
+            Some((lo, hi)) if lo.is_finite() && hi.is_finite() && lo <= hi => {
+                if lo < -max || hi > max {
+                    Err(format!(
+                        "limits {lo}..{hi} reach past {max} {} of rest",
+                        if self.kind == JointKind::Revolute {
+                            "rad"
+                        } else {
+                            "m"
+                        }
+                    ))
+                } else {
+                    Ok(())
+                }
+            }
+            Some((lo, hi)) => Err(format!("limits {lo}..{hi} are not finite and in order")),
+            None => Err("a revolute or prismatic joint without limits".into()),
         }
     }
 

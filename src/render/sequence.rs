@@ -12,6 +12,7 @@ use serde::Serialize;
 use crate::error::IsceneError;
 use crate::geometry::Pinhole;
 use crate::io::atomic::StagedDir;
+use crate::io::output_folder::{OutputCommand, OutputTarget};
 use crate::io::ply::mesh_ply_bytes;
 use crate::io::write_sequence::{
     pose_text, write_camera, write_color, write_depth, write_labels, write_text,
@@ -36,6 +37,11 @@ pub struct RenderOptions {
     /// Turns every noise model off (`--no-noise`).
     pub no_noise: bool,
     pub progress: bool,
+    /// Replace an earlier output of another iscene command at `out` (`--force`).
+    pub force: bool,
+    /// Written to `gt/spec.fingerprint`: lets `reconstruct` reuse the rendering of an unchanged
+    /// specification.
+    pub fingerprint: Option<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -129,6 +135,13 @@ pub fn render_sequence(
     options: &RenderOptions,
 ) -> Result<RenderSummary, IsceneError> {
     let start = Instant::now();
+    let target = OutputTarget::claim(
+        "--out",
+        out,
+        OutputCommand::Render,
+        &[spec_path],
+        options.force,
+    )?;
     let world = SceneWorld::from_spec(spec, spec_path)?;
     let scene = RenderScene::from_world(&world);
     let camera = Pinhole::KINECT;
@@ -148,7 +161,7 @@ pub fn render_sequence(
     };
     let depth_noise = noise.depth_model();
 
-    let staged = StagedDir::new(out)?;
+    let staged = StagedDir::new(&target)?;
     let dir = staged.path().to_path_buf();
     write_camera(&dir, &camera, 1000.0)?;
     write_text(&dir.join("gravity-direction.txt"), "0 0 -1\n")?;
@@ -176,6 +189,9 @@ pub fn render_sequence(
         segmentation_noise: noise.segmentation_model(),
     };
     write_text(&gt.join("render.json"), &pretty_json(&record))?;
+    if let Some(fingerprint) = &options.fingerprint {
+        write_text(&gt.join("spec.fingerprint"), fingerprint)?;
+    }
 
     let progress = crate::progress::bar(frames as u64, "rendering", options.progress);
     poses.par_iter().enumerate().try_for_each(

@@ -56,6 +56,32 @@ pub enum Action {
 }
 
 impl Action {
+    /// The scene nodes the action names.
+    pub fn node_ids(&self) -> Vec<&str> {
+        match self {
+            Action::Navigate { to } => vec![to],
+            Action::Open { object, .. }
+            | Action::Close { object, .. }
+            | Action::Pick { object } => {
+                vec![object]
+            }
+            Action::PlaceOn { object, surface } => vec![object, surface],
+            Action::PlaceIn { object, container } => vec![object, container],
+            Action::Push { object, .. } => vec![object],
+        }
+    }
+
+    /// The node the action picks up or moves, if any.
+    pub fn moved_object(&self) -> Option<&str> {
+        match self {
+            Action::Pick { object }
+            | Action::PlaceOn { object, .. }
+            | Action::PlaceIn { object, .. }
+            | Action::Push { object, .. } => Some(object),
+            _ => None,
+        }
+    }
+
     /// A short text for traces: `open fridge_1`.
     pub fn label(&self) -> String {
         match self {

@@ -45,21 +45,98 @@ impl Task {
                 "a task has either \"steps\" or \"goals\", not both and not neither",
             ));
         }
-        let r = task.robot;
-        if ![r.radius, r.height, r.reach, r.max_reach_height]
-            .iter()
-            .all(|x| x.is_finite() && *x > 0.0)
-        {
-            return Err(InputError::invalid(
-                path,
-                "robot figures must be positive numbers",
-            ));
-        }
-        if let Some(s) = task.start
-            && !(s.position.iter().all(|x| x.is_finite()) && s.yaw_deg.is_finite())
-        {
-            return Err(InputError::invalid(path, "start must be finite numbers"));
-        }
+        task.check_limits()
+            .map_err(|p| InputError::invalid(path, p))?;
         Ok(task)
     }
+
+    /// Every number a task sets, within what a room and a mobile manipulator can mean: a
+    /// robot of 1e20 m or a push of 1e30 m is a broken file, not a long job.
+    fn check_limits(&self) -> Result<(), String> {
+        let r = self.robot;
+        for (key, value, max) in [
+            ("robot.radius", r.radius, MAX_ROBOT_RADIUS_M),
+            ("robot.height", r.height, MAX_ROBOT_HEIGHT_M),
+            ("robot.reach", r.reach, MAX_ROBOT_HEIGHT_M),
+            (
+                "robot.max_reach_height",
+                r.max_reach_height,
+                MAX_ROBOT_HEIGHT_M,
+            ),
+        ] {
+            if !(value.is_finite() && value > 0.0 && value <= max) {
+                return Err(format!("{key}: {value} m is outside (0, {max}] m"));
+            }
+        }
+        if let Some(s) = self.start
+            && !(s
+                .position
+                .iter()
+                .all(|x| x.is_finite() && x.abs() <= MAX_COORDINATE_M)
+                && s.yaw_deg.is_finite())
+        {
+            return Err(format!(
+                "start: position and yaw_deg must be finite numbers, the position within {MAX_COORDINATE_M} m"
+            ));
+        }
+        if self.steps.len() > MAX_STEPS {
+            return Err(format!(
+                "steps: {} steps, more than {MAX_STEPS}",
+                self.steps.len()
+            ));
+        }
+        if self.goals.len() > MAX_GOALS {
+            return Err(format!(
+                "goals: {} goals, more than {MAX_GOALS}",
+                self.goals.len()
+            ));
+        }
+        for (i, step) in self.steps.iter().enumerate() {
+            let key = format!("steps[{i}]");
+            for id in step.node_ids() {
+                crate::io::file_name::check_file_name(id).map_err(|e| format!("{key}: {e}"))?;
+            }
+            match step {
+                Action::Open { value: Some(v), .. }
+                    if !(v.is_finite() && v.abs() <= MAX_JOINT_VALUE) =>
+                {
+                    return Err(format!(
+                        "{key}.value: {v} is not a joint value within {MAX_JOINT_VALUE} (radians or metres)"
+                    ));
+                }
+                Action::Push {
+                    direction,
+                    distance,
+                    ..
+                } => {
+                    if !(distance.is_finite() && *distance > 0.0 && *distance <= MAX_PUSH_M) {
+                        return Err(format!(
+                            "{key}.distance: {distance} m is outside (0, {MAX_PUSH_M}] m"
+                        ));
+                    }
+                    let length = (direction[0] * direction[0] + direction[1] * direction[1]).sqrt();
+                    if !(length.is_finite() && length > 1e-6) {
+                        return Err(format!("{key}.direction: {direction:?} is not a direction"));
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
 }
+
+/// The largest robot base radius a task may set, metres.
+pub const MAX_ROBOT_RADIUS_M: f32 = 2.0;
+/// The largest robot height, reach or reach height, metres.
+pub const MAX_ROBOT_HEIGHT_M: f32 = 5.0;
+/// How far from the origin a start may lie, metres.
+pub const MAX_COORDINATE_M: f32 = 1000.0;
+/// The longest push, metres.
+pub const MAX_PUSH_M: f32 = 20.0;
+/// The largest joint value an `open` may ask for (radians or metres).
+pub const MAX_JOINT_VALUE: f32 = 10.0;
+/// Steps of a scripted task.
+pub const MAX_STEPS: usize = 1000;
+/// Goals of a planned task.
+pub const MAX_GOALS: usize = 32;

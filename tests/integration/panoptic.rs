@@ -23,6 +23,7 @@ fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usiz
         cad: None,
         align: Default::default(),
         progress: false,
+        force: false,
     })
     .expect("reconstruct");
     evaluate_reconstruction(out, sequence).expect("eval")

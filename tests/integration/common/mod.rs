@@ -147,6 +147,7 @@ fn reconstruct_every_second_frame(
         cad,
         align,
         progress: false,
+        force: false,
     })
     .expect("reconstruct");
 }
