@@ -10,6 +10,7 @@ use crate::error::IsceneError;
 use crate::io::Sequence;
 use crate::io::atomic::write_file_atomically;
 use crate::map::agreement::{DepthAgreement, depth_residuals, summarise};
+use crate::map::memory_budget::{check_map_fits, check_memory_budget, check_voxel_size};
 use crate::map::{SegmentLabel, TsdfFrame, TsdfMap, extract_mesh};
 use crate::panoptic::geometric::{GeometricParams, segment_depth};
 
@@ -27,6 +28,8 @@ pub struct TsdfBenchOptions {
     pub mesh: Option<PathBuf>,
     /// Integrations of the whole selection into fresh maps; the fastest is reported.
     pub runs: usize,
+    /// The map's memory budget, GB.
+    pub max_memory_gb: f64,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -58,9 +61,12 @@ pub struct TsdfBenchReport {
 /// Integrates the selected frames into a fresh map `runs` times, timing integration alone, then
 /// extracts the last map's mesh (every run builds the same map) and raycasts the held-out frames.
 pub fn bench_tsdf(options: &TsdfBenchOptions) -> Result<TsdfBenchReport, IsceneError> {
+    check_voxel_size(options.voxel)?;
+    check_memory_budget(options.max_memory_gb)?;
     let mut sequence = Sequence::open(&options.sequence)?;
     let (start, end, step) = options.frames;
     sequence.select(start, end, step);
+    check_map_fits(&sequence, options.voxel, options.max_memory_gb)?;
     let n = sequence.frames.len();
     let held_out = |i: usize| {
         options.holdout_every > 0 && i % options.holdout_every == options.holdout_every - 1

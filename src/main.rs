@@ -151,6 +151,10 @@ struct ReconstructArgs {
     /// write is never replaced).
     #[arg(long)]
     force: bool,
+    /// The map's memory budget in GB: a --voxel expected to outgrow it (estimated from the
+    /// surface a sample of the frames sees) is refused before mapping.
+    #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
+    max_memory: f64,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -206,6 +210,9 @@ enum BenchCommand {
         /// shared machine's noise only ever slows a run down).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
         runs: u32,
+        /// The map's memory budget in GB (as reconstruct's).
+        #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
+        max_memory: f64,
     },
     /// Time per action of a task (with its physics check), over fresh runs of the task on a
     /// scene folder (as `iscene simulate` takes).
@@ -336,6 +343,7 @@ fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<Pat
         align: Default::default(),
         progress,
         force: false,
+        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
     })?;
     eprintln!(
         "reconstructed {} into {}; replaying it",
@@ -494,6 +502,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     labels,
                     mesh,
                     runs,
+                    max_memory,
                 },
         }) => {
             let report = iscene::bench::bench_tsdf(&iscene::bench::TsdfBenchOptions {
@@ -504,6 +513,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 labels,
                 mesh,
                 runs: runs as usize,
+                max_memory_gb: max_memory,
             })?;
             print_json(&report)?;
         }
@@ -593,6 +603,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                     cad: None,
                     align: Align::Lm,
                     force: false,
+                    max_memory: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
                 },
             };
             let out = args.out.unwrap_or_else(|| {
@@ -628,6 +639,7 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 },
                 progress: interactive,
                 force: args.force,
+                max_memory_gb: args.max_memory,
             };
             let r = reconstruct(&options)?;
             println!(

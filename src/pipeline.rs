@@ -19,6 +19,7 @@ use crate::io::output_folder::{MARKER, OutputCommand, OutputTarget};
 use crate::io::panoptic_dir::{PanopticIndex, write_panoptic};
 use crate::io::sequence::SequenceFormat;
 use crate::io::write_sequence::write_text;
+use crate::map::memory_budget::{check_map_fits, check_memory_budget, check_voxel_size};
 use crate::panoptic::{InstanceFusion, MapperParams};
 use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
@@ -59,6 +60,9 @@ pub struct ReconstructOptions {
     pub progress: bool,
     /// Replace an earlier output of another iscene command at `out` (`--force`).
     pub force: bool,
+    /// The map's memory budget, GB (`--max-memory`): a voxel size expected to outgrow it is
+    /// refused before mapping.
+    pub max_memory_gb: f64,
 }
 
 /// What a reconstruction did, for the summary the CLI prints.
@@ -188,13 +192,8 @@ fn render_input(
 }
 
 pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, IsceneError> {
-    if !(options.voxel.is_finite() && options.voxel >= 0.002 && options.voxel <= 0.2) {
-        return Err(InputError::invalid(
-            "--voxel",
-            format!("{} m is outside 0.002..0.2 m", options.voxel),
-        )
-        .into());
-    }
+    check_voxel_size(options.voxel)?;
+    check_memory_budget(options.max_memory_gb)?;
     let target = OutputTarget::claim(
         "--out",
         &options.out,
@@ -247,6 +246,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             .into());
         }
     }
+    check_map_fits(&sequence, options.voxel, options.max_memory_gb)?;
     if options.segmentation == SegmentationChoice::Oracle && sequence.labels.is_none() {
         return Err(InputError::missing(sequence_dir.join("labels.json"), "--segmentation oracle needs ground-truth labels; use --segmentation none (or onnx) for real data").into());
     }

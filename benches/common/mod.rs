@@ -29,6 +29,7 @@ pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<Tri
         align: Default::default(),
         progress: false,
         force: false,
+        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
     })
     .expect("reconstruct");
     let (index, _) = read_panoptic(&out.join("panoptic")).expect("panoptic folder");

@@ -149,22 +149,38 @@ pub fn write_models(
     models: &[CadModel],
     generator: &str,
 ) -> Result<usize, IsceneError> {
-    for model in models {
-        write_model_files(dir, model)?;
-    }
+    let files = models
+        .iter()
+        .map(model_file_bytes)
+        .collect::<Result<Vec<_>, _>>()?;
+    write_model_files(dir, files)?;
     write_index(dir, models.iter().map(IndexEntry::of).collect(), generator)
 }
 
-/// Writes `<id>.glb` and `<id>.json` of `model` into `dir` (created when missing).
-pub fn write_model_files(dir: &Path, model: &CadModel) -> Result<(), IsceneError> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| IsceneError::io(format!("creating {}", dir.display()), e))?;
+/// `<id>.glb` and `<id>.json` of `model`: names and bytes, made in memory so that a model that
+/// fails leaves nothing written.
+pub fn model_file_bytes(model: &CadModel) -> Result<[(String, Vec<u8>); 2], IsceneError> {
     let glb =
         model_glb(model).map_err(|e| IsceneError::Internal(format!("{}: glTF: {e}", model.id)))?;
-    write_file_atomically(&dir.join(format!("{}.glb", model.id)), &glb)?;
     let json = serde_json::to_vec_pretty(&metadata(model))
         .map_err(|e| IsceneError::Internal(e.to_string()))?;
-    write_file_atomically(&dir.join(format!("{}.json", model.id)), &json)
+    Ok([
+        (format!("{}.glb", model.id), glb),
+        (format!("{}.json", model.id), json),
+    ])
+}
+
+/// Writes models' files (from [`model_file_bytes`]) into `dir`, created when missing.
+pub fn write_model_files(
+    dir: &Path,
+    files: Vec<[(String, Vec<u8>); 2]>,
+) -> Result<(), IsceneError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| IsceneError::io(format!("creating {}", dir.display()), e))?;
+    for (name, bytes) in files.into_iter().flatten() {
+        write_file_atomically(&dir.join(name), &bytes)?;
+    }
+    Ok(())
 }
 
 /// Writes `index.json` listing `models` into `dir`; returns how many it lists.

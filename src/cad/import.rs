@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::cad::body_tree::{BodyTree, ImportScale, ModelFileError, canonical_model};
 use crate::cad::class_words::class_of_name;
-use crate::cad::export::{IndexEntry, write_index, write_model_files};
+use crate::cad::export::{IndexEntry, model_file_bytes, write_index, write_model_files};
 use crate::cad::load::read_index;
 use crate::cad::mjcf::read_mjcf;
 use crate::cad::model::CadModel;
@@ -234,8 +234,12 @@ fn merge_into(into: &Path, imported: Vec<CadModel>) -> Result<usize, IsceneError
             index.insert(entry.id.clone(), entry);
         }
     }
+    let files = imported
+        .iter()
+        .map(model_file_bytes)
+        .collect::<Result<Vec<_>, _>>()?;
+    write_model_files(into, files)?;
     for model in &imported {
-        write_model_files(into, model)?;
         index.insert(model.id.clone(), IndexEntry::of(model));
     }
     write_index(into, index.into_values().collect(), "iscene cad import")

@@ -184,8 +184,10 @@ fn entry_of(fields: &BTreeMap<String, String>) -> Result<CatalogueEntry, String>
             .trim()
             .parse()
             .map_err(|_| format!("{key} is not a number"))?;
-        if !(value.is_finite() && value > 0.0) {
-            return Err(format!("{key} {value} is not a positive size"));
+        if !(value.is_finite() && value > 0.0 && value <= MAX_SIZE_CM) {
+            return Err(format!(
+                "{key} {value} cm is not a size of furniture (0..{MAX_SIZE_CM} cm)"
+            ));
         }
         Ok(value / 100.0)
     };
@@ -295,13 +297,23 @@ fn read_text<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, name: &str) -> Result
     Ok(bytes.iter().map(|&b| char::from(b)).collect())
 }
 
+/// The file `name` of the zip, refused past [`MAX_ENTRY_BYTES`] whatever its header claims (a
+/// small archive can expand to gigabytes).
 fn read_bytes<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, name: &str) -> Result<Vec<u8>, String> {
-    let mut file = zip
+    let file = zip
         .by_name(name)
         .map_err(|e| format!("{name} is not in the catalogue: {e}"))?;
+    let too_big = || format!("{name} expands past {} MB", MAX_ENTRY_BYTES >> 20);
+    if file.size() > MAX_ENTRY_BYTES {
+        return Err(too_big());
+    }
     let mut bytes = Vec::new();
-    file.read_to_end(&mut bytes)
+    file.take(MAX_ENTRY_BYTES + 1)
+        .read_to_end(&mut bytes)
         .map_err(|e| format!("reading {name}: {e}"))?;
+    if bytes.len() as u64 > MAX_ENTRY_BYTES {
+        return Err(too_big());
+    }
     Ok(bytes)
 }
 
@@ -333,6 +345,13 @@ fn model_files<R: Read + Seek>(
     Ok((obj, materials))
 }
 
+/// The largest uncompressed file read from a catalogue, bytes.
+const MAX_ENTRY_BYTES: u64 = 64 << 20;
+/// The most triangles an imported model may have before its convex decomposition.
+const MAX_TRIANGLES: usize = 100_000;
+/// The largest size a catalogue may give a piece of furniture, centimetres.
+const MAX_SIZE_CM: f32 = 2000.0;
+
 /// The entry's model in the canonical frame, at the catalogue's size.
 fn entry_model(
     entry: &CatalogueEntry,
@@ -341,6 +360,13 @@ fn entry_model(
     materials: &BTreeMap<String, Vec<u8>>,
 ) -> Result<CadModel, String> {
     let (mesh, color) = obj_mesh(obj, materials)?;
+    if mesh.triangles.len() > MAX_TRIANGLES {
+        return Err(format!(
+            "{} triangles, more than the {MAX_TRIANGLES} an imported model may have (its convex \
+             decomposition would take minutes)",
+            mesh.triangles.len()
+        ));
+    }
     let mesh = canonical_mesh(&mesh, entry.model_rotation, entry.size)?;
     Ok(CadModel {
         id: model_id(&entry.id),

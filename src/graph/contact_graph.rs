@@ -82,6 +82,12 @@ pub struct ContactGraph {
     pub edges: Vec<GraphEdge>,
 }
 
+/// The most nodes a contact graph read from a file may have.
+pub const MAX_NODES: usize = 2000;
+/// The tallest stack of objects on one another a graph may describe (the kinematic tree follows
+/// it, and its exports recurse along it).
+pub const MAX_SUPPORT_DEPTH: usize = 32;
+
 impl ContactGraph {
     pub fn node(&self, id: &str) -> Option<&GraphNode> {
         self.nodes.iter().find(|n| n.id == id)
@@ -105,6 +111,12 @@ impl ContactGraph {
     /// Checks what the schema cannot: unique ids, edges between known nodes, at most one support
     /// parent per node, no support cycles, finite numbers.
     pub fn check(&self) -> Result<(), String> {
+        if self.nodes.len() > MAX_NODES {
+            return Err(format!(
+                "nodes: {} nodes, more than the {MAX_NODES} a room's graph may have",
+                self.nodes.len()
+            ));
+        }
         let mut ids = HashSet::new();
         for n in &self.nodes {
             if !ids.insert(n.id.as_str()) {
@@ -142,15 +154,23 @@ impl ContactGraph {
                 return Err(format!("edges: {child:?} has two support parents"));
             }
         }
+        let parents: std::collections::HashMap<&str, &str> =
+            self.support_edges().map(|(p, c)| (c, p)).collect();
         for n in &self.nodes {
             let mut current = n.id.as_str();
-            for _ in 0..=self.nodes.len() {
-                match self.parent_of(current) {
+            for depth in 0..=self.nodes.len() {
+                match parents.get(current) {
                     Some(p) => current = p,
                     None => break,
                 }
                 if current == n.id {
                     return Err(format!("edges: support cycle through {:?}", n.id));
+                }
+                if depth >= MAX_SUPPORT_DEPTH {
+                    return Err(format!(
+                        "edges: {:?} stands on a stack of more than {MAX_SUPPORT_DEPTH} objects",
+                        n.id
+                    ));
                 }
             }
         }

@@ -5,6 +5,7 @@ pub mod agreement;
 pub mod depth_precision;
 pub mod frame_labels;
 pub mod free_space;
+pub mod memory_budget;
 pub mod mesh;
 pub mod tsdf;
 

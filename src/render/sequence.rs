@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::error::IsceneError;
+use crate::error::{InputError, IsceneError};
 use crate::geometry::Pinhole;
 use crate::io::atomic::StagedDir;
 use crate::io::output_folder::{OutputCommand, OutputTarget};
@@ -149,6 +149,8 @@ pub fn render_sequence(
         .frames
         .or(spec.camera.frames)
         .unwrap_or(DEFAULT_FRAMES);
+    crate::scene::spec::check_frame_count(frames)
+        .map_err(|e| InputError::invalid("--frames", e))?;
     let poses = room_loop(
         world.room_size,
         frames,

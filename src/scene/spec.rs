@@ -89,6 +89,20 @@ pub enum Placement {
     },
 }
 
+/// The most objects a specification may place.
+pub const MAX_OBJECTS: usize = 500;
+/// The most frames a rendering may have (`camera.frames`, `render --frames`): 10 minutes at 15
+/// frames/s, about 4 GB of PNGs.
+pub const MAX_FRAMES: usize = 10_000;
+
+/// Checks a frame count of a rendering.
+pub fn check_frame_count(frames: usize) -> Result<(), String> {
+    if !(1..=MAX_FRAMES).contains(&frames) {
+        return Err(format!("{frames} frames is outside 1..{MAX_FRAMES}"));
+    }
+    Ok(())
+}
+
 impl SceneSpec {
     /// Reads and validates a specification file.
     pub fn load(path: &Path) -> Result<SceneSpec, InputError> {
@@ -129,8 +143,14 @@ impl SceneSpec {
         if self.objects.is_empty() {
             return Err("objects: a scene needs at least one object".into());
         }
-        if let Some(0) = self.camera.frames {
-            return Err("camera.frames: must be at least 1".into());
+        if self.objects.len() > MAX_OBJECTS {
+            return Err(format!(
+                "objects: {} objects, more than the {MAX_OBJECTS} a room may hold",
+                self.objects.len()
+            ));
+        }
+        if let Some(frames) = self.camera.frames {
+            check_frame_count(frames).map_err(|e| format!("camera.frames: {e}"))?;
         }
         if let Some(h) = self.camera.height
             && !(0.3..rz).contains(&h)

@@ -24,6 +24,7 @@ fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usiz
         align: Default::default(),
         progress: false,
         force: false,
+        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
     })
     .expect("reconstruct");
     evaluate_reconstruction(out, sequence).expect("eval")

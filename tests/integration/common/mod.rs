@@ -148,6 +148,7 @@ fn reconstruct_every_second_frame(
         align,
         progress: false,
         force: false,
+        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
     })
     .expect("reconstruct");
 }
