@@ -41,6 +41,20 @@ pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
     let document = roxmltree::Document::parse(&text).map_err(|e| format!("not XML: {e}"))?;
     check_xml_depth(&document)?;
     let root = document.root_element();
+    // Masses come from the class's density on import, but a negative one is a broken file.
+    for node in root.descendants().filter(|n| n.is_element()) {
+        if let Some(mass) = node.attribute("mass")
+            && !mass
+                .trim()
+                .parse::<f64>()
+                .is_ok_and(|m| m.is_finite() && m >= 0.0)
+        {
+            return Err(ModelFileError::Malformed(format!(
+                "{}: mass {mass:?} is not a non-negative number",
+                at(node)
+            )));
+        }
+    }
     if root.tag_name().name() != "mujoco" {
         return Err(ModelFileError::Malformed(format!(
             "the root element is <{}>, not <mujoco>",

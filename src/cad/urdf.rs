@@ -40,6 +40,18 @@ pub fn read_urdf(path: &Path) -> Result<BodyTree, ModelFileError> {
         )
         .into());
     }
+    // Masses come from the class's density on import, but a negative one is a broken file.
+    if let Some(link) = robot
+        .links
+        .iter()
+        .find(|l| !(l.inertial.mass.value.is_finite() && l.inertial.mass.value >= 0.0))
+    {
+        return Err(format!(
+            "link {:?}: mass {} is not a non-negative number",
+            link.name, link.inertial.mass.value
+        )
+        .into());
+    }
     let folder = path.parent().unwrap_or(Path::new("."));
     let children: Vec<&str> = robot.joints.iter().map(|j| j.child.link.as_str()).collect();
     let roots: Vec<&urdf_rs::Link> = robot

@@ -50,7 +50,7 @@ impl StagedDir {
             .unwrap_or(Path::new("."));
         std::fs::create_dir_all(parent)
             .map_err(|e| IsceneError::io(format!("creating {}", parent.display()), e))?;
-        remove_stale_staging(parent, path);
+        clear_stale_staging(path);
         let staging = sibling(path, "partial");
         std::fs::create_dir_all(&staging)
             .map_err(|e| IsceneError::io(format!("creating {}", staging.display()), e))?;
@@ -143,10 +143,14 @@ fn replace_in_two_steps(new: &Path, old: &Path) -> Result<(), IsceneError> {
     std::fs::rename(&aside, new).map_err(|e| io("moving away the earlier", e))
 }
 
-/// Removes the staging folders (`.NAME.partial-PID`) of processes that are gone, and puts back
-/// an earlier output (`.NAME.old-PID`) a killed replacement left aside. Only folders that carry
-/// one of our markers are touched.
-fn remove_stale_staging(parent: &Path, target: &Path) {
+/// Removes the staging folders (`.NAME.partial-PID`) that processes now gone left beside
+/// `target`, and puts back an earlier output (`.NAME.old-PID`) a killed replacement left aside.
+/// Only folders that carry one of our markers are touched.
+pub fn clear_stale_staging(target: &Path) {
+    let parent = target
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let Ok(entries) = std::fs::read_dir(parent) else {
         return;
     };

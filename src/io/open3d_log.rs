@@ -76,7 +76,7 @@ pub fn open(root: &Path) -> Result<Sequence, InputError> {
     let depth = sorted_images(&root.join("depth"))?;
     let color = sorted_images(&root.join("color"))?;
     let entries = lines.len() / 5;
-    if depth.len() < entries || color.len() < entries {
+    if depth.len() != entries || color.len() != entries {
         return Err(InputError::invalid(
             &log,
             format!(

@@ -162,6 +162,9 @@ impl OutputTarget {
                 return Err(target.refuse(format!("lies inside the input {}", input.display())));
             }
         }
+        // A run killed earlier in the same place left its staging folder, or an earlier output
+        // moved aside: cleared (or put back) before the folder is judged.
+        crate::io::atomic::clear_stale_staging(path);
         target.check_replaceable()?;
         Ok(target)
     }

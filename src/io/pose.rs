@@ -72,12 +72,27 @@ pub fn rigid_from_matrix(m: Mat4, path: &Path, what: &str) -> Result<Affine3A, I
             format!("{what}: the rotation is a reflection (det < 0)"),
         ));
     }
+    let t = m.col(3).truncate();
+    check_translation(t, path, what)?;
     // Re-orthonormalise so that downstream code works with an exact rotation.
     let rotation = Quat::from_mat3(&r).normalize();
-    Ok(Affine3A::from_rotation_translation(
-        rotation,
-        m.col(3).truncate(),
-    ))
+    Ok(Affine3A::from_rotation_translation(rotation, t))
+}
+
+/// The farthest a camera may be from the origin, metres: a building, not a planet. Past it, f32
+/// positions lose the millimetres mapping needs.
+pub const MAX_TRANSLATION_M: f32 = 10_000.0;
+
+fn check_translation(t: Vec3, path: &Path, what: &str) -> Result<(), InputError> {
+    if t.abs().max_element() > MAX_TRANSLATION_M {
+        return Err(InputError::invalid(
+            path,
+            format!(
+                "{what}: the translation {t} lies more than {MAX_TRANSLATION_M} m from the origin"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Reads a pose file holding one 4x4 matrix.
@@ -99,6 +114,7 @@ pub fn from_translation_quaternion(
             format!("{what}: NaN or infinite pose"),
         ));
     }
+    check_translation(t, path, what)?;
     let norm = q.length();
     if (norm - 1.0).abs() > 0.01 {
         return Err(InputError::invalid(

@@ -13,6 +13,7 @@ mod cad_replacement;
 mod contact_graph;
 mod exports;
 mod gravity;
+mod hostile_input;
 mod model_import;
 mod onnx;
 mod panoptic;

@@ -49,7 +49,8 @@ pub fn scene_specs() -> Vec<PathBuf> {
     specs
 }
 
-/// SHA-256 of every file under `dir`, by relative path.
+/// SHA-256 of every file under `dir`, by relative path; an output folder's marker is left out,
+/// since it records when each file was written.
 pub fn hash_tree(dir: &Path) -> Vec<(String, String)> {
     use sha2::Digest;
     let mut out = Vec::new();
@@ -62,7 +63,7 @@ pub fn hash_tree(dir: &Path) -> Vec<(String, String)> {
             let p = entry.path();
             if p.is_dir() {
                 stack.push(p);
-            } else {
+            } else if entry.file_name() != iscene::io::output_folder::MARKER {
                 let bytes = std::fs::read(&p).expect("read file");
                 let digest = sha2::Sha256::digest(&bytes);
                 let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
