@@ -367,11 +367,9 @@ fn cad_files_cannot_escape_their_folder_nest_without_end_or_set_endless_ranges()
     refused_import(
         "cabinet.urdf",
         "urdf",
-        &format!(
-            r#"<robot name="cabinet"><link name="carcass"><inertial><mass value="-5"/>
+        r#"<robot name="cabinet"><link name="carcass"><inertial><mass value="-5"/>
             <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>
-            <collision><geometry><box size="0.5 0.5 0.5"/></geometry></collision></link></robot>"#
-        ),
+            <collision><geometry><box size="0.5 0.5 0.5"/></geometry></collision></link></robot>"#,
         &["cabinet.urdf", "mass"],
     );
     // --into a user's folder.
