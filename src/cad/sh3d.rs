@@ -184,10 +184,8 @@ fn entry_of(fields: &BTreeMap<String, String>) -> Result<CatalogueEntry, String>
             .trim()
             .parse()
             .map_err(|_| format!("{key} is not a number"))?;
-        if !(value.is_finite() && value > 0.0 && value <= MAX_SIZE_CM) {
-            return Err(format!(
-                "{key} {value} cm is not a size of furniture (0..{MAX_SIZE_CM} cm)"
-            ));
+        if !(value.is_finite() && value > 0.0) {
+            return Err(format!("{key} {value} is not a positive size"));
         }
         Ok(value / 100.0)
     };
@@ -349,8 +347,9 @@ fn model_files<R: Read + Seek>(
 const MAX_ENTRY_BYTES: u64 = 64 << 20;
 /// The most triangles an imported model may have before its convex decomposition.
 const MAX_TRIANGLES: usize = 100_000;
-/// The largest size a catalogue may give a piece of furniture, centimetres.
-const MAX_SIZE_CM: f32 = 2000.0;
+/// The largest size of a piece of furniture imported, metres (catalogues hold a few buildings
+/// and gardens too).
+const MAX_SIZE_M: f32 = 20.0;
 
 /// The entry's model in the canonical frame, at the catalogue's size.
 fn entry_model(
@@ -359,6 +358,12 @@ fn entry_model(
     obj: &[u8],
     materials: &BTreeMap<String, Vec<u8>>,
 ) -> Result<CadModel, String> {
+    if entry.size.max_element() > MAX_SIZE_M {
+        return Err(format!(
+            "its size {:?} m is not furniture's (at most {MAX_SIZE_M} m)",
+            entry.size.to_array()
+        ));
+    }
     let (mesh, color) = obj_mesh(obj, materials)?;
     if mesh.triangles.len() > MAX_TRIANGLES {
         return Err(format!(

@@ -12,6 +12,7 @@ mod cad_library;
 mod cad_replacement;
 mod contact_graph;
 mod exports;
+mod fuzz_corpora;
 mod gravity;
 mod hostile_input;
 mod model_import;

@@ -1,0 +1,6 @@
+//! Fuzzes the reader of `iscene::fuzzing::Reader::Mjcf` (see src/fuzzing.rs).
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    iscene::fuzzing::read(iscene::fuzzing::Reader::Mjcf, data);
+});
