@@ -33,8 +33,9 @@ use crate::systems::simulation::{
     spawn_robot, step_physics,
 };
 
-/// States the planner may expand before it gives up: about 5 s and 120 MB (2 million took 42 s
-/// and 900 MB to prove 7 goals unreachable). The kitchen's goals need a few thousand.
+/// States the planner may expand before it gives up: 6 s and 130 MB to prove 7 kitchen goals
+/// unreachable (test build, 2026-11-26; 2 million took 42 s and 900 MB). The kitchen's
+/// demonstration goals need 15 to 702 (an 8-step plan).
 const MAX_EXPANDED: usize = 250_000;
 
 pub struct SimulateOptions {

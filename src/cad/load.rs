@@ -75,6 +75,21 @@ pub fn read_model(dir: &Path, id: &str) -> Result<CadModel, InputError> {
                 format!("part {}: pose is not finite", part.name),
             ));
         }
+        // A part's pose is rigid: a singular or scaled one would break every later transform.
+        let r = parent_from_part.matrix3;
+        let deviation = (r.transpose() * r - glam::Mat3A::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f32, |a, v| a.max(v.abs()));
+        if deviation > 1e-3 || r.determinant() < 0.0 {
+            return Err(InputError::invalid(
+                &meta_path,
+                format!(
+                    "part {}: pose is not a rotation and a translation",
+                    part.name
+                ),
+            ));
+        }
         // The part's look, where it has one of its own, is its node's child of that name.
         let visual_name = visual_node_name(&part.name);
         let visual = meshes
