@@ -11,6 +11,7 @@ pub mod components;
 pub mod error;
 pub mod eval;
 pub mod export;
+pub mod file_name;
 pub mod fuzzing;
 pub mod geometry;
 pub mod graph;

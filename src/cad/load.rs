@@ -8,7 +8,7 @@ use crate::cad::export::{DatabaseIndex, ModelMetadata, visual_node_name};
 use crate::cad::model::{CadModel, CadPart};
 use crate::error::InputError;
 use crate::geometry::TriMesh;
-use crate::io::file_name::check_file_name;
+use crate::file_name::check_file_name;
 use glam::{Affine3A, Mat4, Vec3};
 
 /// The index of the database folder `dir`.

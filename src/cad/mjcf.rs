@@ -28,7 +28,7 @@ use crate::cad::body_tree::{Body, BodyJoint, BodyTree, ModelFileError, check_xml
 use crate::cad::mesh_files::read_mesh_file;
 use crate::cad::mjcf_xml::{at, elements, euler_order, numbers, parse_numbers, pose, vec3};
 use crate::geometry::TriMesh;
-use crate::io::file_name::inside_folder;
+use crate::file_name::inside_folder;
 use crate::kinematics::JointKind;
 
 /// Facets around primitives (spheres, capsules, cylinders).

@@ -19,7 +19,7 @@ use crate::cad::body_tree::{
 };
 use crate::cad::mesh_files::read_mesh_file;
 use crate::geometry::TriMesh;
-use crate::io::file_name::inside_folder;
+use crate::file_name::inside_folder;
 use crate::kinematics::JointKind;
 
 /// Facets around cylinders, capsules and spheres.

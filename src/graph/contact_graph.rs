@@ -122,7 +122,7 @@ impl ContactGraph {
             if !ids.insert(n.id.as_str()) {
                 return Err(format!("nodes: duplicate id {:?}", n.id));
             }
-            crate::io::file_name::check_file_name(&n.id).map_err(|e| format!("nodes: {e}"))?;
+            crate::file_name::check_file_name(&n.id).map_err(|e| format!("nodes: {e}"))?;
             let finite = n
                 .bbox
                 .center

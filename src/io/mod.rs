@@ -1,7 +1,6 @@
 //! Reading and writing files: RGB-D sequences in their several layouts, meshes, glTF, staged outputs.
 
 pub mod atomic;
-pub mod file_name;
 pub mod gltf_write;
 pub mod images;
 pub mod intrinsics;

@@ -70,7 +70,7 @@ pub fn open(root: &Path) -> Result<Sequence, InputError> {
         let labels = serde_json::from_str::<Labels>(&text)
             .map_err(|e| InputError::invalid(&labels_path, format!("invalid labels.json: {e}")))?;
         for entry in labels.instances.values() {
-            crate::io::file_name::check_file_name(&entry.entity)
+            crate::file_name::check_file_name(&entry.entity)
                 .map_err(|e| InputError::invalid(&labels_path, format!("entity: {e}")))?;
         }
         Some(labels)

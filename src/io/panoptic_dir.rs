@@ -111,7 +111,7 @@ pub fn read_index(dir: &Path) -> Result<PanopticIndex, InputError> {
     let index: PanopticIndex = serde_json::from_str(&text)
         .map_err(|e| InputError::invalid(&index_path, format!("not a panoptic index: {e}")))?;
     for entity in &index.entities {
-        crate::io::file_name::check_file_name(&entity.id)
+        crate::file_name::check_file_name(&entity.id)
             .map_err(|e| InputError::invalid(&index_path, format!("entities: {e}")))?;
     }
     Ok(index)

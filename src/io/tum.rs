@@ -6,7 +6,7 @@ use glam::{Quat, Vec3};
 
 use crate::error::InputError;
 use crate::geometry::Pinhole;
-use crate::io::file_name::inside_folder;
+use crate::file_name::inside_folder;
 use crate::io::intrinsics;
 use crate::io::pose::from_translation_quaternion;
 use crate::io::sequence::{FrameRecord, Sequence, SequenceFormat};

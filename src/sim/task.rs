@@ -94,7 +94,7 @@ impl Task {
         for (i, step) in self.steps.iter().enumerate() {
             let key = format!("steps[{i}]");
             for id in step.node_ids() {
-                crate::io::file_name::check_file_name(id).map_err(|e| format!("{key}: {e}"))?;
+                crate::file_name::check_file_name(id).map_err(|e| format!("{key}: {e}"))?;
             }
             match step {
                 Action::Open { value: Some(v), .. }
