@@ -210,9 +210,19 @@ impl OutputTarget {
             return Ok(());
         }
         let Some(marker) = OutputMarker::read(&self.path) else {
+            // Outputs of iscene before the marker existed look like this; they are not deleted
+            // either, but the user is told what they are.
+            let older = ["report.json", "trace.json", "gt/render.json"]
+                .iter()
+                .any(|f| self.path.join(f).is_file());
             return Err(self.refuse(format!(
                 "is a folder iscene did not write (it has no {MARKER}), and it is not empty: \
-                 choose a new or empty folder"
+                 choose a new or empty folder{}",
+                if older {
+                    " (if it is the output of an iscene older than the marker, delete it yourself)"
+                } else {
+                    ""
+                }
             )));
         };
         if marker.command != self.command && !self.force {
