@@ -7,8 +7,8 @@ use std::path::Path;
 use crate::cad::export::{DatabaseIndex, ModelMetadata, visual_node_name};
 use crate::cad::model::{CadModel, CadPart};
 use crate::error::InputError;
-use crate::geometry::TriMesh;
 use crate::file_name::check_file_name;
+use crate::geometry::TriMesh;
 use glam::{Affine3A, Mat4, Vec3};
 
 /// The index of the database folder `dir`.

@@ -27,8 +27,8 @@ use roxmltree::Node;
 use crate::cad::body_tree::{Body, BodyJoint, BodyTree, ModelFileError, check_xml_depth};
 use crate::cad::mesh_files::read_mesh_file;
 use crate::cad::mjcf_xml::{at, elements, euler_order, numbers, parse_numbers, pose, vec3};
-use crate::geometry::TriMesh;
 use crate::file_name::inside_folder;
+use crate::geometry::TriMesh;
 use crate::kinematics::JointKind;
 
 /// Facets around primitives (spheres, capsules, cylinders).

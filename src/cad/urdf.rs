@@ -18,8 +18,8 @@ use crate::cad::body_tree::{
     Body, BodyJoint, BodyTree, MAX_BODIES, ModelFileError, check_xml_depth,
 };
 use crate::cad::mesh_files::read_mesh_file;
-use crate::geometry::TriMesh;
 use crate::file_name::inside_folder;
+use crate::geometry::TriMesh;
 use crate::kinematics::JointKind;
 
 /// Facets around cylinders, capsules and spheres.

@@ -5,8 +5,8 @@ use std::path::Path;
 use glam::{Quat, Vec3};
 
 use crate::error::InputError;
-use crate::geometry::Pinhole;
 use crate::file_name::inside_folder;
+use crate::geometry::Pinhole;
 use crate::io::intrinsics;
 use crate::io::pose::from_translation_quaternion;
 use crate::io::sequence::{FrameRecord, Sequence, SequenceFormat};
