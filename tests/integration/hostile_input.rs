@@ -9,37 +9,6 @@ use std::time::{Duration, Instant};
 
 use crate::common;
 
-/// Every path under `dir` with its size and content hash: what "nothing touched" compares.
-fn listing(dir: &Path) -> Vec<(String, String)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d)
-            .expect("read dir")
-            .filter_map(Result::ok)
-        {
-            let p = entry.path();
-            let name = p.strip_prefix(dir).expect("prefix").display().to_string();
-            let meta = p.symlink_metadata().expect("metadata");
-            if meta.is_dir() {
-                out.push((name, "dir".into()));
-                stack.push(p);
-            } else {
-                let hash = if meta.file_type().is_symlink() {
-                    "link".into()
-                } else {
-                    use sha2::Digest;
-                    let digest = sha2::Sha256::digest(std::fs::read(&p).expect("read"));
-                    digest.iter().map(|b| format!("{b:02x}")).collect()
-                };
-                out.push((name, hash));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 /// Runs iscene in `cwd`, killed after `limit`; (exit code, stderr). A run past the limit fails
 /// the test: nothing may hang.
 fn run_within(args: &[&str], cwd: &Path, limit: Duration) -> (i32, String) {
@@ -69,7 +38,7 @@ fn run_within(args: &[&str], cwd: &Path, limit: Duration) -> (i32, String) {
 /// Runs a case in `dir`: exit code 2 within `seconds`, stderr naming each of `words`, and `dir`
 /// exactly as before.
 fn refused(dir: &Path, args: &[&str], words: &[&str], seconds: u64) {
-    let before = listing(dir);
+    let before = common::listing(dir);
     let (code, stderr) = run_within(args, dir, Duration::from_secs(seconds));
     assert_eq!(code, 2, "{args:?}: exit code {code}: {stderr}");
     for word in words {
@@ -80,7 +49,7 @@ fn refused(dir: &Path, args: &[&str], words: &[&str], seconds: u64) {
     }
     assert_eq!(
         before,
-        listing(dir),
+        common::listing(dir),
         "{args:?}: files changed around the output"
     );
 }
@@ -88,6 +57,19 @@ fn refused(dir: &Path, args: &[&str], words: &[&str], seconds: u64) {
 fn ok(dir: &Path, args: &[&str]) {
     let (code, stderr) = run_within(args, dir, Duration::from_secs(600));
     assert_eq!(code, 0, "{args:?}: {stderr}");
+}
+
+/// `reconstruct INPUT --segmentation none` is refused, saying each of `words`.
+fn refused_without_labels(dir: &Path, input: &str, words: &[&str]) {
+    let args = [
+        "reconstruct",
+        input,
+        "--out",
+        "out",
+        "--segmentation",
+        "none",
+    ];
+    refused(dir, &args, words, 60);
 }
 
 /// A 3-frame noise-free kitchen sequence at `dir/data/seq`.
@@ -484,19 +466,7 @@ fn sizes_set_by_files_and_flags_are_bounded() {
         "1 0 320\n0 1 240\n0 0 1\n",
     )
     .expect("write");
-    refused(
-        dir,
-        &[
-            "reconstruct",
-            "data/wide",
-            "--out",
-            "out",
-            "--segmentation",
-            "none",
-        ],
-        &["camera-intrinsics.txt", "focal"],
-        60,
-    );
+    refused_without_labels(dir, "data/wide", &["camera-intrinsics.txt", "focal"]);
     // A pose 1e30 m away.
     std::fs::copy(
         dir.join("data/seq/camera-intrinsics.txt"),
@@ -508,19 +478,7 @@ fn sizes_set_by_files_and_flags_are_bounded() {
         "1 0 0 1e30\n0 1 0 0\n0 0 1 0\n0 0 0 1\n",
     )
     .expect("write");
-    refused(
-        dir,
-        &[
-            "reconstruct",
-            "data/wide",
-            "--out",
-            "out",
-            "--segmentation",
-            "none",
-        ],
-        &["frame-000001.pose.txt", "translation"],
-        60,
-    );
+    refused_without_labels(dir, "data/wide", &["frame-000001.pose.txt", "translation"]);
 
     // Specifications: a trillion frames, four thousand objects.
     let spec: serde_json::Value = serde_json::from_str(

@@ -52,6 +52,18 @@ pub fn scene_specs() -> Vec<PathBuf> {
 /// SHA-256 of every file under `dir`, by relative path; an output folder's marker is left out,
 /// since it records when each file was written.
 pub fn hash_tree(dir: &Path) -> Vec<(String, String)> {
+    listing(dir)
+        .into_iter()
+        .filter(|(name, hash)| hash != DIR && !name.ends_with(iscene::io::output_folder::MARKER))
+        .collect()
+}
+
+/// What [`listing`] gives a folder instead of a hash.
+const DIR: &str = "dir";
+
+/// Every path under `dir` (symbolic links not followed) with the SHA-256 of its content, `dir`
+/// for a folder or `link` for a link, sorted: what "nothing touched" compares.
+pub fn listing(dir: &Path) -> Vec<(String, String)> {
     use sha2::Digest;
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -61,17 +73,18 @@ pub fn hash_tree(dir: &Path) -> Vec<(String, String)> {
             .filter_map(Result::ok)
         {
             let p = entry.path();
-            if p.is_dir() {
+            let name = p.strip_prefix(dir).expect("prefix").display().to_string();
+            let meta = p.symlink_metadata().expect("metadata");
+            let hash = if meta.is_dir() {
                 stack.push(p);
-            } else if entry.file_name() != iscene::io::output_folder::MARKER {
-                let bytes = std::fs::read(&p).expect("read file");
-                let digest = sha2::Sha256::digest(&bytes);
-                let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
-                out.push((
-                    p.strip_prefix(dir).expect("prefix").display().to_string(),
-                    hex,
-                ));
-            }
+                DIR.to_string()
+            } else if meta.file_type().is_symlink() {
+                "link".to_string()
+            } else {
+                let digest = sha2::Sha256::digest(std::fs::read(&p).expect("read file"));
+                digest.iter().map(|b| format!("{b:02x}")).collect()
+            };
+            out.push((name, hash));
         }
     }
     out.sort();
