@@ -36,7 +36,7 @@ echo "== tests (with the viewer feature: one build serves every test)"
 # the same and clippy above checks it as it is. Building the tests once, with the feature,
 # keeps a clean CI run within its time budget: a second build of the Bevy stack would not.
 # Lints of the viewer code: `cargo clippy --features viewer --all-targets -- -D warnings`.
-# src/main.rs has no tests: Cargo.toml turns its test harness off (`test = false`), which saves
+# The command line (src/bin/iscene) has no tests: Cargo.toml turns its test harness off (`test = false`), which saves
 # one more link of the whole Bevy stack. The integration tests build and run the binary.
 cargo test --locked --features viewer --lib --tests --no-fail-fast
 disk

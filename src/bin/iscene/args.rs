@@ -1,0 +1,300 @@
+//! The command line's arguments: every subcommand and flag, with their help texts and parsers.
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+use iscene::cad::body_tree::ImportScale;
+
+#[derive(Parser)]
+#[command(
+    name = "iscene",
+    version,
+    about = "RGB-D stream of a room to an interactive, simulatable scene"
+)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+pub(crate) enum Command {
+    /// Render a scene specification to an RGB-D sequence folder with ground truth.
+    Render {
+        spec: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Number of frames (default: the specification's, else 300).
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Turn every noise model off.
+        #[arg(long)]
+        no_noise: bool,
+        /// Replace an earlier output of another iscene command at --out (a folder iscene did
+        /// not write is never replaced).
+        #[arg(long)]
+        force: bool,
+    },
+    /// Reconstruct a scene from a specification (rendered first), a sequence folder or a TUM folder.
+    Reconstruct(ReconstructArgs),
+    /// Score a reconstruction against a rendered sequence's ground truth; one JSON object on stdout.
+    Eval {
+        dir: PathBuf,
+        #[arg(long)]
+        gt: PathBuf,
+    },
+    /// Run a task (actions, or goals to plan for) in a reconstructed scene folder (or a rendered
+    /// sequence's gt/); writes the trace, the task's PDDL and the exports after the last step.
+    Simulate {
+        /// A folder with contact_graph.json.
+        dir: PathBuf,
+        #[arg(long)]
+        task: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Replace an earlier output of another iscene command at --out (a folder iscene did
+        /// not write is never replaced).
+        #[arg(long)]
+        force: bool,
+    },
+    /// Look at a scene folder (a reconstruction, or a rendered sequence's gt/) in a window, or
+    /// render it off screen into a PNG (built with `--features viewer`).
+    View {
+        /// A folder with contact_graph.json; with --replay, a reconstruction's output folder.
+        dir: PathBuf,
+        /// Render off screen into this PNG and exit.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Layers shown: colour, segments, boxes, graph, planes, collision, occupancy, physics,
+        /// map (repeat or separate with commas).
+        #[arg(long, value_delimiter = ',')]
+        layer: Vec<String>,
+        /// Frames rendered before the screenshot.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: u32,
+        /// Screenshot size in pixels, WIDTHxHEIGHT.
+        #[arg(long, default_value = "960x720", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Open this object's main door or drawer first (repeatable).
+        #[arg(long)]
+        open: Vec<String>,
+        /// Play back the reconstruction in DIR (written by `iscene reconstruct`) frame by frame.
+        #[arg(long)]
+        replay: bool,
+        /// A task script (scenes/tasks/*.json) to run in the window: N does the next action, P
+        /// plays them; with --screenshot, the picture is taken after the last action.
+        #[arg(long)]
+        task: Option<PathBuf>,
+        /// With --replay and --screenshot: this many pictures from the first frame to the last
+        /// (FILE.gif: one animated GIF; otherwise numbered PNGs FILE_00.png ...).
+        #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=200))]
+        shots: u32,
+    },
+    /// Benchmarks that print their figures as one JSON object on stdout.
+    Bench {
+        #[command(subcommand)]
+        command: BenchCommand,
+    },
+    /// The CAD database.
+    Cad {
+        #[command(subcommand)]
+        command: CadCommand,
+    },
+}
+
+#[derive(clap::Args)]
+pub(crate) struct ReconstructArgs {
+    /// Scene specification (.json), sequence folder, or TUM folder; default: the built-in kitchen.
+    pub(crate) input: Option<PathBuf>,
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+    /// Frames to use as A:B[:STEP] (B may be empty for "to the end").
+    #[arg(long, value_parser = parse_frames)]
+    pub(crate) frames: Option<(usize, Option<usize>, usize)>,
+    /// TSDF voxel size in metres.
+    #[arg(long, default_value_t = 0.02)]
+    pub(crate) voxel: f32,
+    #[arg(long, value_enum, default_value_t = Segmentation::Oracle)]
+    pub(crate) segmentation: Segmentation,
+    /// Segment every K-th frame (the others are fused with geometric segments only).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub(crate) segment_every: u64,
+    /// Folder of the onnx backend's models (yolox_nano.onnx, deeplab_v3_1_default_1.opset13.onnx,
+    /// coco.names); default ../shared/data/models.
+    #[arg(long)]
+    pub(crate) models: Option<PathBuf>,
+    /// Map like this baseline instead of the joint fusion (for the ablation).
+    #[arg(long, value_enum)]
+    pub(crate) baseline: Option<Baseline>,
+    /// Estimate gravity from the map even when the sequence has a gravity file (which is then
+    /// only compared with, in report.json).
+    #[arg(long)]
+    pub(crate) estimate_gravity: bool,
+    /// CAD database folder to replace objects from, instead of the built-in parametric library
+    /// (`iscene cad import` writes one; `iscene cad generate --into DB` adds the parametric
+    /// models to it). The models used are copied into OUT/cad.
+    #[arg(long, value_name = "DB")]
+    pub(crate) cad: Option<PathBuf>,
+    /// How CAD candidates are chosen and aligned: `lm` ranks every model of the class in 24
+    /// orientations and aligns the 10 best by Levenberg-Marquardt over per-axis scale, yaw and
+    /// translation (Han et al.); `icp` aligns every upright model of the class by a yaw sweep
+    /// and ICP over yaw, floor position and width and depth scales (Sivananda et al.).
+    #[arg(long, value_enum, default_value_t = Align::Lm)]
+    pub(crate) align: Align,
+    /// Replace an earlier output of another iscene command at --out (a folder iscene did not
+    /// write is never replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+    /// The map's memory budget in GB: a --voxel expected to outgrow it (estimated from the
+    /// surface a sample of the frames sees) is refused before mapping.
+    #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
+    pub(crate) max_memory: f64,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(crate) enum Align {
+    Lm,
+    Icp,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(crate) enum Baseline {
+    #[value(name = "voxblox++")]
+    VoxbloxPlusPlus,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(crate) enum Segmentation {
+    Oracle,
+    Onnx,
+    None,
+}
+
+#[derive(Subcommand)]
+pub(crate) enum BenchCommand {
+    /// The onnx segmentation backend's time per frame on one core, and on a rendered sequence its
+    /// chair and table masks' overlap (IoU) with the ground truth.
+    Segmentation {
+        sequence: PathBuf,
+        /// Frames to use as A:B[:STEP].
+        #[arg(long, value_parser = parse_frames, default_value = "0::10")]
+        frames: (usize, Option<usize>, usize),
+        /// Folder of the models; default ../shared/data/models.
+        #[arg(long, default_value = iscene::segmentation::onnx::OnnxModels::DEFAULT_DIR)]
+        models: PathBuf,
+    },
+    /// TSDF integration speed, map memory and depth agreement on held-out frames of a sequence.
+    Tsdf {
+        sequence: PathBuf,
+        /// Frames to use as A:B[:STEP].
+        #[arg(long, value_parser = parse_frames, default_value = "0:300")]
+        frames: (usize, Option<usize>, usize),
+        #[arg(long, default_value_t = 0.02)]
+        voxel: f32,
+        /// Leave every N-th frame out of the fusion and raycast the map at it (0: fuse all).
+        #[arg(long, default_value_t = 0)]
+        holdout: usize,
+        /// Also fuse a segment label per pixel (geometric segments), as the panoptic mapper does.
+        #[arg(long)]
+        labels: bool,
+        /// Write the map's mesh here (PLY).
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+        /// Integrate the frames this many times into fresh maps and report the fastest run (a
+        /// shared machine's noise only ever slows a run down).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
+        /// The map's memory budget in GB (as reconstruct's).
+        #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
+        max_memory: f64,
+    },
+    /// Time per action of a task (with its physics check), over fresh runs of the task on a
+    /// scene folder (as `iscene simulate` takes).
+    Simulation {
+        dir: PathBuf,
+        #[arg(long)]
+        task: PathBuf,
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
+    },
+}
+
+#[derive(Subcommand)]
+pub(crate) enum CadCommand {
+    /// Write the parametric library (glTF meshes and metadata) into a folder.
+    Generate {
+        #[arg(long, default_value = "assets/cad")]
+        into: PathBuf,
+    },
+    /// Import third-party models into a database folder (added to what it holds), for
+    /// `reconstruct --cad DB`.
+    Import {
+        /// The format. sh3d: Sweet Home 3D furniture (a *.sh3f catalogue, sweethome3d.jar, or a
+        /// folder of them such as /usr/share/sweethome3d/furniture). mjcf: MuJoCo model files
+        /// (one *.xml file or a folder of them, such as LIBERO's articulated_objects). urdf: URDF
+        /// model files (one *.urdf file or a folder of them).
+        format: ImportFormat,
+        path: PathBuf,
+        #[arg(long)]
+        into: PathBuf,
+        /// mjcf and urdf: `class` sizes each model uniformly to its class's typical size; a
+        /// number scales the file's units by it (1: metres). Default: `class` for mjcf (LIBERO's
+        /// objects are made for a tabletop), 1 for urdf (URDF is in metres at real size).
+        #[arg(long, value_parser = parse_import_scale)]
+        scale: Option<ImportScale>,
+    },
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub(crate) enum ImportFormat {
+    Sh3d,
+    Mjcf,
+    Urdf,
+}
+
+pub(crate) fn parse_import_scale(s: &str) -> Result<ImportScale, String> {
+    if s == "class" {
+        return Ok(ImportScale::Class);
+    }
+    s.parse::<f32>()
+        .ok()
+        .filter(|f| f.is_finite() && *f > 0.0)
+        .map(ImportScale::Factor)
+        .ok_or_else(|| format!("{s:?} is neither `class` nor a positive number"))
+}
+
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT"))?;
+    let number = |p: &str| {
+        p.parse::<u32>()
+            .ok()
+            .filter(|n| (16..=8192).contains(n))
+            .ok_or_else(|| format!("{p:?} in {s:?} is not a size from 16 to 8192 pixels"))
+    };
+    Ok((number(w)?, number(h)?))
+}
+
+pub(crate) fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), String> {
+    let parts: Vec<&str> = s.split(':').collect();
+    let number = |p: &str| {
+        p.parse::<usize>()
+            .map_err(|_| format!("{p:?} is not a frame number (expected A:B[:STEP])"))
+    };
+    match parts[..] {
+        [a, b] | [a, b, _] => {
+            let start = if a.is_empty() { 0 } else { number(a)? };
+            let end = if b.is_empty() { None } else { Some(number(b)?) };
+            let step = if parts.len() == 3 {
+                number(parts[2])?
+            } else {
+                1
+            };
+            if step == 0 || end.is_some_and(|e| e <= start) {
+                return Err(format!("{s:?} selects no frames"));
+            }
+            Ok((start, end, step))
+        }
+        _ => Err(format!("{s:?}: expected A:B[:STEP]")),
+    }
+}
