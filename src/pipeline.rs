@@ -149,7 +149,13 @@ fn render_input(
     let spec = SceneSpec::parse(spec_text, spec_path)?;
     let sequence_dir = rendered_input_dir(out);
     let stamp = sequence_dir.join("gt").join("spec.fingerprint");
-    let fingerprint = spec_fingerprint(spec_text);
+    // The databases of "cad" are part of what is rendered.
+    let indices: Vec<String> = spec
+        .databases
+        .iter()
+        .map(|db| std::fs::read_to_string(db.dir.join("index.json")).unwrap_or_default())
+        .collect();
+    let fingerprint = spec_fingerprint(&format!("{spec_text}\n{}", indices.join("\n")));
     let ours = OutputTarget::claim(
         "--out",
         &sequence_dir,

@@ -33,27 +33,12 @@ pub struct PlacedSolid {
 
 impl PlacedSolid {
     pub fn new(model: &DatabaseModel, world_from_model: &Affine3A) -> Self {
-        let pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)> = model
-            .pieces
-            .iter()
-            .filter_map(|piece| {
-                let points: Vec<Vec3> = piece
-                    .iter()
-                    .map(|p| world_from_model.transform_point3(*p))
-                    .collect();
-                let (lo, hi) = bounds(&points)?;
-                Some((ConvexPolyhedron::from_convex_hull(&points)?, lo, hi))
-            })
-            .collect();
-        let (lo, hi) = pieces.iter().fold(
-            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-            |(lo, hi), (_, a, b)| (lo.min(*a), hi.max(*b)),
-        );
-        let posed = model.mesh.transformed(world_from_model);
-        let upward = (0..posed.triangles.len())
-            .filter(|&t| posed.face_normal(t).z > 0.9)
-            .map(|t| posed.triangle(t))
-            .collect();
+        let pieces = model.pieces.iter().map(|piece| {
+            piece
+                .iter()
+                .map(|p| world_from_model.transform_point3(*p))
+                .collect()
+        });
         let (mlo, mhi) = model.mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
         let footprint = [
             Vec3::new(mlo.x, mlo.y, mlo.z),
@@ -62,6 +47,42 @@ impl PlacedSolid {
             Vec3::new(mlo.x, mhi.y, mlo.z),
         ]
         .map(|c| world_from_model.transform_point3(c));
+        Self::from_pieces(pieces, &model.mesh.transformed(world_from_model), footprint)
+    }
+
+    /// A mesh already placed in the world (doors and drawers where they stand) as the hulls of
+    /// its connected components; its footprint is the bottom of its axis-aligned bounds.
+    pub fn from_world_mesh(mesh: &TriMesh) -> Self {
+        let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+        let footprint = [
+            lo,
+            Vec3::new(hi.x, lo.y, lo.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+        ];
+        let pieces = mesh.connected_components().into_iter().map(|c| c.positions);
+        Self::from_pieces(pieces, mesh, footprint)
+    }
+
+    fn from_pieces(
+        pieces: impl Iterator<Item = Vec<Vec3>>,
+        posed: &TriMesh,
+        footprint: [Vec3; 4],
+    ) -> Self {
+        let pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)> = pieces
+            .filter_map(|points| {
+                let (lo, hi) = bounds(&points)?;
+                Some((ConvexPolyhedron::from_convex_hull(&points)?, lo, hi))
+            })
+            .collect();
+        let (lo, hi) = pieces.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), (_, a, b)| (lo.min(*a), hi.max(*b)),
+        );
+        let upward = (0..posed.triangles.len())
+            .filter(|&t| posed.face_normal(t).z > 0.9)
+            .map(|t| posed.triangle(t))
+            .collect();
         Self {
             pieces,
             lo,

@@ -36,7 +36,7 @@ impl RenderScene {
         for o in &world.objects {
             for (part, world_from_part) in o.model.parts.iter().zip(o.world_from_parts()) {
                 scene.push_mesh(
-                    &part.mesh.transformed(&world_from_part),
+                    &part.visual_mesh().transformed(&world_from_part),
                     o.instance,
                     part.color,
                     Surface::Plain,

@@ -135,13 +135,9 @@ pub fn render_sequence(
     options: &RenderOptions,
 ) -> Result<RenderSummary, IsceneError> {
     let start = Instant::now();
-    let target = OutputTarget::claim(
-        "--out",
-        out,
-        OutputCommand::Render,
-        &[spec_path],
-        options.force,
-    )?;
+    let mut inputs: Vec<&Path> = vec![spec_path];
+    inputs.extend(spec.databases.iter().map(|db| db.dir.as_path()));
+    let target = OutputTarget::claim("--out", out, OutputCommand::Render, &inputs, options.force)?;
     let world = SceneWorld::from_spec(spec, spec_path)?;
     let scene = RenderScene::from_world(&world);
     let camera = Pinhole::KINECT;

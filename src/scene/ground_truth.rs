@@ -63,7 +63,7 @@ impl SceneWorld {
         let objects = self
             .objects
             .iter()
-            .map(|o| (o.id.clone(), o.world_mesh(), o.model.parts[0].color));
+            .map(|o| (o.id.clone(), o.world_visual_mesh(), o.model.parts[0].color));
         layout.chain(objects).collect()
     }
 

@@ -1,6 +1,7 @@
 //! Synthetic scenes: the JSON specification and the world it describes, with its ground truth.
 
 pub mod ground_truth;
+pub mod overlap;
 pub mod placement;
 pub mod spec;
 pub mod world;

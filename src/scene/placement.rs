@@ -9,7 +9,8 @@ use glam::{Affine3A, Quat, Vec3};
 use crate::cad::ParametricLibrary;
 use crate::classes::ClassTable;
 use crate::error::InputError;
-use crate::scene::spec::{Placement, SceneSpec};
+use crate::scene::overlap::{MAX_OVERLAP_M, deepest_overlap};
+use crate::scene::spec::{ModelSource, Placement, SceneSpec};
 use crate::scene::world::{
     FIRST_OBJECT_INSTANCE, PlacedObject, SceneWorld, Support, wall_frame, wall_length, yaw_facing,
 };
@@ -34,22 +35,19 @@ impl SceneWorld {
             .collect();
         for i in order {
             let o = &spec.objects[i];
-            let entry = match &o.model {
-                Some(m) => ParametricLibrary::get(m),
+            let source = match &o.model {
+                Some(m) => spec.model_source(m),
                 None => {
                     let variants: Vec<_> = ParametricLibrary::variants(&o.class).collect();
                     variants
                         .get(
                             (stable_hash(spec.seed, &o.id) % variants.len().max(1) as u64) as usize,
                         )
-                        .copied()
+                        .map(|e| ModelSource::Parametric(e))
                 }
             }
             .ok_or_else(|| err(i, format!("class: no CAD model for class {:?}", o.class)))?;
-            let model = match o.size {
-                Some(s) => entry.model_sized(Vec3::from_array(s)),
-                None => entry.model(),
-            };
+            let model = source.build(o.size.map(Vec3::from_array));
             for name in o.joints.keys() {
                 if !model.movable_parts().any(|p| &p.name == name) {
                     let movable: Vec<_> = model.movable_parts().map(|p| p.name.as_str()).collect();
@@ -181,13 +179,28 @@ impl SceneWorld {
             placed[i] = Some(object);
         }
         let objects = placed.into_iter().flatten().collect::<Vec<_>>();
-        Ok(SceneWorld {
+        let world = SceneWorld {
             name: spec.name.clone(),
             seed: spec.seed,
             room_size: room,
             layout: SceneWorld::room_layout(room),
             objects,
-        })
+        };
+        if let Some(o) = deepest_overlap(&world) {
+            return Err(InputError::invalid(
+                source,
+                format!(
+                    "objects[{}] {:?} and objects[{}] {:?} overlap by {:.1} mm (at most {:.0} mm is allowed)",
+                    o.a,
+                    world.objects[o.a].id,
+                    o.b,
+                    world.objects[o.b].id,
+                    1000.0 * o.depth,
+                    1000.0 * MAX_OVERLAP_M
+                ),
+            ));
+        }
+        Ok(world)
     }
 }
 

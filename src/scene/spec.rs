@@ -2,11 +2,14 @@
 //! classes, dangling references and impossible sizes are errors that name the key.
 
 use std::collections::{BTreeMap, HashMap};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use serde::Deserialize;
 
-use crate::cad::ParametricLibrary;
+use crate::cad::library::LibraryEntry;
+use crate::cad::load::read_database;
+use crate::cad::{CadModel, ParametricLibrary};
 use crate::classes::{ClassTable, EntityKind};
 use crate::error::InputError;
 use crate::render::noise::NoiseSettings;
@@ -23,6 +26,55 @@ pub struct SceneSpec {
     pub camera: CameraSpec,
     #[serde(default)]
     pub noise: NoiseSettings,
+    /// CAD database folders (written by `iscene cad import`), relative to the specification:
+    /// `objects[].model` may name their models.
+    #[serde(default)]
+    pub cad: Vec<String>,
+    /// The databases of `cad`, read when the specification is parsed.
+    #[serde(skip)]
+    pub databases: Vec<SpecDatabase>,
+}
+
+/// One database of a specification's `"cad"`, read.
+#[derive(Clone, Debug)]
+pub struct SpecDatabase {
+    pub dir: PathBuf,
+    pub models: Vec<CadModel>,
+}
+
+/// Where an object's model comes from.
+#[derive(Clone, Copy)]
+pub enum ModelSource<'a> {
+    /// The parametric library, built at any size of its class.
+    Parametric(&'static LibraryEntry),
+    /// A database of the specification's `"cad"`, at the size its author gave it.
+    Database(&'a CadModel),
+}
+
+impl ModelSource<'_> {
+    pub fn class(&self) -> &str {
+        match self {
+            Self::Parametric(e) => e.class,
+            Self::Database(m) => &m.class,
+        }
+    }
+
+    /// The size the model has when a specification gives none.
+    pub fn nominal_size(&self) -> Vec3 {
+        match self {
+            Self::Parametric(e) => e.nominal_size,
+            Self::Database(m) => m.size,
+        }
+    }
+
+    /// The model, built to `size` where its source allows.
+    pub fn build(&self, size: Option<Vec3>) -> CadModel {
+        match (self, size) {
+            (Self::Parametric(e), Some(s)) => e.model_sized(s),
+            (Self::Parametric(e), None) => e.model(),
+            (Self::Database(m), _) => (*m).clone(),
+        }
+    }
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -113,16 +165,67 @@ impl SceneSpec {
     /// Parses and validates `text`; `path` is only used to name the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<SceneSpec, InputError> {
         let mut de = serde_json::Deserializer::from_str(text);
-        let spec: SceneSpec = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let mut spec: SceneSpec = serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let key = e.path().to_string();
             InputError::invalid(
                 path,
                 format!("invalid scene specification at {key}: {}", e.into_inner()),
             )
         })?;
+        spec.read_databases(path)?;
         spec.validate()
             .map_err(|problem| InputError::invalid(path, problem))?;
         Ok(spec)
+    }
+
+    /// Reads the databases of `"cad"`, relative to the specification's folder.
+    fn read_databases(&mut self, path: &Path) -> Result<(), InputError> {
+        let base = path.parent().unwrap_or(Path::new("."));
+        for (k, name) in self.cad.iter().enumerate() {
+            let dir = base.join(name);
+            if !dir.join("index.json").is_file() {
+                return Err(InputError::missing(
+                    dir.join("index.json"),
+                    format!(
+                        "cad[{k}] of {}: {name:?} is not a CAD database (`iscene cad import` writes one)",
+                        path.display()
+                    ),
+                ));
+            }
+            let models = read_database(&dir)?;
+            self.databases.push(SpecDatabase { dir, models });
+        }
+        let mut seen: HashMap<&str, &Path> = HashMap::new();
+        for db in &self.databases {
+            for m in &db.models {
+                if ParametricLibrary::get(&m.id).is_some() {
+                    return Err(InputError::invalid(
+                        &db.dir,
+                        format!("model {:?} has the id of a built-in model", m.id),
+                    ));
+                }
+                if let Some(other) = seen.insert(&m.id, &db.dir) {
+                    return Err(InputError::invalid(
+                        &db.dir,
+                        format!("model {:?} is also in {}", m.id, other.display()),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The model `id`: a built-in one or one of the specification's databases.
+    pub fn model_source(&self, id: &str) -> Option<ModelSource<'_>> {
+        ParametricLibrary::get(id)
+            .map(ModelSource::Parametric)
+            .or_else(|| {
+                self.databases
+                    .iter()
+                    .flat_map(|db| &db.models)
+                    .find(|m| m.id == id)
+                    .map(ModelSource::Database)
+            })
     }
 
     fn validate(&self) -> Result<(), String> {
@@ -213,12 +316,26 @@ impl SceneSpec {
                 }
             }
             if let Some(model) = &o.model {
-                match ParametricLibrary::get(model) {
-                    None => return Err(format!("{key}.model: unknown model {model:?}")),
-                    Some(e) if e.class != o.class => {
+                match self.model_source(model) {
+                    None if self.cad.is_empty() => {
+                        return Err(format!("{key}.model: unknown model {model:?}"));
+                    }
+                    None => {
+                        return Err(format!(
+                            "{key}.model: unknown model {model:?} (neither built in nor in the databases of \"cad\": {})",
+                            self.cad.join(", ")
+                        ));
+                    }
+                    Some(e) if e.class() != o.class => {
                         return Err(format!(
                             "{key}.model: {model:?} is a {}, not a {}",
-                            e.class, o.class
+                            e.class(),
+                            o.class
+                        ));
+                    }
+                    Some(ModelSource::Database(_)) if o.size.is_some() => {
+                        return Err(format!(
+                            "{key}.size: {model:?} is a database model and keeps the size its author gave it"
                         ));
                     }
                     Some(_) => {}

@@ -62,6 +62,15 @@ impl PlacedObject {
             .transformed(&self.world_from_model)
     }
 
+    /// What the camera sees of the object (imported models' visual meshes), world frame.
+    pub fn world_visual_mesh(&self) -> TriMesh {
+        let mut merged = TriMesh::default();
+        for (part, world_from_part) in self.model.parts.iter().zip(self.world_from_parts()) {
+            merged.append(&part.visual_mesh().transformed(&world_from_part));
+        }
+        merged
+    }
+
     /// The gravity-aligned box around the object's mesh, turned by the object's yaw.
     pub fn gravity_box(&self) -> GravityBox {
         let mesh = self.world_mesh();
