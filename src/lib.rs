@@ -5,6 +5,7 @@
 //! them an ECS world whose transform hierarchy is the kinematic tree.
 
 pub mod bench;
+pub mod benchmark;
 pub mod cad;
 pub mod classes;
 pub mod components;

@@ -2,6 +2,7 @@
 //! of a synthetic world along a camera path, with Kinect-like depth noise.
 
 pub mod noise;
+pub mod pose_noise;
 pub mod raster;
 pub mod render_scene;
 pub mod sequence;

@@ -10,6 +10,7 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
+use crate::render::pose_noise::{PoseNoise, PoseNoiseSetting, PosePreset};
 use crate::segmentation::noise::{SegmentationNoise, SegmentationNoiseSetting, SegmentationPreset};
 
 /// Parameters of the depth noise model. Angles in degrees, lengths in metres.
@@ -158,6 +159,37 @@ impl DepthNoise {
     }
 }
 
+/// The noise of a generated room (`generate`, `benchmark --noise`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum NoiseChoice {
+    /// Kinect depth, realistic segmentation and a tracker's poses.
+    #[default]
+    Realistic,
+    /// Exact depth, labels and poses.
+    Clean,
+}
+
+impl NoiseChoice {
+    pub fn settings(self) -> NoiseSettings {
+        match self {
+            Self::Realistic => NoiseSettings::realistic(),
+            Self::Clean => NoiseSettings::off(),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Realistic => "realistic",
+            Self::Clean => "clean",
+        }
+    }
+
+    /// The `noise` object of a specification.
+    pub fn to_json(self) -> serde_json::Value {
+        serde_json::to_value(self.settings()).unwrap_or_default()
+    }
+}
+
 /// A depth noise setting: a preset name or explicit parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
@@ -181,6 +213,9 @@ pub struct NoiseSettings {
     pub depth: DepthNoiseSetting,
     #[serde(default = "NoiseSettings::default_segmentation")]
     pub segmentation: SegmentationNoiseSetting,
+    /// Camera pose noise of a tracker; off unless asked for (`"pose": "tracker"`).
+    #[serde(default = "NoiseSettings::default_pose")]
+    pub pose: PoseNoiseSetting,
 }
 
 impl Default for NoiseSettings {
@@ -188,6 +223,7 @@ impl Default for NoiseSettings {
         Self {
             depth: Self::default_depth(),
             segmentation: Self::default_segmentation(),
+            pose: Self::default_pose(),
         }
     }
 }
@@ -201,12 +237,30 @@ impl NoiseSettings {
         SegmentationNoiseSetting::Preset(SegmentationPreset::Realistic)
     }
 
+    fn default_pose() -> PoseNoiseSetting {
+        PoseNoiseSetting::Preset(PosePreset::None)
+    }
+
     /// No noise at all (the `--no-noise` switch).
     pub fn off() -> Self {
         Self {
             depth: DepthNoiseSetting::Preset(DepthPreset::None),
             segmentation: SegmentationNoiseSetting::Preset(SegmentationPreset::None),
+            pose: Self::default_pose(),
         }
+    }
+
+    /// Kinect depth, realistic segmentation and a tracker's poses.
+    pub fn realistic() -> Self {
+        Self {
+            depth: DepthNoiseSetting::Preset(DepthPreset::Kinect),
+            segmentation: SegmentationNoiseSetting::Preset(SegmentationPreset::Realistic),
+            pose: PoseNoiseSetting::Preset(PosePreset::Tracker),
+        }
+    }
+
+    pub fn pose_model(&self) -> Option<PoseNoise> {
+        self.pose.model()
     }
 
     /// The depth model to apply, or `None` for clean depth.

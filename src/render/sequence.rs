@@ -18,6 +18,7 @@ use crate::io::write_sequence::{
     pose_text, write_camera, write_color, write_depth, write_labels, write_text,
 };
 use crate::render::noise::{DepthNoise, NoiseSettings};
+use crate::render::pose_noise::PoseNoise;
 use crate::render::raster::{NO_TRIANGLE, rasterize};
 use crate::render::render_scene::RenderScene;
 use crate::render::shading::shade;
@@ -70,6 +71,8 @@ struct RenderRecord<'a> {
     camera: Pinhole,
     depth_noise: Option<DepthNoise>,
     segmentation_noise: Option<SegmentationNoise>,
+    /// The pose noise of the written `pose.txt` files (the frames are rendered from true poses).
+    pose_noise: Option<PoseNoise>,
 }
 
 /// Renders frame `k` of a sequence: rasterise, shade, and pass depth through `noise`.
@@ -158,6 +161,11 @@ pub fn render_sequence(
         spec.noise.clone()
     };
     let depth_noise = noise.depth_model();
+    let pose_noise = noise.pose_model();
+    let reported_poses = match &pose_noise {
+        Some(model) => model.apply(&poses, spec.seed),
+        None => poses.clone(),
+    };
 
     let staged = StagedDir::new(&target)?;
     let dir = staged.path().to_path_buf();
@@ -185,6 +193,7 @@ pub fn render_sequence(
         camera,
         depth_noise,
         segmentation_noise: noise.segmentation_model(),
+        pose_noise,
     };
     write_text(&gt.join("render.json"), &pretty_json(&record))?;
     if let Some(fingerprint) = &options.fingerprint {
@@ -207,7 +216,7 @@ pub fn render_sequence(
             write_labels(&frame_path(&dir, k, "label.png"), &f.labels, &camera)?;
             write_text(
                 &frame_path(&dir, k, "pose.txt"),
-                &pose_text(world_from_camera),
+                &pose_text(&reported_poses[k]),
             )?;
             progress.inc(1);
             Ok(())

@@ -1,5 +1,6 @@
 //! Synthetic scenes: the JSON specification and the world it describes, with its ground truth.
 
+pub mod generate;
 pub mod ground_truth;
 pub mod overlap;
 pub mod placement;

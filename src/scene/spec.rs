@@ -179,7 +179,7 @@ impl SceneSpec {
     }
 
     /// Reads the databases of `"cad"`, relative to the specification's folder.
-    fn read_databases(&mut self, path: &Path) -> Result<(), InputError> {
+    pub(crate) fn read_databases(&mut self, path: &Path) -> Result<(), InputError> {
         let base = path.parent().unwrap_or(Path::new("."));
         for (k, name) in self.cad.iter().enumerate() {
             let dir = base.join(name);
@@ -228,7 +228,7 @@ impl SceneSpec {
             })
     }
 
-    fn validate(&self) -> Result<(), String> {
+    pub(crate) fn validate(&self) -> Result<(), String> {
         let [rx, ry, rz] = self.room.size;
         if !(rx.is_finite() && ry.is_finite() && rz.is_finite())
             || rx < 1.0
@@ -251,6 +251,9 @@ impl SceneSpec {
                 "objects: {} objects, more than the {MAX_OBJECTS} a room may hold",
                 self.objects.len()
             ));
+        }
+        if let Some(pose) = self.noise.pose_model() {
+            pose.check()?;
         }
         if let Some(frames) = self.camera.frames {
             check_frame_count(frames).map_err(|e| format!("camera.frames: {e}"))?;

@@ -4,6 +4,8 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 use iscene::cad::body_tree::ImportScale;
+use iscene::render::noise::NoiseChoice;
+use iscene::scene::generate::RoomStyle;
 
 #[derive(Parser)]
 #[command(
@@ -36,6 +38,46 @@ pub(crate) enum Command {
     },
     /// Reconstruct a scene from a specification (rendered first), a sequence folder or a TUM folder.
     Reconstruct(ReconstructArgs),
+    /// Write the scene specification of a procedural room, the same for the same seed.
+    Generate {
+        #[arg(long)]
+        seed: u64,
+        /// The specification file to write.
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long, value_enum, default_value_t = RoomStyle::Any)]
+        style: RoomStyle,
+        /// CAD databases (`iscene cad import`) whose models the room may use (repeatable).
+        #[arg(long, value_name = "DB")]
+        cad: Vec<PathBuf>,
+        /// Noise of the rendering: Kinect depth, realistic segmentation and tracker poses, or none.
+        #[arg(long, value_enum, default_value_t = NoiseChoice::Realistic)]
+        noise: NoiseChoice,
+        /// Frames of the default camera path.
+        #[arg(long, default_value_t = 300)]
+        frames: usize,
+    },
+    /// Generate, render, reconstruct and score a range of procedural rooms; summary in --out.
+    Benchmark {
+        /// Seeds as A:B (B excluded).
+        #[arg(long, value_parser = parse_seeds)]
+        seeds: (u64, u64),
+        #[arg(long, value_enum, default_value_t = RoomStyle::Any)]
+        style: RoomStyle,
+        #[arg(long, value_enum, default_value_t = NoiseChoice::Realistic)]
+        noise: NoiseChoice,
+        /// A CAD database the rooms draw models from and the reconstruction searches.
+        #[arg(long, value_name = "DB")]
+        cad: Option<PathBuf>,
+        /// Frames per room.
+        #[arg(long, default_value_t = 300)]
+        frames: usize,
+        /// Rooms run at once (default: what cores and memory allow).
+        #[arg(long)]
+        jobs: Option<usize>,
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Score a reconstruction against a rendered sequence's ground truth; one JSON object on stdout.
     Eval {
         dir: PathBuf,
@@ -297,4 +339,19 @@ pub(crate) fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), Str
         }
         _ => Err(format!("{s:?}: expected A:B[:STEP]")),
     }
+}
+
+/// `A:B` seeds, B excluded and greater than A.
+fn parse_seeds(text: &str) -> Result<(u64, u64), String> {
+    let (a, b) = text
+        .split_once(':')
+        .ok_or_else(|| format!("{text:?} is not A:B"))?;
+    let a: u64 = a.parse().map_err(|e| format!("{a:?}: {e}"))?;
+    let b: u64 = b.parse().map_err(|e| format!("{b:?}: {e}"))?;
+    if b <= a || b - a > 10_000 {
+        return Err(format!(
+            "{text:?}: B must be greater than A, by at most 10000"
+        ));
+    }
+    Ok((a, b))
 }

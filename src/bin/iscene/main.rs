@@ -11,6 +11,7 @@ use iscene::panoptic::InstanceFusion;
 use iscene::pipeline::{AlignMethod, ReconstructOptions, SegmentationChoice, reconstruct};
 use iscene::render::{RenderOptions, render_sequence};
 use iscene::scene::SceneSpec;
+use iscene::scene::generate::GenerateOptions;
 
 mod args;
 
@@ -295,6 +296,53 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                         .into(),
                 ));
             }
+        }
+        Some(Command::Generate {
+            seed,
+            out,
+            style,
+            cad,
+            noise,
+            frames,
+        }) => {
+            iscene::scene::spec::check_frame_count(frames)
+                .map_err(|e| iscene::error::InputError::invalid("--frames", e))?;
+            let options = GenerateOptions {
+                seed,
+                style,
+                cad,
+                noise,
+                frames,
+            };
+            let generated = iscene::scene::generate::generate(&options, &out)?;
+            iscene::scene::generate::write_generated(&out, &generated.json)?;
+            println!(
+                "wrote {}: a {} room of {} objects (seed {seed})",
+                out.display(),
+                generated.style.name(),
+                generated.objects
+            );
+        }
+        Some(Command::Benchmark {
+            seeds,
+            style,
+            noise,
+            cad,
+            frames,
+            jobs,
+            out,
+        }) => {
+            let summary = iscene::benchmark::run(&iscene::benchmark::BenchmarkOptions {
+                seeds: seeds.0..seeds.1,
+                style,
+                noise,
+                cad,
+                frames,
+                jobs,
+                out,
+                progress: interactive,
+            })?;
+            println!("{summary}");
         }
         Some(Command::Eval { dir, gt }) => {
             let report = iscene::eval::evaluate_reconstruction(&dir, &gt)?;
