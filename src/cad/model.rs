@@ -76,6 +76,16 @@ impl CadModel {
         merged
     }
 
+    /// All parts' visual meshes merged in the model frame at the given joint values: what a
+    /// camera sees of the model.
+    pub fn merged_visual_mesh(&self, joint_values: &[(String, f32)]) -> TriMesh {
+        let mut merged = TriMesh::default();
+        for (part, model_from_part) in self.parts.iter().zip(self.model_from_parts(joint_values)) {
+            merged.append(&part.visual_mesh().transformed(&model_from_part));
+        }
+        merged
+    }
+
     /// Parts that move (revolute or prismatic joints).
     pub fn movable_parts(&self) -> impl Iterator<Item = &CadPart> {
         self.parts.iter().filter(|p| p.joint.limits.is_some())

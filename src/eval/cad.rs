@@ -13,6 +13,8 @@ use crate::cad::physical_check::{
     MIN_SUPPORT_AREA, PlacedSolid, layout_penetration, penetration_depth, support_area,
 };
 use crate::classes::{ClassTable, EntityKind};
+use crate::eval::chamfer::chamfer_distance;
+use crate::geometry::TriMesh;
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{ContactGraph, GraphNode};
 
@@ -38,6 +40,9 @@ pub struct CadObjectScore {
     pub size_error: Option<f32>,
     /// The relative difference of the two boxes' diagonals: the size as one number.
     pub diagonal_error: Option<f32>,
+    /// Symmetric Chamfer distance between the placed model's surface (its doors and drawers
+    /// at the truth's joint values, by part name) and the truth's mesh, metres.
+    pub chamfer_m: Option<f32>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -46,8 +51,10 @@ pub struct CadMetrics {
     pub class_accuracy: f64,
     /// Of the objects whose front matters and whose class is right: yaw within 15 degrees.
     pub yaw_accuracy: Option<f64>,
-    /// Mean over the predicted objects that were replaced.
+    /// Mean over the predicted objects that were replaced: the fit's own residual.
     pub mean_alignment_error_m: Option<f64>,
+    /// Mean over the paired truth objects with a placed model of `chamfer_m`.
+    pub mean_chamfer_m: Option<f64>,
     /// Seen truth objects replaced by exactly their own database model.
     pub model_accuracy: f64,
     /// The deepest interpenetration of two placed models, metres (parametric models only).
@@ -87,6 +94,7 @@ pub fn evaluate_cad(
     truth: &ContactGraph,
     truth_from_pred: &Affine3A,
     db: &CadDatabase,
+    truth_meshes: &BTreeMap<String, TriMesh>,
 ) -> Option<CadMetrics> {
     if pred.nodes.iter().all(|n| n.cad.is_none()) {
         return None;
@@ -165,6 +173,18 @@ pub fn evaluate_cad(
                 let truth = Vec3::from(tn.bbox.size).length().max(1e-3);
                 (p.length() - truth).abs() / truth
             }),
+            chamfer_m: placement.and_then(|(n, c)| {
+                let model = &db.get(&c.model)?.model;
+                let joints: Vec<(String, f32)> = tn
+                    .joints
+                    .iter()
+                    .filter(|(name, _)| model.parts.iter().any(|p| &p.name == *name))
+                    .map(|(k, v)| (k.clone(), *v))
+                    .collect();
+                let frame = *truth_from_pred * placement_frame(n)?;
+                let placed = model.merged_visual_mesh(&joints).transformed(&frame);
+                chamfer_distance(&placed, truth_meshes.get(&tn.id)?)
+            }),
         });
     }
     let fraction = |hits: usize, total: usize| {
@@ -193,6 +213,13 @@ pub fn evaluate_cad(
                 yaws.len(),
             )
         }),
+        mean_chamfer_m: {
+            let c: Vec<f64> = scores
+                .iter()
+                .filter_map(|s| s.chamfer_m.map(f64::from))
+                .collect();
+            (!c.is_empty()).then(|| c.iter().sum::<f64>() / c.len() as f64)
+        },
         mean_alignment_error_m: (!errors.is_empty())
             .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
         model_accuracy: fraction(

@@ -8,10 +8,15 @@ use glam::{Affine3A, Vec3};
 use serde::Serialize;
 
 use crate::classes::EntityKind;
-use crate::eval::ged::{EditDistance, EditGraph, graph_edit_distance};
+use crate::eval::ged::{EditDistance, EditGraph, graph_edit_distance, graph_edit_distance_where};
 use crate::eval::panoptic_quality::average_precision;
 use crate::geometry::GravityBox;
 use crate::graph::{ContactGraph, GraphEdge};
+
+/// A predicted node may stand for a truth node in `ged_positional` when their boxes overlap by
+/// this 3D IoU, or their centres are this close (metres).
+pub const POSITIONAL_IOU: f32 = 0.1;
+pub const POSITIONAL_DISTANCE_M: f32 = 0.3;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ContactMetrics {
@@ -19,6 +24,9 @@ pub struct ContactMetrics {
     /// AP@0.5 of oriented boxes per object class of the truth.
     pub obb_ap50: BTreeMap<String, f64>,
     pub ged: EditDistance,
+    /// The edit distance where a predicted node may stand for a truth node only where their
+    /// boxes are: 3D IoU over `POSITIONAL_IOU` or centres within `POSITIONAL_DISTANCE_M`.
+    pub ged_positional: EditDistance,
     /// Truth nodes left out because nothing of them was seen.
     pub unseen_truth: Vec<String>,
 }
@@ -124,14 +132,33 @@ pub fn evaluate_contact_graph(
     for n in &mut aligned.nodes {
         n.bbox = pred_box(&GravityBox::from(&n.bbox)).into();
     }
-    let ged = graph_edit_distance(
-        &EditGraph::from_contact_graph(&aligned),
-        &EditGraph::from_contact_graph(truth),
+    let (pred_graph, truth_graph) = (
+        EditGraph::from_contact_graph(&aligned),
+        EditGraph::from_contact_graph(truth),
     );
+    let ged = graph_edit_distance(&pred_graph, &truth_graph);
+    let allowed: Vec<Vec<bool>> = aligned
+        .nodes
+        .iter()
+        .map(|p| {
+            let pb = GravityBox::from(&p.bbox);
+            truth
+                .nodes
+                .iter()
+                .map(|t| {
+                    let tb = GravityBox::from(&t.bbox);
+                    pb.center.distance(tb.center) <= POSITIONAL_DISTANCE_M
+                        || pb.iou(&tb) > POSITIONAL_IOU
+                })
+                .collect()
+        })
+        .collect();
+    let ged_positional = graph_edit_distance_where(&pred_graph, &truth_graph, Some(&allowed));
     ContactMetrics {
         obb_map50,
         obb_ap50,
         ged,
+        ged_positional,
         unseen_truth,
     }
 }

@@ -81,11 +81,28 @@ pub struct EditParts {
     pub proximal: u32,
 }
 
+/// Which node of `a` may stand for which node of `b` (`allowed[i][j]`); `None`: any.
+pub type Allowed<'a> = Option<&'a [Vec<bool>]>;
+
+fn may_map(allowed: Allowed<'_>, i: usize, j: usize) -> bool {
+    allowed.is_none_or(|a| a[i][j])
+}
+
 /// The edit distance: exact when both graphs have at most `EXACT_MAX_NODES` nodes.
 pub fn graph_edit_distance(a: &EditGraph, b: &EditGraph) -> EditDistance {
-    let (bound, mapping) = bipartite_upper_bound(a, b);
+    graph_edit_distance_where(a, b, None)
+}
+
+/// The edit distance where node `i` of `a` may become node `j` of `b` only when `allowed` says
+/// so (otherwise it is deleted and `j` inserted).
+pub fn graph_edit_distance_where(
+    a: &EditGraph,
+    b: &EditGraph,
+    allowed: Allowed<'_>,
+) -> EditDistance {
+    let (bound, mapping) = bipartite_bound_where(a, b, allowed);
     if a.len().max(b.len()) <= EXACT_MAX_NODES {
-        let (cost, mapping) = exact_search(a, b, bound, mapping);
+        let (cost, mapping) = exact_search(a, b, bound, mapping, allowed);
         EditDistance {
             cost,
             exact: true,
@@ -142,6 +159,14 @@ pub fn mapping_parts(a: &EditGraph, b: &EditGraph, mapping: &[Option<usize>]) ->
 /// Kuhn-Munkres on node costs (class, local edges halved, a small pull towards the nearest
 /// centre), then the mapping's exact cost, then pairwise swaps while they lower it.
 pub fn bipartite_upper_bound(a: &EditGraph, b: &EditGraph) -> (u32, Vec<Option<usize>>) {
+    bipartite_bound_where(a, b, None)
+}
+
+fn bipartite_bound_where(
+    a: &EditGraph,
+    b: &EditGraph,
+    allowed: Allowed<'_>,
+) -> (u32, Vec<Option<usize>>) {
     let (n, m) = (a.len(), b.len());
     let size = n + m;
     // Integer costs in thousandths of an edit.
@@ -165,6 +190,7 @@ pub fn bipartite_upper_bound(a: &EditGraph, b: &EditGraph) -> (u32, Vec<Option<u
     for (i, row) in rows.iter_mut().enumerate() {
         for (j, cell) in row.iter_mut().enumerate() {
             *cell = match (i < n, j < m) {
+                (true, true) if !may_map(allowed, i, j) => FORBIDDEN,
                 (true, true) => {
                     let class = i64::from(a.classes[i] != b.classes[j]) * UNIT;
                     let edges = (degree(a, i) - degree(b, j)).abs() * UNIT / 2;
@@ -201,7 +227,7 @@ pub fn bipartite_upper_bound(a: &EditGraph, b: &EditGraph) -> (u32, Vec<Option<u
         let (_, assignment) = kuhn_munkres_min(&matrix);
         for (i, m_i) in mapping.iter_mut().enumerate() {
             let j = assignment[i];
-            *m_i = (j < m).then_some(j);
+            *m_i = (j < m && may_map(allowed, i, j)).then_some(j);
         }
     }
     let mut cost = mapping_cost(a, b, &mapping);
@@ -211,7 +237,12 @@ pub fn bipartite_upper_bound(a: &EditGraph, b: &EditGraph) -> (u32, Vec<Option<u
         for i in 0..n {
             for k in (i + 1)..n {
                 mapping.swap(i, k);
-                let c = mapping_cost(a, b, &mapping);
+                let fits = |x: usize| mapping[x].is_none_or(|j| may_map(allowed, x, j));
+                let c = if fits(i) && fits(k) {
+                    mapping_cost(a, b, &mapping)
+                } else {
+                    u32::MAX
+                };
                 if c < cost {
                     cost = c;
                     improved = true;
@@ -230,7 +261,7 @@ pub fn bipartite_upper_bound(a: &EditGraph, b: &EditGraph) -> (u32, Vec<Option<u
 /// Branch and bound over the nodes of `a`, each mapped to an unused node of `b` or deleted,
 /// starting from the bound `upper`. Exponential: for small graphs only.
 pub fn exact_distance(a: &EditGraph, b: &EditGraph, upper: u32) -> u32 {
-    exact_search(a, b, upper, vec![None; a.len()]).0
+    exact_search(a, b, upper, vec![None; a.len()], None).0
 }
 
 /// The exact distance and a mapping that reaches it; `upper` and `start` are a known cost and
@@ -240,17 +271,19 @@ fn exact_search(
     b: &EditGraph,
     upper: u32,
     start: Vec<Option<usize>>,
+    allowed: Allowed<'_>,
 ) -> (u32, Vec<Option<usize>>) {
     let mut best = (upper, start);
     let mut mapping = vec![None; a.len()];
     let mut used = vec![false; b.len()];
-    search(a, b, 0, &mut mapping, &mut used, &mut best);
+    search(a, b, allowed, 0, &mut mapping, &mut used, &mut best);
     best
 }
 
 fn search(
     a: &EditGraph,
     b: &EditGraph,
+    allowed: Allowed<'_>,
     i: usize,
     mapping: &mut [Option<usize>],
     used: &mut [bool],
@@ -267,16 +300,16 @@ fn search(
         return;
     }
     for j in 0..b.len() {
-        if used[j] {
+        if used[j] || !may_map(allowed, i, j) {
             continue;
         }
         used[j] = true;
         mapping[i] = Some(j);
-        search(a, b, i + 1, mapping, used, best);
+        search(a, b, allowed, i + 1, mapping, used, best);
         used[j] = false;
     }
     mapping[i] = None;
-    search(a, b, i + 1, mapping, used, best);
+    search(a, b, allowed, i + 1, mapping, used, best);
 }
 
 /// A lower bound on any completion of the first `i` assignments: the node and edge edits among

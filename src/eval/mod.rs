@@ -2,7 +2,9 @@
 //! sequence: panoptic quality and instance mAP, contact-graph and CAD figures; the physics
 //! figures are `null` until their stages exist.
 
+pub mod articulation;
 pub mod cad;
+pub mod chamfer;
 pub mod contact;
 pub mod ged;
 pub mod panoptic_quality;
@@ -23,6 +25,7 @@ use truth::NearestMesh;
 
 use std::collections::{BTreeMap, HashSet};
 
+use articulation::{ArticulationMetrics, evaluate_articulation, swept_ranges};
 use cad::{CadMetrics, evaluate_cad};
 use contact::{ContactMetrics, evaluate_contact_graph, seen_subgraph};
 
@@ -50,9 +53,21 @@ pub struct EvalReport {
     /// Per object: the paired prediction, its model, class, yaw error and alignment error.
     pub cad: Option<CadMetrics>,
     pub cad_class_accuracy: Option<f64>,
+    /// The fit's own residual (kept under its first name; `fit_residual_m` is the same).
     pub mean_alignment_error: Option<f64>,
+    pub fit_residual_m: Option<f64>,
+    /// Mean symmetric Chamfer distance between placed models and the truth's meshes, metres.
+    pub cad_chamfer_m: Option<f64>,
+    /// The reconstruction's own rest-test verdicts (report.json): the share of objects stable.
     pub stable_fraction: Option<f64>,
     pub max_penetration_m: Option<f64>,
+    /// The edit distance where a predicted node stands for a truth node only where it is.
+    pub ged_positional: Option<u32>,
+    pub articulation_precision: Option<f64>,
+    pub articulation_recall: Option<f64>,
+    pub articulation_f1: Option<f64>,
+    /// Every door and drawer of the truth and what stands for it.
+    pub articulation: Option<Vec<articulation::PartScore>>,
 }
 
 pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, InputError> {
@@ -123,23 +138,37 @@ pub fn evaluate_reconstruction(dir: &Path, gt: &Path) -> Result<EvalReport, Inpu
         .iter()
         .map(|e| (e.id.clone(), e.score))
         .collect();
-    let (contact, cad) = match contact_metrics(dir, gt, &seen, &scores)? {
-        Some((c, cad)) => (Some(c), cad),
-        None => (None, None),
-    };
+    let truth_meshes: BTreeMap<String, crate::geometry::TriMesh> =
+        truth.iter().map(|t| t.name.clone()).zip(meshes).collect();
+    let report = read_report(&dir.join("report.json"))?;
+    let (contact, cad, articulation) =
+        match contact_metrics(dir, gt, &seen, &scores, &truth_meshes, &report)? {
+            Some((c, cad, a)) => (Some(c), cad, Some(a)),
+            None => (None, None, None),
+        };
+    let stable_fraction = report
+        .pointer("/physics/stable_fraction")
+        .and_then(serde_json::Value::as_f64);
     Ok(EvalReport {
         panoptic,
         truth_distance_m,
         obb_map50: contact.as_ref().map(|c| c.obb_map50),
         ged: contact.as_ref().map(|c| c.ged.cost),
         ged_exact: contact.as_ref().map(|c| c.ged.exact),
+        ged_positional: contact.as_ref().map(|c| c.ged_positional.cost),
         contact_graph: contact,
         cad_class_accuracy: cad.as_ref().map(|c| c.class_accuracy),
         mean_alignment_error: cad.as_ref().and_then(|c| c.mean_alignment_error_m),
+        fit_residual_m: cad.as_ref().and_then(|c| c.mean_alignment_error_m),
+        cad_chamfer_m: cad.as_ref().and_then(|c| c.mean_chamfer_m),
+        articulation_precision: articulation.as_ref().and_then(|a| a.precision),
+        articulation_recall: articulation.as_ref().and_then(|a| a.recall),
+        articulation_f1: articulation.as_ref().and_then(|a| a.f1),
+        articulation: articulation.map(|a| a.parts),
         cad_yaw_accuracy: cad.as_ref().and_then(|c| c.yaw_accuracy),
         max_penetration_m: cad.as_ref().and_then(|c| c.max_penetration_m),
         cad,
-        stable_fraction: None,
+        stable_fraction,
     })
 }
 
@@ -150,7 +179,9 @@ fn contact_metrics(
     gt: &Path,
     seen: &HashSet<String>,
     scores: &BTreeMap<String, f32>,
-) -> Result<Option<(ContactMetrics, Option<CadMetrics>)>, InputError> {
+    truth_meshes: &BTreeMap<String, crate::geometry::TriMesh>,
+    report: &serde_json::Value,
+) -> Result<Option<(ContactMetrics, Option<CadMetrics>, ArticulationMetrics)>, InputError> {
     let pred_path = dir.join("contact_graph.json");
     let truth_path = gt.join("gt").join("contact_graph.json");
     if !pred_path.is_file() || !truth_path.is_file() {
@@ -165,22 +196,30 @@ fn contact_metrics(
         .map(|n| n.id.clone())
         .collect();
     let truth = seen_subgraph(&truth, seen);
-    let truth_from_pred = aligned_from_world(&dir.join("report.json"))?.inverse();
+    let truth_from_pred = aligned_from_world(report, &dir.join("report.json"))?.inverse();
     let db = CadDatabase::for_scene(dir)?;
-    let cad = evaluate_cad(&pred, &truth, &truth_from_pred, &db);
+    let cad = evaluate_cad(&pred, &truth, &truth_from_pred, &db, truth_meshes);
+    let articulation =
+        evaluate_articulation(&pred, &truth, &truth_from_pred, &db, &swept_ranges(report));
     let contact = evaluate_contact_graph(&pred, &truth, &truth_from_pred, scores, unseen);
-    Ok(Some((contact, cad)))
+    Ok(Some((contact, cad, articulation)))
+}
+
+/// `report.json` of a reconstruction (`null` when it has none).
+fn read_report(path: &Path) -> Result<serde_json::Value, InputError> {
+    if !path.is_file() {
+        return Ok(serde_json::Value::Null);
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, &e))?;
+    serde_json::from_str(&text).map_err(|e| InputError::invalid(path, format!("invalid JSON: {e}")))
 }
 
 /// The reconstruction's aligned frame from the sequence's world frame, as report.json records it
 /// (identity when the report has none).
-fn aligned_from_world(report: &Path) -> Result<glam::Affine3A, InputError> {
-    if !report.is_file() {
-        return Ok(glam::Affine3A::IDENTITY);
-    }
-    let text = std::fs::read_to_string(report).map_err(|e| InputError::io(report, &e))?;
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| InputError::invalid(report, format!("invalid JSON: {e}")))?;
+fn aligned_from_world(
+    value: &serde_json::Value,
+    report: &Path,
+) -> Result<glam::Affine3A, InputError> {
     let Some(cols) = value.pointer("/gravity/aligned_from_world") else {
         return Ok(glam::Affine3A::IDENTITY);
     };

@@ -175,6 +175,7 @@ mod tests {
                 planes: Vec::new(),
                 cad: None,
                 joints: Default::default(),
+                parts: Vec::new(),
             });
         }
         let pose = Affine3A::from_translation(Vec3::new(0.5, 0.5, 0.0));

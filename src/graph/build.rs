@@ -348,6 +348,7 @@ pub fn build_contact_graph_with_surfaces(
             planes: planes[k].iter().map(Plane::to_array).collect(),
             cad: None,
             joints: BTreeMap::new(),
+            parts: Vec::new(),
         })
         .collect();
     let surfaces = surfaces

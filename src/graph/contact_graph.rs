@@ -64,6 +64,9 @@ pub struct GraphNode {
     /// Joint values of the CAD model's moving parts, by part name.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub joints: BTreeMap<String, f32>,
+    /// Its doors and drawers with their joints, world frame.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<crate::graph::parts::PartJson>,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -5,6 +5,7 @@ pub mod contact_graph;
 pub mod counters;
 pub mod gravity;
 pub mod layout_plane;
+pub mod parts;
 pub mod proximal;
 pub mod sighted_extent;
 pub mod sparse_ends;

@@ -285,6 +285,7 @@ mod tests {
             planes: Vec::new(),
             cad: None,
             joints: Default::default(),
+            parts: Vec::new(),
         }
     }
 

@@ -343,6 +343,7 @@ mod tests {
             planes: Vec::new(),
             cad: None,
             joints: Default::default(),
+            parts: Vec::new(),
         };
         let graph = ContactGraph {
             nodes: vec![

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::classes::EntityKind;
 use crate::geometry::plane::dominant_planes;
 use crate::geometry::{GravityBox, TriMesh};
+use crate::graph::parts::model_parts;
 use crate::graph::proximal::{ProximalMargins, proximal_edges};
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
 use crate::scene::world::{SceneWorld, Support};
@@ -99,6 +100,7 @@ impl SceneWorld {
                 planes: vec![l.plane.to_array()],
                 cad: None,
                 joints: BTreeMap::new(),
+                parts: Vec::new(),
             });
         }
         for o in &self.objects {
@@ -121,6 +123,7 @@ impl SceneWorld {
                     alignment_error: 0.0,
                 }),
                 joints: o.joint_values.iter().cloned().collect(),
+                parts: model_parts(&o.model, &o.world_from_model),
             });
         }
         let mut edges = Vec::new();

@@ -64,11 +64,9 @@ impl PlacedObject {
 
     /// What the camera sees of the object (imported models' visual meshes), world frame.
     pub fn world_visual_mesh(&self) -> TriMesh {
-        let mut merged = TriMesh::default();
-        for (part, world_from_part) in self.model.parts.iter().zip(self.world_from_parts()) {
-            merged.append(&part.visual_mesh().transformed(&world_from_part));
-        }
-        merged
+        self.model
+            .merged_visual_mesh(&self.joint_values)
+            .transformed(&self.world_from_model)
     }
 
     /// The gravity-aligned box around the object's mesh, turned by the object's yaw.

@@ -179,6 +179,7 @@ mod tests {
             planes: Vec::new(),
             cad: None,
             joints: BTreeMap::new(),
+            parts: Vec::new(),
         }
     }
 
