@@ -215,3 +215,63 @@ fn score(
         && s.free_share.is_some_and(|f| f >= MIN_FREE_SHARE);
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kitchen() -> ContactGraph {
+        crate::scene::kitchen_contact_graph()
+    }
+
+    #[test]
+    fn the_truth_reproduces_itself_and_a_shifted_hinge_does_not() {
+        let truth = kitchen();
+        let db = CadDatabase::parametric();
+        let same = evaluate_articulation(
+            &truth,
+            &truth,
+            &Affine3A::IDENTITY,
+            &db,
+            &SweptRanges::new(),
+        );
+        assert!(same.truth_parts >= 8, "{}", same.truth_parts);
+        assert_eq!(same.recall, Some(1.0), "{:?}", same.parts);
+        assert_eq!(same.precision, Some(1.0));
+        // Everything 7 cm along each axis: every hinge line (vertical or horizontal) misses by
+        // 10 cm, drawers still slide the same way.
+        let shifted = evaluate_articulation(
+            &truth,
+            &truth,
+            &Affine3A::from_translation(Vec3::splat(0.07)),
+            &db,
+            &SweptRanges::new(),
+        );
+        for p in &shifted.parts {
+            assert_eq!(
+                p.reproduced,
+                p.truth_type == PartJointType::Prismatic,
+                "{p:?}"
+            );
+        }
+        // A door its sweep stopped at a quarter of its range is not reproduced.
+        let door = same
+            .parts
+            .iter()
+            .find(|p| p.truth_type == PartJointType::Revolute)
+            .expect("a door");
+        let (node, part) = door.truth.split_once('/').expect("node/part");
+        let link = format!("{node}_{part}");
+        let swept = SweptRanges::from([(link, Some((0.0, 0.45)))]);
+        let narrowed = evaluate_articulation(&truth, &truth, &Affine3A::IDENTITY, &db, &swept);
+        let scored = narrowed
+            .parts
+            .iter()
+            .find(|p| p.truth == door.truth)
+            .expect("scored");
+        assert!(
+            !scored.reproduced && scored.free_share < Some(0.3),
+            "{scored:?}"
+        );
+    }
+}

@@ -337,16 +337,40 @@ mod tests {
         crate::scene::kitchen_contact_graph()
     }
 
+    /// The kitchen's truth meshes by id, as `iscene render` writes them.
+    fn kitchen_meshes() -> BTreeMap<String, TriMesh> {
+        let path = std::path::Path::new("kitchen.json");
+        let spec = crate::scene::SceneSpec::parse(crate::BUILTIN_KITCHEN, path).expect("spec");
+        crate::scene::SceneWorld::from_spec(&spec, path)
+            .expect("world")
+            .entity_meshes()
+            .into_iter()
+            .map(|(id, mesh, _)| (id, mesh))
+            .collect()
+    }
+
     #[test]
     fn the_truth_scores_perfectly_and_a_turned_chair_misses_its_yaw() {
         let truth = kitchen_truth();
+        let meshes = kitchen_meshes();
         let perfect = evaluate_cad(
             &truth,
             &truth,
             &Affine3A::IDENTITY,
             &CadDatabase::parametric(),
+            &meshes,
         )
         .expect("placements");
+        // The truth's own models at the truth's joints lie on the truth's meshes (box_1 is
+        // box_01 made smaller, which the database holds at its nominal size).
+        for o in &perfect.objects {
+            let chamfer = o.chamfer_m.expect("placed and meshed");
+            if o.truth == "box_1" {
+                assert!(chamfer > 0.01, "{chamfer}");
+            } else {
+                assert!(chamfer < 1e-3, "{}: {chamfer}", o.truth);
+            }
+        }
         assert_eq!(perfect.class_accuracy, 1.0);
         assert_eq!(perfect.model_accuracy, 1.0);
         assert_eq!(perfect.yaw_accuracy, Some(1.0));
@@ -395,6 +419,7 @@ mod tests {
             &truth,
             &Affine3A::IDENTITY,
             &CadDatabase::parametric(),
+            &meshes,
         )
         .expect("placements");
         let chair = scored
@@ -403,6 +428,7 @@ mod tests {
             .find(|s| s.truth == "chair_1")
             .expect("chair score");
         assert!((chair.yaw_error_deg.expect("yaw") - 180.0).abs() < 0.1);
+        assert!(chair.chamfer_m.expect("chamfer") > 0.02, "a chair turned round misses its mesh");
         assert!(scored.yaw_accuracy.expect("yaws") < 1.0);
         // A cup's yaw never counts: it is round.
         assert!(

@@ -162,3 +162,27 @@ pub fn evaluate_contact_graph(
         unseen_truth,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_node_moved_away_costs_in_the_positional_distance_only() {
+        let truth = crate::scene::kitchen_contact_graph();
+        let mut moved = truth.clone();
+        let table = moved
+            .nodes
+            .iter_mut()
+            .find(|n| n.id == "table_1")
+            .expect("table");
+        table.bbox.center[0] += 1.5;
+        let scores = BTreeMap::new();
+        let m = evaluate_contact_graph(&moved, &truth, &Affine3A::IDENTITY, &scores, Vec::new());
+        assert_eq!(m.ged.cost, 0);
+        // Deleted and inserted, with its support edge and its children's, and its proximal edges.
+        assert!(m.ged_positional.cost >= 2 + 2, "{:?}", m.ged_positional);
+        let same = evaluate_contact_graph(&truth, &truth, &Affine3A::IDENTITY, &scores, Vec::new());
+        assert_eq!(same.ged_positional.cost, 0);
+    }
+}

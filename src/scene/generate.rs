@@ -270,24 +270,10 @@ impl<'a> RoomBuilder<'a> {
     /// others') can open all the way; returns whether it was added.
     fn try_add(&mut self, object: ObjectSpec) -> bool {
         self.spec.objects.push(object);
-        let v = self.spec.validate();
-        let w = SceneWorld::from_spec(&self.spec, Path::new("generated.json"));
-        if std::env::var("GEN_DEBUG").is_ok() {
-            eprintln!(
-                "{:?} {:?} {:?}",
-                self.spec.objects.last().map(|o| &o.id),
-                v.as_ref().err(),
-                w.as_ref().err().map(|e| e.to_string())
-            );
-        }
-        let ok = v.is_ok()
-            && w.ok().is_some_and(|w| {
-                let d = doors_open_freely(&w, w.objects.len() - 1);
-                if std::env::var("GEN_DEBUG").is_ok() && !d {
-                    eprintln!("  doors");
-                }
-                d
-            });
+        let ok = self.spec.validate().is_ok()
+            && self
+                .world()
+                .is_some_and(|w| doors_open_freely(&w, w.objects.len() - 1));
         if !ok {
             self.spec.objects.pop();
         }
@@ -829,7 +815,7 @@ pub fn unseen_objects(world: &SceneWorld, frames: usize) -> Vec<usize> {
 
 /// Whether every door and drawer of object `new` opens all the way without meeting another
 /// object or the room, and every other object's doors and drawers still open past `new`.
-fn doors_open_freely(world: &SceneWorld, new: usize) -> bool {
+pub fn doors_open_freely(world: &SceneWorld, new: usize) -> bool {
     let planes: Vec<_> = world.layout.iter().map(|l| l.plane).collect();
     let opened = |i: usize| {
         let o = &world.objects[i];

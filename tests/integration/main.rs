@@ -14,6 +14,7 @@ mod contact_graph;
 mod exports;
 mod fuzz_corpora;
 mod gravity;
+mod held_out;
 mod hostile_input;
 mod model_import;
 mod onnx;

@@ -1,0 +1,402 @@
+//! Held-out truth: procedural rooms (`iscene generate`), specifications naming CAD databases
+//! the library does not hold, the overlap rule, and the benchmark over a range of seeds with
+//! bounds on every metric of `iscene eval`. No test here is tied to one room: each runs over a
+//! range of seeds.
+
+use std::path::Path;
+
+use iscene::render::noise::NoiseChoice;
+use iscene::scene::generate::{
+    GenerateOptions, MAX_OBJECTS, MIN_OBJECTS, RoomStyle, doors_open_freely, generate,
+    unseen_objects,
+};
+use iscene::scene::{SceneSpec, SceneWorld};
+
+use crate::common::{iscene, listing, shared_data};
+
+const SEEDS: std::ops::Range<u64> = 0..12;
+
+fn options(seed: u64) -> GenerateOptions {
+    GenerateOptions {
+        seed,
+        style: RoomStyle::Any,
+        cad: Vec::new(),
+        noise: NoiseChoice::Realistic,
+        frames: 300,
+    }
+}
+
+/// The world of a generated specification, written to `dir` and read back as a user would.
+fn generated_world(dir: &Path, seed: u64) -> (SceneSpec, SceneWorld) {
+    let path = dir.join(format!("room_{seed}.json"));
+    let generated = generate(&options(seed), &path).expect("generated");
+    iscene::scene::generate::write_generated(&path, &generated.json).expect("written");
+    let spec = SceneSpec::load(&path).expect("a generated specification is valid");
+    let world = SceneWorld::from_spec(&spec, &path).expect("and describes a world");
+    (spec, world)
+}
+
+#[test]
+fn generated_rooms_are_valid_seen_free_to_open_and_differ_by_seed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut styles = std::collections::BTreeSet::new();
+    let mut open_joints = 0;
+    let mut articulated = 0;
+    let mut texts = std::collections::BTreeSet::new();
+    for seed in SEEDS {
+        let (spec, world) = generated_world(dir.path(), seed);
+        styles.insert(spec.name.split('_').nth(1).unwrap_or("").to_string());
+        let n = world.objects.len();
+        assert!(
+            (MIN_OBJECTS..=MAX_OBJECTS).contains(&n),
+            "seed {seed}: {n} objects"
+        );
+        assert!(
+            unseen_objects(&world, 300).is_empty(),
+            "seed {seed}: objects the default path never sees"
+        );
+        for (i, o) in world.objects.iter().enumerate() {
+            assert!(
+                doors_open_freely(&world, i),
+                "seed {seed}: a door or drawer of {} (or one opening onto it) cannot open all the way",
+                o.id
+            );
+            if o.model.is_articulated() {
+                articulated += 1;
+            }
+        }
+        open_joints += spec.objects.iter().filter(|o| !o.joints.is_empty()).count();
+        // Furniture on the floor stands on it and inside the room (checked by the world), and
+        // what stands against a wall faces into the room: its front (-y) points away from the
+        // nearest wall.
+        for o in &world.objects {
+            if o.support != iscene::scene::Support::Floor
+                || !matches!(o.class.as_str(), "fridge" | "oven" | "dishwasher" | "shelf")
+            {
+                continue;
+            }
+            let front = o.world_from_model.transform_vector3(-glam::Vec3::Y);
+            let p = o.world_from_model.translation;
+            let room = world.room_size;
+            let inward = [
+                (p.y, glam::Vec3::Y),
+                (room.x - p.x, -glam::Vec3::X),
+                (room.y - p.y, -glam::Vec3::Y),
+                (p.x, glam::Vec3::X),
+            ]
+            .into_iter()
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, n)| n)
+            .expect("four walls");
+            assert!(
+                front.dot(inward) > 0.9,
+                "seed {seed}: {} faces {front}, not into the room",
+                o.id
+            );
+        }
+        let text =
+            std::fs::read_to_string(dir.path().join(format!("room_{seed}.json"))).expect("spec");
+        let again = generate(&options(seed), &dir.path().join("again.json")).expect("again");
+        assert_eq!(
+            serde_json::to_string_pretty(&again.json).expect("json") + "\n",
+            text,
+            "seed {seed}: the same seed gives the same room"
+        );
+        texts.insert(text);
+    }
+    assert_eq!(texts.len(), SEEDS.count(), "every seed gives its own room");
+    assert!(styles.len() >= 3, "styles over the seeds: {styles:?}");
+    assert!(
+        articulated >= SEEDS.count(),
+        "{articulated} articulated objects"
+    );
+    assert!(
+        open_joints >= 3,
+        "{open_joints} objects left with a door or drawer open"
+    );
+}
+
+#[test]
+fn generate_refuses_to_write_over_what_it_did_not_write() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let user_file = dir.path().join("notes.json");
+    std::fs::write(&user_file, "{\"mine\": true}").expect("write");
+    let cwd = dir.path();
+    let (code, _, err) = iscene(&["generate", "--seed", "1", "--out", "notes.json"], cwd);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("notes.json"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&user_file).expect("kept"),
+        "{\"mine\": true}"
+    );
+    let (code, _, err) = iscene(&["generate", "--seed", "1", "--out", "."], cwd);
+    assert_eq!(code, 2, "{err}");
+    let (code, _, err) = iscene(
+        &[
+            "generate",
+            "--seed",
+            "1",
+            "--out",
+            "a.json",
+            "--cad",
+            "no_such_db",
+        ],
+        cwd,
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no_such_db"), "{err}");
+    assert!(!cwd.join("a.json").exists());
+    // An earlier generated specification is replaced.
+    let (code, _, err) = iscene(&["generate", "--seed", "1", "--out", "room.json"], cwd);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = iscene(&["generate", "--seed", "2", "--out", "room.json"], cwd);
+    assert_eq!(code, 0, "{err}");
+    let names: Vec<String> = listing(cwd).into_iter().map(|(n, _)| n).collect();
+    assert_eq!(names, ["notes.json", "room.json"], "no temporary file left");
+}
+
+#[test]
+fn overlapping_objects_are_refused_naming_both() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let spec = dir.path().join("overlap.json");
+    // A 1.6 m bed at x 2.5 reaches x 1.7; a 0.8 m shelf at x 1.35 reaches 1.75: 5 cm.
+    std::fs::write(
+        &spec,
+        r#"{"name": "overlap", "room": {"size": [5, 4, 2.6]}, "objects": [
+            {"id": "bed_1", "class": "bed", "model": "bed_01", "position": [2.5, 2.9]},
+            {"id": "shelf_1", "class": "shelf", "model": "shelf_01", "position": [1.35, 3.7]}]}"#,
+    )
+    .expect("write");
+    let (code, _, err) = iscene(
+        &["render", "overlap.json", "--out", "seq", "--frames", "2"],
+        dir.path(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("bed_1") && err.contains("shelf_1") && err.contains("overlap.json"),
+        "{err}"
+    );
+    assert!(!dir.path().join("seq").exists());
+    // Moved apart by a centimetre it renders.
+    let text = std::fs::read_to_string(&spec)
+        .expect("spec")
+        .replace("[1.35, 3.7]", "[1.29, 3.7]");
+    std::fs::write(&spec, text).expect("write");
+    let (code, _, err) = iscene(
+        &["render", "overlap.json", "--out", "seq", "--frames", "2"],
+        dir.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+}
+
+/// Imports the LIBERO models of the shared data into `db`.
+fn libero_database(db: &Path) {
+    let source = shared_data("cad/libero/articulated_objects");
+    let (code, _, err) = iscene(
+        &[
+            "cad",
+            "import",
+            "mjcf",
+            source.to_str().expect("utf-8"),
+            "--into",
+            db.to_str().expect("utf-8"),
+        ],
+        Path::new("."),
+    );
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn specifications_draw_models_of_their_cad_databases_with_their_joints() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    libero_database(&dir.path().join("libero"));
+    let spec = r#"{"name": "with_libero", "seed": 3, "cad": ["libero"], "room": {"size": [4, 3.5, 2.6]},
+        "objects": [
+          {"id": "cabinet_1", "class": "cabinet", "model": "mjcf_wooden_cabinet", "position": [1.5, 3.0], "joints": {"cabinet_top": 0.1}},
+          {"id": "fridge_1", "class": "fridge", "model": "mjcf_short_fridge", "position": [3.0, 3.0]},
+          {"id": "table_1", "class": "table", "position": [2, 1.3]}]}"#;
+    std::fs::write(dir.path().join("spec.json"), spec).expect("write");
+    let (code, _, err) = iscene(
+        &["render", "spec.json", "--out", "seq", "--frames", "4"],
+        dir.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+    let graph = iscene::graph::ContactGraph::load(&dir.path().join("seq/gt/contact_graph.json"))
+        .expect("truth graph");
+    let cabinet = graph
+        .nodes
+        .iter()
+        .find(|n| n.id == "cabinet_1")
+        .expect("cabinet");
+    assert_eq!(
+        cabinet.cad.as_ref().map(|c| c.model.as_str()),
+        Some("mjcf_wooden_cabinet")
+    );
+    assert_eq!(cabinet.joints.get("cabinet_top"), Some(&0.1));
+    assert_eq!(cabinet.parts.len(), 3, "three drawers: {:?}", cabinet.parts);
+    let fridge = graph
+        .nodes
+        .iter()
+        .find(|n| n.id == "fridge_1")
+        .expect("fridge");
+    assert!(
+        fridge
+            .parts
+            .iter()
+            .any(|p| p.joint.kind == iscene::graph::parts::PartJointType::Revolute),
+        "the fridge's door is a hinge"
+    );
+
+    // Bad input names the file and the key, and leaves nothing behind.
+    let cases = [
+        (spec.replace("\"libero\"", "\"nowhere\""), "nowhere"),
+        (
+            spec.replace("mjcf_short_fridge", "mjcf_no_such_model"),
+            "objects[1].model",
+        ),
+        (
+            spec.replace("\"cabinet_top\": 0.1", "\"door\": 0.3"),
+            "objects[0].joints.door",
+        ),
+        (
+            spec.replace(
+                "\"position\": [3.0, 3.0]",
+                "\"position\": [3.0, 3.0], \"size\": [1, 1, 1]",
+            ),
+            "objects[1].size",
+        ),
+    ];
+    for (text, key) in cases {
+        std::fs::write(dir.path().join("bad.json"), &text).expect("write");
+        let (code, _, err) = iscene(
+            &["render", "bad.json", "--out", "bad_seq", "--frames", "2"],
+            dir.path(),
+        );
+        assert_eq!(code, 2, "{key}: {err}");
+        assert!(err.contains(key), "{key}: {err}");
+        assert!(!dir.path().join("bad_seq").exists(), "{key}");
+    }
+}
+
+#[test]
+fn generated_rooms_use_the_databases_they_are_given() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    libero_database(&dir.path().join("libero"));
+    let mut used = 0;
+    for seed in 0..6 {
+        let path = dir.path().join(format!("room_{seed}.json"));
+        let options = GenerateOptions {
+            cad: vec![dir.path().join("libero")],
+            style: RoomStyle::Kitchen,
+            ..options(seed)
+        };
+        let generated = generate(&options, &path).expect("generated");
+        iscene::scene::generate::write_generated(&path, &generated.json).expect("written");
+        let spec = SceneSpec::load(&path).expect("valid, with its databases");
+        assert_eq!(spec.cad, ["libero"], "named relative to the specification");
+        used += spec
+            .objects
+            .iter()
+            .filter(|o| o.model.as_deref().is_some_and(|m| m.starts_with("mjcf_")))
+            .count();
+    }
+    assert!(used >= 3, "{used} LIBERO models in six kitchens");
+}
+
+#[test]
+fn the_benchmark_scores_every_room_resumes_and_keeps_its_bounds() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("bench");
+    let out_s = out.to_str().expect("utf-8");
+    let args = [
+        "benchmark",
+        "--seeds",
+        "0:3",
+        "--frames",
+        "40",
+        "--out",
+        out_s,
+    ];
+    let (code, stdout, err) = iscene(&args, dir.path());
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("| pq |"), "{stdout}");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("summary.json")).expect("summary.json"),
+    )
+    .expect("json");
+    assert_eq!(summary["rooms"], 3, "{summary}");
+    let metrics = &summary["metrics"];
+    for key in [
+        "pq",
+        "instance_map50",
+        "ged",
+        "ged_positional",
+        "stable_fraction",
+        "cad_yaw_accuracy",
+        "cad_class_accuracy",
+        "cad_chamfer_m",
+        "fit_residual_m",
+        "mean_alignment_error",
+        "articulation_precision",
+        "articulation_recall",
+        "articulation_f1",
+    ] {
+        for stat in ["mean", "median", "worst"] {
+            assert!(
+                metrics[key][stat].as_f64().is_some_and(f64::is_finite),
+                "{key}.{stat} in {metrics}"
+            );
+        }
+    }
+    let mean = |key: &str| metrics[key]["mean"].as_f64().expect(key);
+    let worst = |key: &str| metrics[key]["worst"].as_f64().expect(key);
+    // Bounds of a short (40-frame) run over three rooms: what the pipeline reaches today with a
+    // margin, so that a regression fails; the 300-frame goals of the issue stand in the README.
+    assert!(mean("pq") >= 0.75 && worst("pq") >= 0.65, "pq {metrics}");
+    assert!(mean("instance_map50") >= 0.8, "mAP {metrics}");
+    assert!(mean("cad_class_accuracy") >= 0.75, "{metrics}");
+    assert!(mean("cad_chamfer_m") <= 0.03, "{metrics}");
+    assert!(mean("stable_fraction") >= 0.6, "{metrics}");
+    assert!(mean("ged_positional") >= mean("ged"), "{metrics}");
+    assert!(mean("ged") <= 30.0, "{metrics}");
+    assert!(mean("articulation_recall") >= 0.2, "{metrics}");
+    let worst_rooms = summary["worst_rooms"].as_array().expect("worst rooms");
+    assert!(
+        worst_rooms
+            .iter()
+            .any(|w| w["metric"] == "pq" && (0..3).contains(&w["seed"].as_u64().expect("seed"))),
+        "{summary}"
+    );
+    for name in ["summary.csv", "summary.md"] {
+        assert!(out.join(name).is_file(), "{name}");
+    }
+    // Resumed: a finished room is not redone.
+    let eval = out.join("seed_1/eval.json");
+    let before = std::fs::metadata(&eval)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    let (code, _, err) = iscene(&args, dir.path());
+    assert_eq!(code, 0, "{err}");
+    let after = std::fs::metadata(&eval)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    assert_eq!(before, after, "seed 1 was redone");
+    // A folder it did not write is refused.
+    let mine = dir.path().join("mine");
+    std::fs::create_dir(&mine).expect("mkdir");
+    std::fs::write(mine.join("thesis.tex"), "x").expect("write");
+    let (code, _, err) = iscene(
+        &[
+            "benchmark",
+            "--seeds",
+            "0:1",
+            "--frames",
+            "2",
+            "--out",
+            "mine",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(listing(&mine).len(), 1);
+}
