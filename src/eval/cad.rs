@@ -428,7 +428,10 @@ mod tests {
             .find(|s| s.truth == "chair_1")
             .expect("chair score");
         assert!((chair.yaw_error_deg.expect("yaw") - 180.0).abs() < 0.1);
-        assert!(chair.chamfer_m.expect("chamfer") > 0.02, "a chair turned round misses its mesh");
+        assert!(
+            chair.chamfer_m.expect("chamfer") > 0.02,
+            "a chair turned round misses its mesh"
+        );
         assert!(scored.yaw_accuracy.expect("yaws") < 1.0);
         // A cup's yaw never counts: it is round.
         assert!(
