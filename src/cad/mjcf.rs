@@ -1,7 +1,8 @@
 //! MJCF, MuJoCo's XML model format, read into a [`BodyTree`]: the articulated objects of LIBERO
 //! (../shared/data/cad/libero) and of MuJoCo model collections.
 //!
-//! Read: `<compiler>` (angle units, Euler sequence, mesh and texture folders), `<default>`
+//! Read: `<include>` of other files (spliced in as MuJoCo does; a root `<mujocoinclude>` is an
+//! include file, passed over by a folder import), `<compiler>` (angle units, Euler sequence, mesh and texture folders), `<default>`
 //! classes with their nesting and `childclass`, mesh, material and texture assets, and the body
 //! tree with body and geom poses (`pos` with `quat`, `axisangle`, `euler`, `xyaxes` or `zaxis`;
 //! `fromto` for capsules and cylinders). Hinge joints become revolute and slide joints prismatic,
@@ -15,7 +16,7 @@
 //! Primitive geoms become closed meshes. Colours come from the visual geoms: the material's
 //! `rgba` times its texture's mean colour, else the geom's `rgba`, weighted by area and opacity.
 //!
-//! Not read (an error says so where it changes the geometry): `<include>`, `<frame>`, inline
+//! Not read (an error says so where it changes the geometry): `<frame>`, inline
 //! mesh vertices, ball joints, more than one joint in a body, height fields.
 
 use std::collections::HashMap;
@@ -37,7 +38,12 @@ const ROUND_SEGMENTS: u32 = 16;
 /// Reads the MJCF file at `path`. Errors name the element's line, not the file: the caller
 /// names it.
 pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let folder = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut budget = MAX_INCLUDED_BYTES;
+    let text = expanded_text(path, folder, 0, &mut budget)?;
     let document = roxmltree::Document::parse(&text).map_err(|e| format!("not XML: {e}"))?;
     check_xml_depth(&document)?;
     let root = document.root_element();
@@ -55,13 +61,18 @@ pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
             )));
         }
     }
+    if root.tag_name().name() == "mujocoinclude" {
+        return Err(ModelFileError::Unsupported(
+            "an include file (<mujocoinclude>): it is read through the model that includes it"
+                .into(),
+        ));
+    }
     if root.tag_name().name() != "mujoco" {
         return Err(ModelFileError::Malformed(format!(
             "the root element is <{}>, not <mujoco>",
             root.tag_name().name()
         )));
     }
-    let folder = path.parent().unwrap_or(Path::new("."));
     let mut reader = Reader::new(root, folder)?;
     let name = root
         .attribute("model")
@@ -92,6 +103,88 @@ pub fn read_mjcf(path: &Path) -> Result<BodyTree, ModelFileError> {
         }
     }
     Ok(tree)
+}
+
+/// Includes nest at most this deep, and a model with its includes is at most this long (bytes).
+const MAX_INCLUDE_DEPTH: usize = 8;
+const MAX_INCLUDED_BYTES: usize = 64 << 20;
+
+/// Whether the MJCF file at `path` is an include file (root `<mujocoinclude>`), which a folder
+/// import passes over: it is read through the model that includes it.
+pub fn is_include_file(path: &Path) -> bool {
+    std::fs::read_to_string(path).is_ok_and(|text| {
+        roxmltree::Document::parse(&text)
+            .is_ok_and(|d| d.root_element().tag_name().name() == "mujocoinclude")
+    })
+}
+
+/// The text of the MJCF file at `path` with every `<include file="..."/>` replaced by what the
+/// included file's root element holds, as MuJoCo reads it: files are named relative to the
+/// model's folder `folder` and must lie inside it; includes nest up to `MAX_INCLUDE_DEPTH`, and
+/// `budget` bytes of text are left for the whole model.
+fn expanded_text(
+    path: &Path,
+    folder: &Path,
+    depth: usize,
+    budget: &mut usize,
+) -> Result<String, ModelFileError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    *budget = budget.checked_sub(text.len()).ok_or_else(|| {
+        ModelFileError::Malformed(format!(
+            "the model with its includes is longer than {MAX_INCLUDED_BYTES} bytes"
+        ))
+    })?;
+    let document = roxmltree::Document::parse(&text).map_err(|e| {
+        if depth == 0 {
+            format!("not XML: {e}")
+        } else {
+            format!("{}: not XML: {e}", path.display())
+        }
+    })?;
+    let includes: Vec<(std::ops::Range<usize>, String)> = document
+        .descendants()
+        .filter(|n| n.is_element() && n.tag_name().name() == "include")
+        .map(|n| {
+            let file = n.attribute("file").ok_or_else(|| {
+                ModelFileError::Malformed(format!("{}: <include> without a file", at(n)))
+            })?;
+            Ok((n.range(), file.to_string()))
+        })
+        .collect::<Result<_, ModelFileError>>()?;
+    if includes.is_empty() {
+        return Ok(text);
+    }
+    if depth >= MAX_INCLUDE_DEPTH {
+        return Err(ModelFileError::Malformed(format!(
+            "{}: includes nest deeper than {MAX_INCLUDE_DEPTH}",
+            path.display()
+        )));
+    }
+    let mut expanded = String::with_capacity(text.len());
+    let mut copied = 0;
+    for (range, file) in includes {
+        let included = inside_folder(folder, Path::new(&file))
+            .map_err(|e| ModelFileError::Malformed(format!("<include file={file:?}>: {e}")))?;
+        let inner = expanded_text(&included, folder, depth + 1, budget)?;
+        let inner_document = roxmltree::Document::parse(&inner)
+            .map_err(|e| format!("{}: not XML: {e}", included.display()))?;
+        let root = inner_document.root_element();
+        let body = match (root.first_child(), root.last_child()) {
+            (Some(first), Some(last)) => &inner[first.range().start..last.range().end],
+            _ => "",
+        };
+        // Nested includes sit inside earlier ones' ranges only if an include has children,
+        // which MJCF does not allow; ranges come in document order.
+        if range.start < copied {
+            continue;
+        }
+        expanded.push_str(&text[copied..range.start]);
+        expanded.push_str(body);
+        copied = range.end;
+    }
+    expanded.push_str(&text[copied..]);
+    Ok(expanded)
 }
 
 /// Attribute values by element kind (`geom`, `joint`, `mesh`, ...) of one default class.
@@ -130,15 +223,6 @@ struct Reader {
 
 impl Reader {
     fn new(root: Node, folder: &Path) -> Result<Self, ModelFileError> {
-        if let Some(include) = root
-            .descendants()
-            .find(|n| n.is_element() && n.tag_name().name() == "include")
-        {
-            return Err(ModelFileError::Unsupported(format!(
-                "{}: <include> is not supported",
-                at(include)
-            )));
-        }
         let mut degrees = true;
         let mut euler = EulerRot::XYZ;
         // Relative to `folder`; every file named is resolved inside it.

@@ -16,6 +16,7 @@ pub mod mesh_files;
 pub mod mjcf;
 pub mod mjcf_xml;
 pub mod model;
+pub mod model_parts;
 pub mod orientation;
 pub mod physical_check;
 pub mod placed_solid;

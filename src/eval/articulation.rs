@@ -9,7 +9,8 @@ use glam::{Affine3A, Vec3};
 use serde::Serialize;
 
 use crate::cad::database::CadDatabase;
-use crate::graph::parts::{PartJointType, PartJson, model_parts};
+use crate::cad::model_parts::model_parts;
+use crate::graph::parts::{PartJointType, PartJson};
 use crate::graph::{ContactGraph, GraphNode};
 
 /// A predicted part may stand for a truth part when their fronts' centres are this close, metres.

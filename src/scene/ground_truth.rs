@@ -6,10 +6,10 @@ use std::collections::BTreeMap;
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::cad::model_parts::model_parts;
 use crate::classes::EntityKind;
 use crate::geometry::plane::dominant_planes;
 use crate::geometry::{GravityBox, TriMesh};
-use crate::graph::parts::model_parts;
 use crate::graph::proximal::{ProximalMargins, proximal_edges};
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
 use crate::scene::world::{SceneWorld, Support};

@@ -416,3 +416,77 @@ fn copy_folder(from: &Path, to: &Path) {
         std::fs::copy(entry.path(), to.join(entry.file_name())).expect("copy");
     }
 }
+
+/// A model split the way MuJoCo collections publish them: the main file includes a
+/// `<mujocoinclude>` of defaults and one of the body tree (with a `childclass`), from a
+/// subfolder. The folder import reads the model through its includes and passes over the
+/// include files; an include that leaves the model's folder is refused.
+#[test]
+fn mjcf_includes_are_spliced_in_and_include_files_passed_over() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let src = tmp.path().join("models");
+    std::fs::create_dir_all(src.join("parts")).expect("mkdir");
+    std::fs::write(
+        src.join("parts/defaults.xml"),
+        r#"<mujocoinclude>
+  <default>
+    <default class="panel"><geom type="box" rgba="0.8 0.6 0.4 1"/></default>
+    <default class="hinge"><joint type="hinge" axis="0 0 1" range="0 1.6"/></default>
+  </default>
+</mujocoinclude>"#,
+    )
+    .expect("write");
+    std::fs::write(
+        src.join("parts/body.xml"),
+        r#"<mujocoinclude>
+  <body name="cabinet" childclass="panel">
+    <geom size="0.3 0.25 0.02" pos="0 0 0.02"/>
+    <geom size="0.3 0.25 0.02" pos="0 0 0.78"/>
+    <geom size="0.02 0.25 0.4" pos="-0.28 0 0.4"/>
+    <geom size="0.02 0.25 0.4" pos="0.28 0 0.4"/>
+    <geom size="0.3 0.02 0.4" pos="0 0.23 0.4"/>
+    <body name="door" pos="-0.3 -0.27 0.4">
+      <joint name="door_hinge" class="hinge"/>
+      <geom size="0.3 0.02 0.38" pos="0.3 0 0"/>
+    </body>
+  </body>
+</mujocoinclude>"#,
+    )
+    .expect("write");
+    std::fs::write(
+        src.join("cabinet.xml"),
+        r#"<mujoco model="cabinet">
+  <include file="parts/defaults.xml"/>
+  <worldbody>
+    <include file="parts/body.xml"/>
+  </worldbody>
+</mujoco>"#,
+    )
+    .expect("write");
+    // The include files sit in a subfolder: import the folder with them beside the model too.
+    std::fs::copy(src.join("parts/defaults.xml"), src.join("defaults.xml")).expect("copy");
+    let db = tmp.path().join("db");
+    let (code, stdout, stderr) = run_import(&src, &db, "class");
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    assert!(stdout.contains("imported 1 models"), "{stdout}");
+    assert!(!stdout.contains("not imported"), "{stdout}");
+    let models = read_database(&db).expect("database");
+    assert_eq!(models.len(), 1);
+    let kinds: Vec<JointKind> = joints(&models[0]).iter().map(|j| j.0).collect();
+    assert_eq!(kinds, [JointKind::Revolute], "the included door's hinge");
+
+    std::fs::write(
+        src.join("escape.xml"),
+        r#"<mujoco model="cabinet"><include file="../outside.xml"/><worldbody/></mujoco>"#,
+    )
+    .expect("write");
+    std::fs::write(tmp.path().join("outside.xml"), "<mujocoinclude/>").expect("write");
+    let db2 = tmp.path().join("db2");
+    let (code, _, stderr) = run_import(&src.join("escape.xml"), &db2, "class");
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("escape.xml") && stderr.contains("outside.xml"),
+        "{stderr}"
+    );
+    assert!(!db2.exists());
+}
