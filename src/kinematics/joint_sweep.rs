@@ -44,6 +44,10 @@ pub struct JointSweep {
     /// limit (a door stopped by the wall beside it): from its value at rest out to where it
     /// touches, either way.
     pub reachable: Option<(f32, f32)>,
+    /// The part cannot move through `MIN_FREE_SHARE` of its model's range: a conflict between
+    /// the model or its pose and the scene, kept in the report (the range is not narrowed to
+    /// make it fit).
+    pub conflict: bool,
     /// Other joints of the same object that had to be open first (a dishwasher's rack slides
     /// out once its door is down); empty when the joint moves from the scene as it stands.
     pub after_opening: Vec<String>,
@@ -226,6 +230,11 @@ impl<'a> SweepPose<'a> {
     }
 }
 
+/// A door or drawer must move through this share of its model's range in the scene; one that
+/// meets something sooner is a conflict, not a shorter joint (a door stopped by the wall at 85
+/// degrees of 100 is narrowed to 85; one stopped at 20 is a conflict).
+pub const MIN_FREE_SHARE: f32 = 0.8;
+
 /// Sweeps joint `j` with the joints `open` set to their open ends: from its value at rest out to
 /// each limit, recording the deepest overlap and where the moving part first meets another
 /// object (or the room) deeper than `LIMIT_CONTACT_M` more than it does at rest.
@@ -303,14 +312,17 @@ fn sweep_one(tree: &KinematicTree, solids: &[LinkSolids], j: usize, open: &[usiz
     let reachable = (stops != [lo, hi] && stops[1] - stops[0] >= (hi - lo) / 8.0)
         .then_some((stops[0], stops[1]));
     let max_penetration_m = worst.map_or(0.0, |(d, _, _)| d);
+    let free = max_penetration_m <= SWEEP_TOLERANCE_M;
+    let conflict = !free && reachable.is_none_or(|(a, b)| b - a < MIN_FREE_SHARE * (hi - lo));
     JointSweep {
         link: tree.links[j].name.clone(),
         max_penetration_m,
         hits: worst
             .filter(|(d, _, _)| *d > SWEEP_TOLERANCE_M)
             .map(|(_, p, v)| (tree.links[pose.still_of(p)].name.clone(), v)),
-        free: max_penetration_m <= SWEEP_TOLERANCE_M,
+        free,
         reachable,
+        conflict,
         after_opening: open.iter().map(|&o| tree.links[o].name.clone()).collect(),
     }
 }

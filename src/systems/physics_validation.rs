@@ -319,11 +319,14 @@ fn physics_validation_stage(world: &mut World) {
     world.insert_resource(report);
 }
 
-/// Narrows each joint whose sweep met something partway to the range it moves freely in, in the
-/// ECS and in the tree the exports write: a door that meets the wall at 80 degrees opens to 80.
+/// Narrows each joint whose sweep met something near its limit to the range it moves freely
+/// in, in the ECS and in the tree the exports write: a door that meets the wall at 90 degrees of
+/// 100 opens to 90. A joint stopped sooner is a conflict (report.json) and keeps its range: it is
+/// never shrunk to whatever is left to make it pass.
 fn narrow_blocked_joints(world: &mut World, sweeps: &[JointSweep]) {
     let blocked: Vec<(&str, (f32, f32))> = sweeps
         .iter()
+        .filter(|s| !s.conflict)
         .filter_map(|s| s.reachable.map(|r| (s.link.as_str(), r)))
         .collect();
     if blocked.is_empty() {

@@ -125,15 +125,15 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
                 failures.push(format!("{name}: {id} on {parent}: {}", o["reason"]));
             }
         }
-        // Every door and drawer opens without hitting anything, but where a conflict is.
+        // Every door and drawer opens through at least 80 % of its range without hitting
+        // anything, but where objects already penetrate.
         for sweep in report["physics"]["joints"]
             .as_array()
             .expect("joint sweeps")
         {
             let link = sweep["link"].as_str().expect("link");
             let hit = sweep["hits"][0].as_str().unwrap_or("");
-            if sweep["free"] != true
-                && sweep["reachable"].is_null()
+            if sweep["conflict"] == true
                 && !(belongs_to(link, &penetrating) || belongs_to(hit, &penetrating))
             {
                 failures.push(format!("{name}: {link} does not move freely: {sweep}"));
