@@ -627,7 +627,9 @@ impl<'a> RoomBuilder<'a> {
                 }
                 let value = round_cm(upper * rng.random_range(0.3..0.9));
                 self.spec.objects[i].joints.insert(part.name.clone(), value);
-                let ok = self.spec.validate().is_ok() && self.world().is_some();
+                // A part left open is part of the object for every other door's clearance.
+                let ok = self.spec.validate().is_ok()
+                    && self.world().is_some_and(|w| doors_open_freely(&w, i));
                 if !ok {
                     self.spec.objects[i].joints.remove(&part.name);
                 }

@@ -317,10 +317,10 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
             let generated = iscene::scene::generate::generate(&options, &out)?;
             iscene::scene::generate::write_generated(&out, &generated.json)?;
             println!(
-                "wrote {}: a {} room of {} objects (seed {seed})",
+                "wrote {}: {} objects, style {} (seed {seed})",
                 out.display(),
-                generated.style.name(),
-                generated.objects
+                generated.objects,
+                generated.style.name()
             );
         }
         Some(Command::Benchmark {
