@@ -112,6 +112,9 @@ pub struct BenchmarkSummary {
     pub dir: PathBuf,
 }
 
+/// Per seed: the room's `iscene eval` object and its seconds, or why it failed.
+type RoomResults = BTreeMap<u64, Result<(Value, f64), String>>;
+
 /// Whether a larger value of `metric` is better (accuracies, qualities, fractions) or a smaller
 /// one (distances, errors, edit costs, penetrations).
 pub fn higher_is_better(metric: &str) -> bool {
@@ -147,7 +150,7 @@ pub fn run(options: &BenchmarkOptions) -> Result<BenchmarkSummary, IsceneError> 
         .unwrap_or_else(default_jobs)
         .clamp(1, seeds.len().max(1));
     let next = AtomicUsize::new(0);
-    let results: Mutex<BTreeMap<u64, Result<(Value, f64), String>>> = Mutex::new(BTreeMap::new());
+    let results: Mutex<RoomResults> = Mutex::new(BTreeMap::new());
     let progress = crate::progress::bar(seeds.len() as u64, "rooms", options.progress);
     std::thread::scope(|scope| {
         for _ in 0..jobs {
@@ -318,11 +321,7 @@ fn run_room(options: &BenchmarkOptions, seed: u64) -> Result<(Value, f64), Iscen
     Ok((eval, seconds))
 }
 
-fn summarise(
-    options: &BenchmarkOptions,
-    results: &BTreeMap<u64, Result<(Value, f64), String>>,
-    seconds: f64,
-) -> BenchmarkSummary {
+fn summarise(options: &BenchmarkOptions, results: &RoomResults, seconds: f64) -> BenchmarkSummary {
     let mut values: BTreeMap<String, Vec<(u64, f64)>> = BTreeMap::new();
     let mut failed = Vec::new();
     let mut room_seconds = 0.0;
