@@ -51,12 +51,16 @@ impl SceneWorld {
             for name in o.joints.keys() {
                 if !model.movable_parts().any(|p| &p.name == name) {
                     let movable: Vec<_> = model.movable_parts().map(|p| p.name.as_str()).collect();
+                    let has = if movable.is_empty() {
+                        "it has no joints".to_string()
+                    } else {
+                        format!("it has: {}", movable.join(", "))
+                    };
                     return Err(err(
                         i,
                         format!(
-                            "joints.{name}: model {} has no such moving part (it has: {})",
-                            model.id,
-                            movable.join(", ")
+                            "joints.{name}: model {} has no such moving part ({has})",
+                            model.id
                         ),
                     ));
                 }
