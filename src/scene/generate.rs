@@ -92,8 +92,8 @@ pub struct Generated {
 /// Generates the room of `options`. `out` is where the specification will be written: the
 /// databases of `--cad` are named relative to its folder.
 pub fn generate(options: &GenerateOptions, out: &Path) -> Result<Generated, InputError> {
-    let databases = resolve_databases(&options.cad, out)?;
-    let probe = SceneSpec {
+    // The databases, named as the specification will name them, read once.
+    let mut source = SceneSpec {
         name: String::new(),
         seed: options.seed,
         room: RoomSpec {
@@ -102,12 +102,11 @@ pub fn generate(options: &GenerateOptions, out: &Path) -> Result<Generated, Inpu
         objects: Vec::new(),
         camera: CameraSpec::default(),
         noise: options.noise.settings(),
-        cad: databases.clone(),
+        cad: resolve_databases(&options.cad, out)?,
         databases: Vec::new(),
     };
     let base = out.parent().unwrap_or(Path::new("."));
-    let mut probe_with_db = probe;
-    probe_with_db
+    source
         .read_databases(&base.join("generated.json"))
         .map_err(|e| match e {
             InputError::Missing { path, what } => InputError::Missing {
@@ -130,7 +129,7 @@ pub fn generate(options: &GenerateOptions, out: &Path) -> Result<Generated, Inpu
             .unwrap_or(&RoomStyle::Kitchen),
             s => s,
         };
-        let mut room = RoomBuilder::new(&probe_with_db, style, options, &mut rng);
+        let mut room = RoomBuilder::new(&source, style, options, &mut rng);
         room.furnish(&mut rng);
         room.keep_visible();
         if room.spec.objects.len() >= MIN_OBJECTS {
