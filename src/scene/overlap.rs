@@ -4,6 +4,7 @@
 use rayon::prelude::*;
 
 use crate::cad::placed_solid::{PlacedSolid, penetration_depth};
+use crate::geometry::TriMesh;
 use crate::scene::world::{SceneWorld, Support};
 
 /// The most two objects of a specification may interpenetrate, metres: touching within the
@@ -19,29 +20,38 @@ pub struct Overlap {
 }
 
 /// The deepest overlap past `MAX_OVERLAP_M` of two objects of `world`, if any (the first pair in
-/// index order among equals). An object inside a container is not tested against the container:
-/// an imported container's solid pieces are the hulls of its meshes, which hold its inside.
+/// index order among equals). An object inside a container is tested against the container's
+/// pieces but those that hold its centre: an imported container's pieces may be the hulls of its
+/// meshes, which hold its inside; a shelf's boards do not, and one cutting through a box on the
+/// board below is an overlap.
 pub fn deepest_overlap(world: &SceneWorld) -> Option<Overlap> {
-    let solids: Vec<PlacedSolid> = world
-        .objects
+    let meshes: Vec<TriMesh> = world.objects.par_iter().map(|o| o.world_mesh()).collect();
+    let solids: Vec<PlacedSolid> = meshes
         .par_iter()
-        .map(|o| PlacedSolid::from_world_mesh(&o.world_mesh()))
+        .map(PlacedSolid::from_world_mesh)
         .collect();
     let pairs: Vec<(usize, usize)> = (0..solids.len())
         .flat_map(|a| (a + 1..solids.len()).map(move |b| (a, b)))
-        .filter(|&(a, b)| {
-            let inside = |child: usize, parent: usize| {
-                world.objects[child].support == Support::InObject(parent)
-            };
-            !inside(a, b) && !inside(b, a)
-        })
         .collect();
+    let inside =
+        |child: usize, parent: usize| world.objects[child].support == Support::InObject(parent);
     pairs
         .par_iter()
-        .map(|&(a, b)| Overlap {
-            a,
-            b,
-            depth: penetration_depth(&solids[a], &solids[b]),
+        .map(|&(a, b)| {
+            let depth = if inside(a, b) || inside(b, a) {
+                let (child, parent) = if inside(a, b) { (a, b) } else { (b, a) };
+                let centre = solids[child].centre();
+                let mut walls = TriMesh::default();
+                for piece in meshes[parent].connected_components() {
+                    if !piece.convex_hull().is_some_and(|h| hull_holds(&h, centre)) {
+                        walls.append(&piece);
+                    }
+                }
+                penetration_depth(&solids[child], &PlacedSolid::from_world_mesh(&walls))
+            } else {
+                penetration_depth(&solids[a], &solids[b])
+            };
+            Overlap { a, b, depth }
         })
         .filter(|o| o.depth > MAX_OVERLAP_M)
         .max_by(|x, y| {
@@ -50,4 +60,12 @@ pub fn deepest_overlap(world: &SceneWorld) -> Option<Overlap> {
                 .then(y.a.cmp(&x.a))
                 .then(y.b.cmp(&x.b))
         })
+}
+
+/// Whether the closed convex `hull` (outward faces) holds `point`.
+fn hull_holds(hull: &TriMesh, point: glam::Vec3) -> bool {
+    (0..hull.triangles.len()).all(|t| {
+        let normal = hull.face_normal(t);
+        normal == glam::Vec3::ZERO || normal.dot(point - hull.triangle(t)[0]) <= 0.0
+    })
 }
