@@ -151,7 +151,7 @@ pub fn import_model_files(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        if matches!(format, ModelFormat::Mjcf) && crate::cad::mjcf::is_include_file(file) {
+        if matches!(format, ModelFormat::Mjcf) && crate::cad::mjcf_include::is_include_file(file) {
             summary.skipped += 1;
             continue;
         }

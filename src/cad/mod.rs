@@ -14,6 +14,7 @@ pub mod load;
 pub mod matching;
 pub mod mesh_files;
 pub mod mjcf;
+pub mod mjcf_include;
 pub mod mjcf_xml;
 pub mod model;
 pub mod model_parts;

@@ -10,6 +10,7 @@ use serde::Serialize;
 
 use crate::cad::database::CadDatabase;
 use crate::cad::model_parts::model_parts;
+use crate::eval::pairing::greedy_pairs;
 use crate::graph::parts::{PartJointType, PartJson};
 use crate::graph::{ContactGraph, GraphNode};
 
@@ -129,15 +130,7 @@ pub fn evaluate_articulation(
             }
         }
     }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-    let mut pred_of = vec![None; truth_parts.len()];
-    let mut taken = vec![false; pred_parts.len()];
-    for (_, t, p) in pairs {
-        if pred_of[t].is_none() && !taken[p] {
-            pred_of[t] = Some(p);
-            taken[p] = true;
-        }
-    }
+    let pred_of = greedy_pairs(pairs, truth_parts.len(), pred_parts.len(), false);
     let parts: Vec<PartScore> = truth_parts
         .iter()
         .zip(&pred_of)

@@ -14,6 +14,7 @@ use crate::cad::physical_check::{
 };
 use crate::classes::{ClassTable, EntityKind};
 use crate::eval::chamfer::chamfer_distance;
+use crate::eval::pairing::greedy_pairs;
 use crate::geometry::TriMesh;
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{ContactGraph, GraphNode};
@@ -131,15 +132,7 @@ pub fn evaluate_cad(
             }
         }
     }
-    pairs.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-    let mut pred_of = vec![None; truth_objects.len()];
-    let mut taken = vec![false; pred_objects.len()];
-    for (_, t, p) in pairs {
-        if pred_of[t].is_none() && !taken[p] {
-            pred_of[t] = Some(p);
-            taken[p] = true;
-        }
-    }
+    let pred_of = greedy_pairs(pairs, truth_objects.len(), pred_objects.len(), true);
     let mut scores = Vec::new();
     for (t, tn) in truth_objects.iter().enumerate() {
         let pn = pred_of[t].map(|p| &pred_objects[p]);

@@ -7,6 +7,7 @@ pub mod cad;
 pub mod chamfer;
 pub mod contact;
 pub mod ged;
+pub mod pairing;
 pub mod panoptic_quality;
 pub mod truth;
 

@@ -1,175 +1,24 @@
-//! `iscene generate`: a procedural room, the same for the same seed, after the room rules of
-//! ProcTHOR (Deitke et al., 2022): furniture stands with its back to a wall, facing into the room,
-//! with the clearance its doors and drawers need; tables stand free with chairs around them
-//! facing them; wall cabinets hang above; small objects stand on tables, counters and shelves
-//! and in open containers; some doors and drawers are left open. Every proposal is checked by
-//! building the world it describes (the same checks a hand-written specification gets: no
-//! overlaps past 5 mm, inside the room, supported), and the finished room is rendered at low
-//! resolution along the default camera path so that every object is seen.
+//! The room builder: furniture against walls, tables with chairs, doors left open and small
+//! objects, each proposal kept only when the world it describes passes the checks.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::Vec3;
+use rand::Rng;
 use rand::seq::IndexedRandom;
-use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Value, json};
 
+use super::checks::{doors_open_freely, unseen_objects};
+use super::spec_file::{numbers, object_json};
+use super::{
+    EDGE_MARGIN, GenerateOptions, MAX_OBJECTS, RoomStyle, TRIES_PER_OBJECT, WALL_CABINET_HEIGHT,
+    WALL_GAP,
+};
 use crate::cad::ParametricLibrary;
-use crate::cad::placed_solid::{PlacedSolid, layout_penetration, penetration_depth};
-use crate::error::InputError;
-use crate::geometry::Pinhole;
-use crate::render::noise::NoiseChoice;
-use crate::render::raster::{NO_TRIANGLE, rasterize};
-use crate::render::render_scene::RenderScene;
-use crate::render::sequence::{DEFAULT_CAMERA_HEIGHT, DEFAULT_FRAMES};
-use crate::render::trajectory::room_loop;
-use crate::scene::overlap::MAX_OVERLAP_M;
-use crate::scene::placement::stable_hash;
+use crate::render::sequence::DEFAULT_FRAMES;
 use crate::scene::spec::{CameraSpec, ModelSource, ObjectSpec, RoomSpec, SceneSpec};
 use crate::scene::world::{SceneWorld, wall_frame, wall_length, yaw_facing};
-
-/// The kinds of room `generate` makes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum RoomStyle {
-    Kitchen,
-    Office,
-    Living,
-    Bedroom,
-    /// One of the others, chosen by the seed.
-    Any,
-}
-
-impl RoomStyle {
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Kitchen => "kitchen",
-            Self::Office => "office",
-            Self::Living => "living",
-            Self::Bedroom => "bedroom",
-            Self::Any => "any",
-        }
-    }
-}
-
-/// What `generate` is asked for.
-#[derive(Clone, Debug)]
-pub struct GenerateOptions {
-    pub seed: u64,
-    pub style: RoomStyle,
-    /// CAD databases whose models the room may use, as given on the command line.
-    pub cad: Vec<PathBuf>,
-    /// Depth, segmentation and pose noise of the rendering.
-    pub noise: NoiseChoice,
-    pub frames: usize,
-}
-
-/// A room has this many objects, at least and at most.
-pub const MIN_OBJECTS: usize = 8;
-pub const MAX_OBJECTS: usize = 30;
-/// Rooms tried (each from its own stream of the seed) before giving up.
-const ATTEMPTS: u64 = 20;
-/// Placements tried per proposed object.
-const TRIES_PER_OBJECT: usize = 12;
-/// Visibility: frames of the default path rendered at a quarter of the resolution, and the
-/// pixels an object needs in one of them (a 4x4 patch at full resolution is 1 pixel here).
-const VISIBILITY_FRAMES: usize = 60;
-const MIN_VISIBLE_PIXELS: usize = 12;
-/// Gap between a wall and the back of the furniture against it, metres.
-const WALL_GAP: std::ops::Range<f32> = 0.01..0.04;
-/// Bottom of wall cabinets above the floor, metres.
-const WALL_CABINET_HEIGHT: std::ops::Range<f32> = 1.4..1.6;
-/// Small objects keep this far from the edge of what they stand on, metres.
-const EDGE_MARGIN: f32 = 0.03;
-
-/// A generated specification as JSON, and the room it describes.
-pub struct Generated {
-    pub json: Value,
-    pub objects: usize,
-    pub style: RoomStyle,
-}
-
-/// Generates the room of `options`. `out` is where the specification will be written: the
-/// databases of `--cad` are named relative to its folder.
-pub fn generate(options: &GenerateOptions, out: &Path) -> Result<Generated, InputError> {
-    // The databases, named as the specification will name them, read once.
-    let mut source = SceneSpec {
-        name: String::new(),
-        seed: options.seed,
-        room: RoomSpec {
-            size: [4.0, 4.0, 2.6],
-        },
-        objects: Vec::new(),
-        camera: CameraSpec::default(),
-        noise: options.noise.settings(),
-        cad: resolve_databases(&options.cad, out)?,
-        databases: Vec::new(),
-    };
-    let base = out.parent().unwrap_or(Path::new("."));
-    source
-        .read_databases(&base.join("generated.json"))
-        .map_err(|e| match e {
-            InputError::Missing { path, what } => InputError::Missing {
-                path,
-                what: format!("--cad: {what}"),
-            },
-            e => e,
-        })?;
-    for attempt in 0..ATTEMPTS {
-        let mut rng =
-            ChaCha8Rng::seed_from_u64(stable_hash(options.seed, &format!("room-{attempt}")));
-        let style = match options.style {
-            RoomStyle::Any => *[
-                RoomStyle::Kitchen,
-                RoomStyle::Office,
-                RoomStyle::Living,
-                RoomStyle::Bedroom,
-            ]
-            .choose(&mut rng)
-            .unwrap_or(&RoomStyle::Kitchen),
-            s => s,
-        };
-        let mut room = RoomBuilder::new(&source, style, options, &mut rng);
-        room.furnish(&mut rng);
-        room.keep_visible();
-        if room.spec.objects.len() >= MIN_OBJECTS {
-            return Ok(Generated {
-                objects: room.spec.objects.len(),
-                json: room.to_json(options),
-                style,
-            });
-        }
-    }
-    Err(InputError::invalid(
-        "--seed",
-        format!(
-            "no room of {MIN_OBJECTS} or more visible objects came out of {ATTEMPTS} attempts for seed {}",
-            options.seed
-        ),
-    ))
-}
-
-/// The `--cad` folders as the specification names them: relative to its folder where both are
-/// relative, else absolute.
-fn resolve_databases(cad: &[PathBuf], out: &Path) -> Result<Vec<String>, InputError> {
-    let base = out.parent().unwrap_or(Path::new(""));
-    cad.iter()
-        .map(|db| {
-            let absolute = std::fs::canonicalize(db).map_err(|e| InputError::io(db, &e))?;
-            let relative = std::fs::canonicalize(if base.as_os_str().is_empty() {
-                Path::new(".")
-            } else {
-                base
-            })
-            .ok()
-            .and_then(|b| absolute.strip_prefix(b).ok().map(Path::to_path_buf));
-            let name = relative.unwrap_or(absolute);
-            name.to_str()
-                .map(str::to_string)
-                .ok_or_else(|| InputError::invalid(db, "the path is not UTF-8"))
-        })
-        .collect()
-}
 
 /// What a piece of furniture stands against.
 #[derive(Clone, Copy)]
@@ -179,8 +28,8 @@ struct WallSlot {
     along: f32,
 }
 
-struct RoomBuilder<'a> {
-    spec: SceneSpec,
+pub(super) struct RoomBuilder<'a> {
+    pub(super) spec: SceneSpec,
     style: RoomStyle,
     /// Ids given so far per class.
     counts: std::collections::BTreeMap<String, usize>,
@@ -190,7 +39,7 @@ struct RoomBuilder<'a> {
 }
 
 impl<'a> RoomBuilder<'a> {
-    fn new(
+    pub(super) fn new(
         source: &'a SceneSpec,
         style: RoomStyle,
         options: &GenerateOptions,
@@ -279,7 +128,7 @@ impl<'a> RoomBuilder<'a> {
         ok
     }
 
-    fn furnish(&mut self, rng: &mut ChaCha8Rng) {
+    pub(super) fn furnish(&mut self, rng: &mut ChaCha8Rng) {
         match self.style {
             RoomStyle::Kitchen => {
                 let wall = rng.random_range(0..4);
@@ -727,7 +576,7 @@ impl<'a> RoomBuilder<'a> {
     }
 
     /// Removes objects no frame of the default camera path sees (and what stands on them).
-    fn keep_visible(&mut self) {
+    pub(super) fn keep_visible(&mut self) {
         loop {
             let Some(world) = self.world() else {
                 return;
@@ -757,7 +606,7 @@ impl<'a> RoomBuilder<'a> {
         }
     }
 
-    fn to_json(&self, options: &GenerateOptions) -> Value {
+    pub(super) fn to_json(&self, options: &GenerateOptions) -> Value {
         let objects: Vec<Value> = self.spec.objects.iter().map(object_json).collect();
         let mut spec = json!({
             "name": self.spec.name,
@@ -774,99 +623,6 @@ impl<'a> RoomBuilder<'a> {
         }
         spec
     }
-}
-
-/// Indices of the objects of `world` that no frame of the default path of `frames` frames sees
-/// with `MIN_VISIBLE_PIXELS` at a quarter of the resolution.
-pub fn unseen_objects(world: &SceneWorld, frames: usize) -> Vec<usize> {
-    use rayon::prelude::*;
-    let scene = RenderScene::from_world(world);
-    let k = Pinhole::KINECT;
-    let camera = Pinhole {
-        width: k.width / 4,
-        height: k.height / 4,
-        fx: k.fx / 4.0,
-        fy: k.fy / 4.0,
-        cx: (k.cx + 0.5) / 4.0 - 0.5,
-        cy: (k.cy + 0.5) / 4.0 - 0.5,
-    };
-    let poses = room_loop(world.room_size, frames, DEFAULT_CAMERA_HEIGHT);
-    let step = (frames / VISIBILITY_FRAMES).max(1);
-    let counts: Vec<Vec<usize>> = poses
-        .par_iter()
-        .step_by(step)
-        .map(|pose| {
-            let raster = rasterize(&scene, &camera, &pose.inverse());
-            let mut count = vec![0usize; world.objects.len()];
-            for &t in &raster.triangle {
-                if t != NO_TRIANGLE {
-                    let instance = scene.instances[t as usize];
-                    if let Some(i) = world.objects.iter().position(|o| o.instance == instance) {
-                        count[i] += 1;
-                    }
-                }
-            }
-            count
-        })
-        .collect();
-    (0..world.objects.len())
-        .filter(|&i| counts.iter().all(|c| c[i] < MIN_VISIBLE_PIXELS))
-        .collect()
-}
-
-/// Whether every door and drawer of object `new` opens all the way without meeting another
-/// object or the room, and every other object's doors and drawers still open past `new`.
-pub fn doors_open_freely(world: &SceneWorld, new: usize) -> bool {
-    let planes: Vec<_> = world.layout.iter().map(|l| l.plane).collect();
-    let opened = |i: usize| {
-        let o = &world.objects[i];
-        let values: Vec<(String, f32)> = o
-            .model
-            .movable_parts()
-            .filter_map(|p| p.joint.limits.map(|(_, upper)| (p.name.clone(), upper)))
-            .collect();
-        let mesh = o
-            .model
-            .merged_mesh(&values)
-            .transformed(&o.world_from_model);
-        PlacedSolid::from_world_mesh(&mesh)
-    };
-    let closed = |i: usize| PlacedSolid::from_world_mesh(&world.objects[i].world_mesh());
-    let parent_of = |i: usize| match world.objects[i].support {
-        crate::scene::Support::OnObject(p) | crate::scene::Support::InObject(p) => Some(p),
-        _ => None,
-    };
-    let related = |a: usize, b: usize| parent_of(a) == Some(b) || parent_of(b) == Some(a);
-    let new_closed = closed(new);
-    if world.objects[new].model.is_articulated() {
-        let new_open = opened(new);
-        if layout_penetration(&new_open, &planes) > MAX_OVERLAP_M {
-            return false;
-        }
-        for i in 0..world.objects.len() {
-            if i != new
-                && !related(i, new)
-                && penetration_depth(&new_open, &closed(i)) > MAX_OVERLAP_M
-            {
-                return false;
-            }
-        }
-    }
-    (0..world.objects.len()).all(|i| {
-        i == new
-            || related(i, new)
-            || !world.objects[i].model.is_articulated()
-            || penetration_depth(&opened(i), &new_closed) <= MAX_OVERLAP_M
-    })
-}
-
-/// `v` as JSON in its shortest decimal form (0.76, not 0.7599999904632568).
-fn number(v: f32) -> Value {
-    json!(format!("{v}").parse::<f64>().unwrap_or(0.0))
-}
-
-fn numbers(values: &[f32]) -> Value {
-    Value::Array(values.iter().map(|v| number(*v)).collect())
 }
 
 fn round_cm(v: f32) -> f32 {
@@ -902,88 +658,4 @@ impl ObjectSpec {
         });
         self
     }
-}
-
-fn object_json(o: &ObjectSpec) -> Value {
-    let mut v = serde_json::Map::new();
-    v.insert("id".into(), json!(o.id));
-    v.insert("class".into(), json!(o.class));
-    if let Some(m) = &o.model {
-        v.insert("model".into(), json!(m));
-    }
-    if let Some(p) = o.position {
-        v.insert("position".into(), numbers(&p));
-    }
-    if let Some(p) = &o.on {
-        v.insert("on".into(), json!(p));
-    }
-    if let Some(p) = &o.inside {
-        v.insert("in".into(), json!(p));
-    }
-    if let Some(p) = o.offset {
-        v.insert("offset".into(), numbers(&p));
-    }
-    if let Some(y) = o.yaw_deg {
-        v.insert("yaw_deg".into(), number(y));
-    }
-    if let Some(s) = o.size {
-        v.insert("size".into(), numbers(&s));
-    }
-    if !o.joints.is_empty() {
-        let joints: serde_json::Map<String, Value> = o
-            .joints
-            .iter()
-            .map(|(k, v)| (k.clone(), number(*v)))
-            .collect();
-        v.insert("joints".into(), Value::Object(joints));
-    }
-    Value::Object(v)
-}
-
-/// Writes a generated specification to `out`: never over a file `generate` did not write (an
-/// existing file must parse as a generated specification), and atomically (a temporary file
-/// renamed into place), so that an interrupted run leaves the old file or the new one.
-pub fn write_generated(out: &Path, json: &Value) -> Result<(), crate::error::IsceneError> {
-    if out.is_dir() {
-        return Err(InputError::invalid(
-            out,
-            "--out is a folder; name the specification file to write",
-        )
-        .into());
-    }
-    if std::fs::symlink_metadata(out).is_ok_and(|m| m.file_type().is_symlink()) {
-        return Err(InputError::invalid(out, "--out is a symbolic link; name a plain file").into());
-    }
-    if out.exists() && !is_generated_spec(out) {
-        return Err(InputError::invalid(
-            out,
-            "--out exists and is not a specification written by `iscene generate`; it is left alone (choose another path or delete it)",
-        )
-        .into());
-    }
-    let text = serde_json::to_string_pretty(json)
-        .map_err(|e| crate::error::IsceneError::Internal(format!("specification JSON: {e}")))?;
-    let name = out
-        .file_name()
-        .and_then(|n| n.to_str())
-        .ok_or_else(|| InputError::invalid(out, "--out names no file"))?;
-    let temporary = out.with_file_name(format!(".{name}.partial-{}", std::process::id()));
-    std::fs::write(&temporary, format!("{text}\n")).map_err(|e| {
-        crate::error::IsceneError::io(format!("writing {}", temporary.display()), e)
-    })?;
-    std::fs::rename(&temporary, out).map_err(|e| {
-        let _ = std::fs::remove_file(&temporary);
-        crate::error::IsceneError::io(format!("renaming into {}", out.display()), e)
-    })
-}
-
-/// Whether `path` holds a specification `generate` wrote (its name says so and it parses).
-fn is_generated_spec(path: &Path) -> bool {
-    std::fs::read_to_string(path).is_ok_and(|text| {
-        serde_json::from_str::<Value>(&text).is_ok_and(|v| {
-            v.get("name")
-                .and_then(Value::as_str)
-                .is_some_and(|n| n.starts_with("generated_"))
-        })
-    })
 }
