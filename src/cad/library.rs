@@ -23,9 +23,43 @@ impl LibraryEntry {
         (self.build)(self.id, self.nominal_size)
     }
 
-    /// The model scaled by construction (boards keep their thickness) to `size`.
+    /// The model scaled by construction (boards keep their thickness) to `size`. A size other
+    /// than the nominal one gives a model of its own, so its id says the size
+    /// ([`sized_model_id`]): a scene folder that records it (`gt/cad`) never stands for the
+    /// nominal model of the same name.
     pub fn model_sized(&self, size: Vec3) -> CadModel {
-        (self.build)(self.id, size)
+        let differs = (size - self.nominal_size).abs().max_element() > SIZE_TOLERANCE;
+        let id = if differs {
+            sized_model_id(self.id, size)
+        } else {
+            self.id.to_string()
+        };
+        (self.build)(&id, size)
+    }
+}
+
+/// Sizes closer than this to the nominal one build the nominal model.
+const SIZE_TOLERANCE: f32 = 5e-4;
+
+/// The id of library model `base` built to `size`: `table_01.1100x570x500` (millimetres).
+pub fn sized_model_id(base: &str, size: Vec3) -> String {
+    let mm = |v: f32| (v * 1000.0).round() as i64;
+    format!("{base}.{}x{}x{}", mm(size.x), mm(size.y), mm(size.z))
+}
+
+/// The library model a model id was built from: `table_01` for `table_01.1100x570x500`, the id
+/// itself otherwise.
+pub fn library_model_id(id: &str) -> &str {
+    match id.rsplit_once('.') {
+        Some((base, suffix))
+            if suffix.split('x').count() == 3
+                && suffix
+                    .split('x')
+                    .all(|n| !n.is_empty() && n.chars().all(|c| c.is_ascii_digit())) =>
+        {
+            base
+        }
+        _ => id,
     }
 }
 
@@ -217,6 +251,19 @@ mod tests {
     use super::*;
     use crate::classes::{ClassTable, EntityKind};
     use crate::kinematics::JointKind;
+
+    #[test]
+    fn a_model_built_to_another_size_says_so_in_its_id() {
+        let table = ParametricLibrary::get("table_01").expect("table_01");
+        assert_eq!(table.model_sized(table.nominal_size).id, "table_01");
+        let low = table.model_sized(Vec3::new(1.1, 0.57, 0.5));
+        assert_eq!(low.id, "table_01.1100x570x500");
+        assert!(crate::file_name::check_file_name(&low.id).is_ok());
+        assert_eq!(library_model_id(&low.id), "table_01");
+        for plain in ["table_01", "lib.v2", "a.1x2", "a.1x2xz", "a.x1x2"] {
+            assert_eq!(library_model_id(plain), plain);
+        }
+    }
 
     #[test]
     fn every_object_class_has_variants_and_articulated_classes_move() {

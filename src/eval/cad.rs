@@ -9,6 +9,7 @@ use glam::{Affine3A, Mat4, Vec3};
 use serde::Serialize;
 
 use crate::cad::database::{CadDatabase, DatabaseModel};
+use crate::cad::library::library_model_id;
 use crate::cad::physical_check::{
     MIN_SUPPORT_AREA, PlacedSolid, layout_penetration, penetration_depth, support_area,
 };
@@ -218,7 +219,11 @@ pub fn evaluate_cad(
         model_accuracy: fraction(
             scores
                 .iter()
-                .filter(|s| s.model.is_some() && s.model == s.truth_model)
+                .filter(|s| match (&s.model, &s.truth_model) {
+                    // A truth model built to the scene's size is its library model.
+                    (Some(m), Some(t)) => library_model_id(m) == library_model_id(t),
+                    _ => false,
+                })
                 .count(),
             scores.len(),
         ),

@@ -9,6 +9,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::cad::database::SCENE_MODELS;
+use crate::cad::export::write_models;
 use crate::error::{InputError, IsceneError};
 use crate::geometry::Pinhole;
 use crate::io::atomic::StagedDir;
@@ -180,6 +182,10 @@ pub fn render_sequence(
         &gt.join("contact_graph.json"),
         &world.contact_graph().to_json(),
     )?;
+    let own_models = world.models_outside_library();
+    if !own_models.is_empty() {
+        write_models(&gt.join(SCENE_MODELS), &own_models, "iscene render")?;
+    }
     for (id, mesh, color) in world.entity_meshes() {
         let bytes = mesh_ply_bytes(&mesh, color)
             .map_err(|e| IsceneError::Internal(format!("PLY of {id}: {e}")))?;

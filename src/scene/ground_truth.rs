@@ -6,6 +6,8 @@ use std::collections::BTreeMap;
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::cad::library::ParametricLibrary;
+use crate::cad::model::CadModel;
 use crate::cad::model_parts::model_parts;
 use crate::classes::EntityKind;
 use crate::geometry::plane::dominant_planes;
@@ -66,6 +68,22 @@ impl SceneWorld {
             .iter()
             .map(|o| (o.id.clone(), o.world_visual_mesh(), o.model.parts[0].color));
         layout.chain(objects).collect()
+    }
+
+    /// The models of the world that the parametric library does not hold as they are (library
+    /// models built to another size, database models), one per id, sorted: written to
+    /// `gt/cad` so that the ground truth, simulated or exported, stands on its own models.
+    pub fn models_outside_library(&self) -> Vec<CadModel> {
+        let mut models: Vec<CadModel> = Vec::new();
+        for o in &self.objects {
+            if ParametricLibrary::get(&o.model.id).is_none()
+                && models.iter().all(|m| m.id != o.model.id)
+            {
+                models.push(o.model.clone());
+            }
+        }
+        models.sort_by(|a, b| a.id.cmp(&b.id));
+        models
     }
 
     /// The layout entity's box: a slab of the room-facing rectangle, `LAYOUT_THICKNESS` deep behind it.

@@ -84,7 +84,7 @@ impl SceneWorld {
                     let Some((p, parent)) = parent_of(&parent) else {
                         return Err(err(i, format!("on: {parent:?} is not placed")));
                     };
-                    let b = parent.gravity_box();
+                    let b = parent.closed_box();
                     let top = b.world_from_box().transform_point3(Vec3::new(
                         offset[0],
                         offset[1],
@@ -96,6 +96,18 @@ impl SceneWorld {
                             format!(
                                 "offset: {offset:?} is off the top of {} ({:.2} x {:.2} m)",
                                 parent.id, b.size.x, b.size.y
+                            ),
+                        ));
+                    }
+                    // The top of the box is a surface only where the parent has one there (a
+                    // chair's box top is its backrest, an open door's is air).
+                    let surface = surface_below(&parent.world_mesh(), top + Vec3::Z * ON_TOLERANCE);
+                    if surface.is_none_or(|z| (z - top.z).abs() > ON_TOLERANCE) {
+                        return Err(err(
+                            i,
+                            format!(
+                                "offset: {} has no top surface under {offset:?} to stand on",
+                                parent.id
                             ),
                         ));
                     }
@@ -231,6 +243,9 @@ fn support_order(spec: &SceneSpec) -> Vec<usize> {
     order.sort_by_key(|&i| (depth(i), i));
     order
 }
+
+/// How far the surface under an object's `"on"` point may lie from its parent's box top, metres.
+const ON_TOLERANCE: f32 = 0.005;
 
 /// The height of the first upward-facing surface of `mesh` straight below `start`.
 fn surface_below(mesh: &crate::geometry::TriMesh, start: Vec3) -> Option<f32> {

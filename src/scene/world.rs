@@ -71,7 +71,16 @@ impl PlacedObject {
 
     /// The gravity-aligned box around the object's mesh, turned by the object's yaw.
     pub fn gravity_box(&self) -> GravityBox {
-        let mesh = self.world_mesh();
+        self.box_around(&self.world_mesh())
+    }
+
+    /// The box of the object with every joint closed: the frame of `"on"` offsets, which an
+    /// open door or drawer does not move.
+    pub fn closed_box(&self) -> GravityBox {
+        self.box_around(&self.model.merged_mesh(&[]).transformed(&self.world_from_model))
+    }
+
+    fn box_around(&self, mesh: &TriMesh) -> GravityBox {
         GravityBox::enclosing(&mesh.positions, self.yaw).unwrap_or(GravityBox {
             center: self.world_from_model.translation.into(),
             yaw: self.yaw,
