@@ -3,10 +3,10 @@
 //! bottom its parent holds, and whether it stands by itself.
 
 use glam::{Affine3A, Vec2, Vec3};
-use parry3d::math::Pose;
 use parry3d::shape::ConvexPolyhedron;
 
 use crate::cad::database::DatabaseModel;
+use crate::geometry::convex_depth::convex_penetration;
 use crate::geometry::{Plane, TriMesh};
 
 /// How far (metres) below or above a child's bottom the parent's upward surface may be found.
@@ -225,12 +225,11 @@ pub fn deepest_contact(a: &PlacedSolid, b: &PlacedSolid) -> Option<(f32, Vec3)> 
             if !overlap(*alo, *ahi, *blo, *bhi) {
                 continue;
             }
-            if let Ok(Some(contact)) =
-                parry3d::query::contact(&Pose::IDENTITY, pa, &Pose::IDENTITY, pb, 0.0)
-                && contact.dist < 0.0
-                && deepest.is_none_or(|(d, _)| -contact.dist > d)
+            if let Some((depth, normal)) =
+                convex_penetration(pa, &Affine3A::IDENTITY, pb, &Affine3A::IDENTITY)
+                && deepest.is_none_or(|(d, _)| depth > d)
             {
-                deepest = Some((-contact.dist, contact.normal1));
+                deepest = Some((depth, normal));
             }
         }
     }
@@ -252,10 +251,7 @@ pub fn overlap_along(a: &PlacedSolid, b: &PlacedSolid, direction: Vec3) -> f32 {
     let mut most = 0.0f32;
     for (pa, _, _) in &a.pieces {
         for (pb, _, _) in &b.pieces {
-            if let Ok(Some(contact)) =
-                parry3d::query::contact(&Pose::IDENTITY, pa, &Pose::IDENTITY, pb, 0.0)
-                && contact.dist < 0.0
-            {
+            if convex_penetration(pa, &Affine3A::IDENTITY, pb, &Affine3A::IDENTITY).is_some() {
                 most = most.max(extent(pa).1 - extent(pb).0);
             }
         }

@@ -1,6 +1,7 @@
 //! Plain geometric types shared by every stage: triangle meshes, gravity-aligned boxes, planes.
 
 pub mod clusters;
+pub mod convex_depth;
 pub mod gravity_box;
 pub mod mesh;
 pub mod mesh_topology;

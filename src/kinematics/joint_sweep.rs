@@ -6,11 +6,11 @@
 //! pieces (parry), deeper than the tolerance, at any of the sampled joint values.
 
 use glam::{Affine3A, Vec3};
-use parry3d::math::Pose;
 use parry3d::shape::ConvexPolyhedron;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::geometry::convex_depth::convex_penetration;
 use crate::kinematics::JointKind;
 use crate::kinematics::tree::KinematicTree;
 
@@ -81,11 +81,6 @@ impl LinkSolids {
     }
 }
 
-fn pose_of(a: &Affine3A) -> Pose {
-    let (_, rotation, translation) = a.to_scale_rotation_translation();
-    Pose::from_parts(translation, rotation.normalize())
-}
-
 /// World-frame bounds of a local box under `pose`.
 fn world_bounds(pose: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
     let center = pose.transform_point3((lo + hi) / 2.0);
@@ -102,7 +97,6 @@ pub fn link_penetration(
     b: &LinkSolids,
     pose_b: &Affine3A,
 ) -> f32 {
-    let (pa, pb) = (pose_of(pose_a), pose_of(pose_b));
     let mut deepest = 0.0f32;
     for (sa, alo, ahi) in &a.pieces {
         let (alo, ahi) = world_bounds(pose_a, *alo, *ahi);
@@ -111,8 +105,8 @@ pub fn link_penetration(
             if !(alo.cmple(bhi).all() && blo.cmple(ahi).all()) {
                 continue;
             }
-            if let Ok(Some(c)) = parry3d::query::contact(&pa, sa, &pb, sb, 0.0) {
-                deepest = deepest.max(-c.dist);
+            if let Some((depth, _)) = convex_penetration(sa, pose_a, sb, pose_b) {
+                deepest = deepest.max(depth);
             }
         }
     }

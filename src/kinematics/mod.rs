@@ -1,5 +1,6 @@
 //! Joints between links of a kinematic tree, shared by CAD models, the contact graph and the ECS.
 
+pub mod contact_pieces;
 pub mod inertial;
 pub mod joint;
 pub mod joint_sweep;

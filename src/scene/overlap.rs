@@ -69,3 +69,30 @@ fn hull_holds(hull: &TriMesh, point: glam::Vec3) -> bool {
         normal == glam::Vec3::ZERO || normal.dot(point - hull.triangle(t)[0]) <= 0.0
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SceneSpec;
+
+    /// A cup standing where a book lies on a table: their bottoms are coplanar, which parry's
+    /// EPA took for touching.
+    #[test]
+    fn a_cup_standing_in_a_book_is_an_overlap() {
+        let json = r#"{"name": "t", "seed": 1, "room": {"size": [4, 4, 2.6]}, "objects": [
+            {"class": "table", "id": "table_1", "model": "table_01", "position": [2, 2],
+             "size": [1.01, 0.52, 0.47], "yaw_deg": 180},
+            {"class": "book", "id": "book_2", "model": "book_02", "offset": [-0.26, -0.01],
+             "on": "table_1", "yaw_deg": 160.8},
+            {"class": "cup", "id": "cup_5", "model": "cup_01", "offset": [-0.26, -0.01],
+             "on": "table_1", "yaw_deg": -160.5}]}"#;
+        let path = std::path::Path::new("t.json");
+        let spec = SceneSpec::parse(json, path).expect("a valid specification");
+        let err = SceneWorld::from_spec(&spec, path).expect_err("the cup stands in the book");
+        let text = err.to_string();
+        assert!(
+            text.contains("book_2") && text.contains("cup_5") && text.contains("overlap by 20"),
+            "{text}"
+        );
+    }
+}

@@ -77,7 +77,12 @@ impl PlacedObject {
     /// The box of the object with every joint closed: the frame of `"on"` offsets, which an
     /// open door or drawer does not move.
     pub fn closed_box(&self) -> GravityBox {
-        self.box_around(&self.model.merged_mesh(&[]).transformed(&self.world_from_model))
+        self.box_around(
+            &self
+                .model
+                .merged_mesh(&[])
+                .transformed(&self.world_from_model),
+        )
     }
 
     fn box_around(&self, mesh: &TriMesh) -> GravityBox {

@@ -13,6 +13,7 @@ use glam::Affine3A;
 use serde::Serialize;
 
 use crate::geometry::mesh::box_corners;
+use crate::kinematics::contact_pieces::contact_pieces;
 use crate::kinematics::rest_test::{
     MAX_START_PENETRATION_M, REST_STEP_S, rest_bodies, start_penetrations,
 };
@@ -201,7 +202,8 @@ fn mover_collider(
         pieces.extend(
             g.collision
                 .iter()
-                .filter_map(|piece| Collider::convex_hull(&piece.positions))
+                .flat_map(|piece| contact_pieces(&piece.positions))
+                .filter_map(|points| Collider::convex_hull(&points))
                 .map(|c| (translation, rotation.normalize(), c)),
         );
     }

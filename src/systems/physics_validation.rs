@@ -12,6 +12,7 @@ use bevy_rapier3d::rapier::prelude::{
 use glam::Affine3A;
 use serde::Serialize;
 
+use crate::kinematics::contact_pieces::contact_pieces;
 use crate::kinematics::joint_sweep::{JointSweep, sweep_joints};
 use crate::kinematics::rest_test::{
     MAX_START_PENETRATION_M, ObjectVerdict, REST_SECONDS, REST_STEP_S, REST_SUBSTEPS, RestBody,
@@ -68,7 +69,8 @@ pub(crate) fn dynamic_collider(
         pieces.extend(
             g.collision
                 .iter()
-                .filter_map(|piece| Collider::convex_hull(&piece.positions))
+                .flat_map(|piece| contact_pieces(&piece.positions))
+                .filter_map(|points| Collider::convex_hull(&points))
                 .map(|c| (translation, rotation, c)),
         );
         let link_mass = ParryMassProperties::with_inertia_matrix(
