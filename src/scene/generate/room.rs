@@ -496,7 +496,8 @@ impl<'a> RoomBuilder<'a> {
         let mut tops = Vec::new();
         let mut insides = Vec::new();
         for (i, o) in world.objects.iter().enumerate() {
-            let b = o.gravity_box();
+            // The top as "on" offsets measure it: with doors and drawers closed.
+            let b = o.closed_box();
             let spec = &self.spec.objects[i];
             let on_wall = spec.on.as_deref().is_some_and(|p| p.starts_with("wall_"));
             match o.class.as_str() {
