@@ -25,33 +25,16 @@ pub struct Overlap {
 /// meshes, which hold its inside; a shelf's boards do not, and one cutting through a box on the
 /// board below is an overlap.
 pub fn deepest_overlap(world: &SceneWorld) -> Option<Overlap> {
-    let meshes: Vec<TriMesh> = world.objects.par_iter().map(|o| o.world_mesh()).collect();
-    let solids: Vec<PlacedSolid> = meshes
-        .par_iter()
-        .map(PlacedSolid::from_world_mesh)
+    let solids = Solids::of(world);
+    let pairs: Vec<(usize, usize)> = (0..solids.solids.len())
+        .flat_map(|a| (a + 1..solids.solids.len()).map(move |b| (a, b)))
         .collect();
-    let pairs: Vec<(usize, usize)> = (0..solids.len())
-        .flat_map(|a| (a + 1..solids.len()).map(move |b| (a, b)))
-        .collect();
-    let inside =
-        |child: usize, parent: usize| world.objects[child].support == Support::InObject(parent);
     pairs
         .par_iter()
-        .map(|&(a, b)| {
-            let depth = if inside(a, b) || inside(b, a) {
-                let (child, parent) = if inside(a, b) { (a, b) } else { (b, a) };
-                let centre = solids[child].centre();
-                let mut walls = TriMesh::default();
-                for piece in meshes[parent].connected_components() {
-                    if !piece.convex_hull().is_some_and(|h| hull_holds(&h, centre)) {
-                        walls.append(&piece);
-                    }
-                }
-                penetration_depth(&solids[child], &PlacedSolid::from_world_mesh(&walls))
-            } else {
-                penetration_depth(&solids[a], &solids[b])
-            };
-            Overlap { a, b, depth }
+        .map(|&(a, b)| Overlap {
+            a,
+            b,
+            depth: solids.depth(world, a, b),
         })
         .filter(|o| o.depth > MAX_OVERLAP_M)
         .max_by(|x, y| {
@@ -60,6 +43,52 @@ pub fn deepest_overlap(world: &SceneWorld) -> Option<Overlap> {
                 .then(y.a.cmp(&x.a))
                 .then(y.b.cmp(&x.b))
         })
+}
+
+/// How deep object `index` of `world` stands in any other object, metres (0 when in none).
+pub fn deepest_overlap_of(world: &SceneWorld, index: usize) -> f32 {
+    let solids = Solids::of(world);
+    (0..world.objects.len())
+        .into_par_iter()
+        .filter(|&other| other != index)
+        .map(|other| solids.depth(world, index.min(other), index.max(other)))
+        .reduce(|| 0.0, f32::max)
+}
+
+/// Every object's posed mesh and its solid pieces.
+struct Solids {
+    meshes: Vec<TriMesh>,
+    solids: Vec<PlacedSolid>,
+}
+
+impl Solids {
+    fn of(world: &SceneWorld) -> Self {
+        let meshes: Vec<TriMesh> = world.objects.par_iter().map(|o| o.world_mesh()).collect();
+        let solids = meshes
+            .par_iter()
+            .map(PlacedSolid::from_world_mesh)
+            .collect();
+        Self { meshes, solids }
+    }
+
+    /// How deep objects `a` and `b` interpenetrate.
+    fn depth(&self, world: &SceneWorld, a: usize, b: usize) -> f32 {
+        let inside =
+            |child: usize, parent: usize| world.objects[child].support == Support::InObject(parent);
+        if inside(a, b) || inside(b, a) {
+            let (child, parent) = if inside(a, b) { (a, b) } else { (b, a) };
+            let centre = self.solids[child].centre();
+            let mut walls = TriMesh::default();
+            for piece in self.meshes[parent].connected_components() {
+                if !piece.convex_hull().is_some_and(|h| hull_holds(&h, centre)) {
+                    walls.append(&piece);
+                }
+            }
+            penetration_depth(&self.solids[child], &PlacedSolid::from_world_mesh(&walls))
+        } else {
+            penetration_depth(&self.solids[a], &self.solids[b])
+        }
+    }
 }
 
 /// Whether the closed convex `hull` (outward faces) holds `point`.
