@@ -319,8 +319,7 @@ fn score(
 /// df of the ranking (`Candidate::facing_error`) for a model turned by `yaw`.
 fn facing_error(object: &ObservedObject, yaw: f32) -> f32 {
     object.facing.map_or(0.0, |facing| {
-        let front = Mat3::from_rotation_z(yaw) * -Vec3::Y;
-        facing.confidence * 0.5 * (1.0 - front.dot(facing.direction))
+        facing.error(Mat3::from_rotation_z(yaw) * -Vec3::Y)
     })
 }
 

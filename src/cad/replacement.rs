@@ -88,6 +88,7 @@ pub fn observed_objects<'a>(
                         Some(Facing {
                             direction: to_middle.with_z(0.0).try_normalize()?,
                             confidence: FACES_ROOM_CONFIDENCE,
+                            against_wall: false,
                         })
                     })
                 } else {
@@ -117,6 +118,7 @@ fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Facing> {
             Some(Facing {
                 direction: w.normal.with_z(0.0).try_normalize()?,
                 confidence: 1.0,
+                against_wall: true,
             })
         })
 }
