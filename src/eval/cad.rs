@@ -16,6 +16,7 @@ use crate::cad::physical_check::{
 use crate::classes::{ClassTable, EntityKind};
 use crate::eval::chamfer::chamfer_distance;
 use crate::eval::pairing::greedy_pairs;
+use crate::eval::symmetry::{yaw_difference, yaw_symmetry};
 use crate::geometry::TriMesh;
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{ContactGraph, GraphNode};
@@ -33,8 +34,12 @@ pub struct CadObjectScore {
     pub predicted: Option<String>,
     pub model: Option<String>,
     pub class_correct: bool,
-    /// Only for classes whose front matters, with the right class.
+    /// Only for classes whose front matters, with the right class; modulo the true object's
+    /// own symmetry (`truth_yaw_symmetry`).
     pub yaw_error_deg: Option<f32>,
+    /// How many ways the true object looks the same turned about the vertical (4 for a round
+    /// stool, a "chair" without a front; 1 for a chair with a back), measured on its mesh.
+    pub truth_yaw_symmetry: Option<u32>,
     pub alignment_error_m: Option<f32>,
     /// The placed model's box against the true box: the largest relative difference of the
     /// height and the two horizontal sides (longer with longer). `None` when not replaced or
@@ -140,12 +145,19 @@ pub fn evaluate_cad(
         let placement = pn.and_then(|n| n.cad.as_ref().map(|c| (n, c)));
         let class_correct = placement.is_some_and(|(n, _)| n.class == tn.class);
         let front_matters = table.get(&tn.class).is_some_and(|c| c.yaw_symmetry == 1);
-        let yaw_error_deg = match (placement, placement_frame(tn)) {
-            (Some((n, _)), Some(truth_frame)) if class_correct && front_matters => {
+        let truth_yaw_symmetry = match (placement, placement_frame(tn)) {
+            (Some(_), Some(truth_frame)) if class_correct && front_matters => Some(
+                truth_meshes
+                    .get(&tn.id)
+                    .map_or(1, |mesh| yaw_symmetry(mesh, truth_frame.translation.into())),
+            ),
+            _ => None,
+        };
+        let yaw_error_deg = match (placement, placement_frame(tn), truth_yaw_symmetry) {
+            (Some((n, _)), Some(truth_frame), Some(symmetry)) => {
                 let pred_frame = *truth_from_pred * placement_frame(n)?;
-                let info = table.get(&tn.class)?;
                 Some(
-                    info.yaw_difference(model_yaw(&pred_frame), model_yaw(&truth_frame))
+                    yaw_difference(model_yaw(&pred_frame), model_yaw(&truth_frame), symmetry)
                         .to_degrees(),
                 )
             }
@@ -161,6 +173,7 @@ pub fn evaluate_cad(
             model: placement.map(|(_, c)| c.model.clone()),
             class_correct,
             yaw_error_deg,
+            truth_yaw_symmetry,
             alignment_error_m: placement.map(|(_, c)| c.alignment_error),
             size_error: placed.map(|p| size_error(p, Vec3::from(tn.bbox.size))),
             diagonal_error: placed.map(|p| {
@@ -335,39 +348,43 @@ mod tests {
         crate::scene::kitchen_contact_graph()
     }
 
-    /// The kitchen's truth meshes by id, as `iscene render` writes them.
-    fn kitchen_meshes() -> BTreeMap<String, TriMesh> {
+    fn kitchen_world() -> crate::scene::SceneWorld {
         let path = std::path::Path::new("kitchen.json");
         let spec = crate::scene::SceneSpec::parse(crate::BUILTIN_KITCHEN, path).expect("spec");
-        crate::scene::SceneWorld::from_spec(&spec, path)
-            .expect("world")
+        crate::scene::SceneWorld::from_spec(&spec, path).expect("world")
+    }
+
+    /// The kitchen's truth meshes by id, as `iscene render` writes them.
+    fn kitchen_meshes() -> BTreeMap<String, TriMesh> {
+        kitchen_world()
             .entity_meshes()
             .into_iter()
             .map(|(id, mesh, _)| (id, mesh))
             .collect()
     }
 
+    /// The library and the kitchen's own models (box_1 is box_01 made smaller), as
+    /// `CadDatabase::for_scene` reads them from a rendered sequence's `gt/`.
+    fn kitchen_models() -> CadDatabase {
+        let mut models: Vec<_> = crate::cad::ParametricLibrary::entries()
+            .iter()
+            .map(|e| e.model())
+            .collect();
+        models.extend(kitchen_world().models_outside_library());
+        CadDatabase::from_models(models).expect("models")
+    }
+
     #[test]
     fn the_truth_scores_perfectly_and_a_turned_chair_misses_its_yaw() {
         let truth = kitchen_truth();
         let meshes = kitchen_meshes();
-        let perfect = evaluate_cad(
-            &truth,
-            &truth,
-            &Affine3A::IDENTITY,
-            &CadDatabase::parametric(),
-            &meshes,
-        )
-        .expect("placements");
-        // The truth's own models at the truth's joints lie on the truth's meshes (box_1 is
-        // box_01 made smaller, which the database holds at its nominal size).
+        let models = kitchen_models();
+        let perfect = evaluate_cad(&truth, &truth, &Affine3A::IDENTITY, &models, &meshes)
+            .expect("placements");
+        // The truth's own models at the truth's joints lie on the truth's meshes.
         for o in &perfect.objects {
             let chamfer = o.chamfer_m.expect("placed and meshed");
-            if o.truth == "box_1" {
-                assert!(chamfer > 0.01, "{chamfer}");
-            } else {
-                assert!(chamfer < 1e-3, "{}: {chamfer}", o.truth);
-            }
+            assert!(chamfer < 1e-3, "{}: {chamfer}", o.truth);
         }
         assert_eq!(perfect.class_accuracy, 1.0);
         assert_eq!(perfect.model_accuracy, 1.0);
@@ -381,24 +398,27 @@ mod tests {
         assert!(perfect.max_layout_penetration_m.expect("placed") < 0.002);
         assert!(perfect.supports_tested >= 4);
         assert_eq!(perfect.supports_passing, perfect.supports_tested);
-        // Placed boxes are the database model's size times the placement's scale. The truth
-        // places its models made at the specification's sizes with scale 1, which is the
-        // library's size for all but box_1 (14 x 10 x 16 cm of box_01's 30 x 25 x 20).
+        // Placed boxes are the database model's size times the placement's scale: the truth's
+        // own models (box_1 made 14 x 10 x 16 cm, box_01.140x100x160) with scale 1.
         for o in &perfect.objects {
             let (side, diagonal) = (
                 o.size_error.expect("placed"),
                 o.diagonal_error.expect("placed"),
             );
-            if o.truth == "box_1" {
-                assert!(side > 0.5 && diagonal > 0.5, "{side} {diagonal}");
-            } else {
-                assert!(
-                    side < 1e-4 && diagonal < 1e-4,
-                    "{}: {side} {diagonal}",
-                    o.truth
-                );
-            }
+            assert!(
+                side < 1e-4 && diagonal < 1e-4,
+                "{}: {side} {diagonal}",
+                o.truth
+            );
         }
+        assert!(
+            perfect
+                .objects
+                .iter()
+                .any(|o| o.truth_model.as_deref() == Some("box_01.140x100x160")),
+            "{:?}",
+            perfect.objects
+        );
         let mut turned = truth.clone();
         let chair = turned
             .nodes
@@ -412,14 +432,8 @@ mod tests {
             * Affine3A::from_translation((-frame.translation).into())
             * frame;
         cad.world_from_model = Mat4::from(spun).to_cols_array();
-        let scored = evaluate_cad(
-            &turned,
-            &truth,
-            &Affine3A::IDENTITY,
-            &CadDatabase::parametric(),
-            &meshes,
-        )
-        .expect("placements");
+        let scored = evaluate_cad(&turned, &truth, &Affine3A::IDENTITY, &models, &meshes)
+            .expect("placements");
         let chair = scored
             .objects
             .iter()

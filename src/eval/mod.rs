@@ -9,6 +9,7 @@ pub mod contact;
 pub mod ged;
 pub mod pairing;
 pub mod panoptic_quality;
+pub mod symmetry;
 pub mod truth;
 
 use std::path::Path;

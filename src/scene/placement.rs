@@ -283,3 +283,63 @@ pub fn stable_hash(seed: u64, id: &str) -> u64 {
     }
     h
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use crate::scene::{SceneSpec, SceneWorld};
+
+    fn world(objects: &str) -> Result<SceneWorld, String> {
+        let json = format!(
+            r#"{{"name": "t", "seed": 1, "room": {{"size": [4, 4, 2.6]}}, "objects": [{objects}]}}"#
+        );
+        let path = Path::new("t.json");
+        let spec = SceneSpec::parse(&json, path).map_err(|e| e.to_string())?;
+        SceneWorld::from_spec(&spec, path).map_err(|e| e.to_string())
+    }
+
+    /// An open door widens the cabinet's box; what stands "on" it is measured in the closed
+    /// box, so an offset over the open door is off its top, and one on the top stays put
+    /// whether the door is open or not.
+    #[test]
+    fn on_offsets_are_measured_in_the_closed_parent() {
+        let cabinet = |joints: &str| {
+            format!(
+                r#"{{"id": "cabinet_1", "class": "cabinet", "model": "cabinet_01",
+                    "position": [2, 2], "joints": {{{joints}}}}}"#
+            )
+        };
+        let cup = |offset: &str| {
+            format!(
+                r#"{{"id": "cup_1", "class": "cup", "model": "cup_01", "on": "cabinet_1", "offset": {offset}}}"#
+            )
+        };
+        let over_door = world(&format!(
+            "{}, {}",
+            cabinet(r#""door_left": 1.5"#),
+            cup("[-0.2, -0.45]")
+        ));
+        let err = over_door.expect_err("over the open door");
+        assert!(
+            err.contains("objects[1].offset") && err.contains("off the top"),
+            "{err}"
+        );
+        let cup_at = |joints: &str| {
+            let w = world(&format!("{}, {}", cabinet(joints), cup("[-0.2, -0.1]"))).expect("valid");
+            w.objects[1].world_from_model.translation
+        };
+        assert_eq!(cup_at(""), cup_at(r#""door_left": 1.5"#));
+    }
+
+    /// A chair's box top is its backrest: nothing stands there.
+    #[test]
+    fn on_needs_a_top_surface_under_the_offset() {
+        let err = world(
+            r#"{"id": "chair_1", "class": "chair", "model": "chair_01", "position": [2, 2]},
+               {"id": "cup_1", "class": "cup", "model": "cup_01", "on": "chair_1"}"#,
+        )
+        .expect_err("no top under the middle of a chair's box");
+        assert!(err.contains("no top surface"), "{err}");
+    }
+}

@@ -23,8 +23,8 @@ use crate::scene::world::{SceneWorld, wall_frame, wall_length, yaw_facing};
 
 /// How deep a generated object may stand in another, metres. Specifications may round sizes
 /// into each other by up to `MAX_OVERLAP_M`; a generated room, the truth the benchmark
-/// measures against, touches without standing in anything (MuJoCo pushed a cup 3.6 mm into a
-/// book 3.7 mm away at rest).
+/// measures against, touches without standing in anything (a cup standing 3.6 mm in a book
+/// moved 3.7 mm in MuJoCo at rest).
 const GENERATED_OVERLAP_M: f32 = 0.0005;
 
 /// How far (metres, 0 when not) object `index` reaches behind a wall, the floor or the ceiling.
