@@ -313,7 +313,7 @@ fn the_benchmark_scores_every_room_resumes_and_keeps_its_bounds() {
         "--seeds",
         "0:3",
         "--frames",
-        "40",
+        "60",
         "--out",
         out_s,
     ];
@@ -350,19 +350,21 @@ fn the_benchmark_scores_every_room_resumes_and_keeps_its_bounds() {
     }
     let mean = |key: &str| metrics[key]["mean"].as_f64().expect(key);
     let worst = |key: &str| metrics[key]["worst"].as_f64().expect(key);
-    // Bounds of a short (40-frame) run over three rooms: what the pipeline reaches today with a
+    // Bounds of a short (60-frame) run over three rooms: what the pipeline reaches today with a
     // margin, so that a regression fails; the 300-frame goals of the issue stand in the README.
+    // (At 40 frames, small objects in shelves are seen by fewer than the 30 points replacement
+    // needs: class accuracy 0.73 on these rooms, 0.80 at 60.)
     assert!(mean("pq") >= 0.75 && worst("pq") >= 0.65, "pq {metrics}");
     assert!(mean("instance_map50") >= 0.8, "mAP {metrics}");
     assert!(mean("cad_class_accuracy") >= 0.75, "{metrics}");
     assert!(mean("cad_chamfer_m") <= 0.03, "{metrics}");
-    assert!(mean("stable_fraction") >= 0.6, "{metrics}");
+    assert!(mean("stable_fraction") >= 0.8, "{metrics}");
     assert!(
-        mean("ged") <= 30.0 && mean("ged_positional") <= 35.0,
+        mean("ged") <= 20.0 && mean("ged_positional") <= 25.0,
         "{metrics}"
     );
-    // Articulation has no bound here yet: on these three rooms at 40 frames no door or drawer
-    // is reproduced (cabinets get a model with other fronts; issue 36 perceives them). Its
+    // Articulation has no bound here yet: on these three rooms at 60 frames one moving part in
+    // six is reproduced (cabinets get a model with other fronts; issue 36 perceives them). Its
     // metric is checked against known answers in src/eval/articulation.rs.
     // The rapier verdicts of each reconstruction agree with MuJoCo loading its MJCF.
     let disagreements: Vec<String> = (0..3)

@@ -292,7 +292,9 @@ fn rendering_twice_with_one_seed_gives_identical_files() {
     let b = common::hash_tree(&dir.path().join("b"));
     assert_eq!(
         a.len(),
-        6 * 4 + 6 + 22,
+        // 4 files a frame, 6 of the sequence, 22 true meshes, and gt/cad with the one model
+        // the library does not hold as it is (box_1: box_01 made 14 x 10 x 16 cm).
+        6 * 4 + 6 + 22 + 3,
         "files written: {:?}",
         a.iter().map(|x| &x.0).collect::<Vec<_>>()
     );
