@@ -37,6 +37,8 @@ pub struct BenchmarkOptions {
     pub style: RoomStyle,
     pub noise: NoiseChoice,
     pub cad: Option<PathBuf>,
+    /// The rooms draw models from `cad`, but the reconstruction searches only its own library.
+    pub unseen: bool,
     pub frames: usize,
     /// Rooms at once; `None`: what the cores and the memory allow.
     pub jobs: Option<usize>,
@@ -51,6 +53,9 @@ struct RoomRecord {
     style: String,
     noise: String,
     cad: Option<String>,
+    /// The reconstruction did not search `cad`.
+    #[serde(default)]
+    unseen: bool,
     frames: usize,
     version: String,
     seconds: f64,
@@ -63,6 +68,7 @@ impl RoomRecord {
             &self.style,
             &self.noise,
             &self.cad,
+            self.unseen,
             self.frames,
             &self.version,
         ) == (
@@ -70,6 +76,7 @@ impl RoomRecord {
             &other.style,
             &other.noise,
             &other.cad,
+            other.unseen,
             other.frames,
             &other.version,
         )
@@ -228,6 +235,7 @@ fn room_record(options: &BenchmarkOptions, seed: u64, seconds: f64) -> RoomRecor
         style: options.style.name().into(),
         noise: options.noise.name().into(),
         cad: options.cad.as_ref().map(|p| p.display().to_string()),
+        unseen: options.unseen,
         frames: options.frames,
         version: env!("CARGO_PKG_VERSION").into(),
         seconds,
@@ -295,7 +303,7 @@ fn run_room(options: &BenchmarkOptions, seed: u64) -> Result<(Value, f64), Iscen
         models: None,
         fusion: crate::panoptic::InstanceFusion::Joint,
         estimate_gravity: false,
-        cad: options.cad.clone(),
+        cad: options.cad.clone().filter(|_| !options.unseen),
         align: AlignMethod::default(),
         progress: false,
         force: false,

@@ -303,6 +303,55 @@ fn generated_rooms_use_the_databases_they_are_given() {
     assert!(used >= 3, "{used} LIBERO models in six kitchens");
 }
 
+/// `benchmark --cad DB --unseen`: the rooms draw the database's models, the reconstruction
+/// searches only its own library, and each room records that it did.
+#[test]
+fn an_unseen_database_is_drawn_from_but_never_searched() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    libero_database(&dir.path().join("libero"));
+    let (code, _, err) = iscene(
+        &["benchmark", "--seeds", "0:1", "--unseen", "--out", "b"],
+        dir.path(),
+    );
+    assert_eq!(code, 2, "--unseen needs --cad: {err}");
+    let args = [
+        "benchmark",
+        "--seeds",
+        "0:2",
+        "--style",
+        "kitchen",
+        "--frames",
+        "20",
+        "--cad",
+        "libero",
+        "--unseen",
+        "--out",
+        "bench",
+    ];
+    let (code, _, err) = iscene(&args, dir.path());
+    assert_eq!(code, 0, "{err}");
+    let mut drawn = 0;
+    for seed in 0..2 {
+        let room = dir.path().join(format!("bench/seed_{seed}"));
+        let record: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(room.join("room.json")).expect("room.json"),
+        )
+        .expect("JSON");
+        assert_eq!(record["unseen"], true, "{record}");
+        drawn += std::fs::read_to_string(room.join("spec.json"))
+            .expect("spec")
+            .matches("\"mjcf_")
+            .count();
+        let graph =
+            std::fs::read_to_string(room.join("reconstruction/contact_graph.json")).expect("graph");
+        assert!(
+            !graph.contains("mjcf_"),
+            "seed {seed} searched the database"
+        );
+    }
+    assert!(drawn > 0, "no LIBERO model in two kitchens");
+}
+
 #[test]
 fn the_benchmark_scores_every_room_resumes_and_keeps_its_bounds() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -69,6 +69,10 @@ pub(crate) enum Command {
         /// A CAD database the rooms draw models from and the reconstruction searches.
         #[arg(long, value_name = "DB")]
         cad: Option<PathBuf>,
+        /// With --cad: the reconstruction searches only its own library, so the database's
+        /// models are ones it has never seen.
+        #[arg(long, requires = "cad")]
+        unseen: bool,
         /// Frames per room.
         #[arg(long, default_value_t = 300)]
         frames: usize,
