@@ -26,8 +26,9 @@ pub struct Overlap {
 /// board below is an overlap.
 pub fn deepest_overlap(world: &SceneWorld) -> Option<Overlap> {
     let solids = Solids::of(world);
-    let pairs: Vec<(usize, usize)> = (0..solids.solids.len())
-        .flat_map(|a| (a + 1..solids.solids.len()).map(move |b| (a, b)))
+    let count = world.objects.len();
+    let pairs: Vec<(usize, usize)> = (0..count)
+        .flat_map(|a| (a + 1..count).map(move |b| (a, b)))
         .collect();
     pairs
         .par_iter()
@@ -46,47 +47,67 @@ pub fn deepest_overlap(world: &SceneWorld) -> Option<Overlap> {
 }
 
 /// How deep object `index` of `world` stands in any other object, metres (0 when in none).
+/// Only objects whose bounds meet its bounds are made solid: `generate` asks this of every
+/// object it tries.
 pub fn deepest_overlap_of(world: &SceneWorld, index: usize) -> f32 {
-    let solids = Solids::of(world);
+    let meshes: Vec<TriMesh> = world.objects.par_iter().map(|o| o.world_mesh()).collect();
+    let bounds = |i: usize| meshes[i].bounds();
+    let near: Vec<bool> = (0..meshes.len())
+        .map(|i| match (bounds(index), bounds(i)) {
+            (Some((alo, ahi)), Some((blo, bhi))) => alo.cmple(bhi).all() && blo.cmple(ahi).all(),
+            _ => false,
+        })
+        .collect();
+    let solids = Solids::from_meshes(meshes, &near);
     (0..world.objects.len())
         .into_par_iter()
-        .filter(|&other| other != index)
+        .filter(|&other| other != index && near[other])
         .map(|other| solids.depth(world, index.min(other), index.max(other)))
         .reduce(|| 0.0, f32::max)
 }
 
-/// Every object's posed mesh and its solid pieces.
+/// Every object's posed mesh and, where wanted, its solid pieces.
 struct Solids {
     meshes: Vec<TriMesh>,
-    solids: Vec<PlacedSolid>,
+    solids: Vec<Option<PlacedSolid>>,
 }
 
 impl Solids {
     fn of(world: &SceneWorld) -> Self {
         let meshes: Vec<TriMesh> = world.objects.par_iter().map(|o| o.world_mesh()).collect();
+        let all = vec![true; meshes.len()];
+        Self::from_meshes(meshes, &all)
+    }
+
+    fn from_meshes(meshes: Vec<TriMesh>, wanted: &[bool]) -> Self {
         let solids = meshes
             .par_iter()
-            .map(PlacedSolid::from_world_mesh)
+            .zip(wanted)
+            .map(|(m, &w)| w.then(|| PlacedSolid::from_world_mesh(m)))
             .collect();
         Self { meshes, solids }
     }
 
-    /// How deep objects `a` and `b` interpenetrate.
+    /// How deep objects `a` and `b` (both made solid) interpenetrate.
     fn depth(&self, world: &SceneWorld, a: usize, b: usize) -> f32 {
+        let (Some(solid_a), Some(solid_b)) = (&self.solids[a], &self.solids[b]) else {
+            return 0.0;
+        };
         let inside =
             |child: usize, parent: usize| world.objects[child].support == Support::InObject(parent);
         if inside(a, b) || inside(b, a) {
             let (child, parent) = if inside(a, b) { (a, b) } else { (b, a) };
-            let centre = self.solids[child].centre();
+            let child_solid = if child == a { solid_a } else { solid_b };
+            let centre = child_solid.centre();
             let mut walls = TriMesh::default();
             for piece in self.meshes[parent].connected_components() {
                 if !piece.convex_hull().is_some_and(|h| hull_holds(&h, centre)) {
                     walls.append(&piece);
                 }
             }
-            penetration_depth(&self.solids[child], &PlacedSolid::from_world_mesh(&walls))
+            penetration_depth(child_solid, &PlacedSolid::from_world_mesh(&walls))
         } else {
-            penetration_depth(&self.solids[a], &self.solids[b])
+            penetration_depth(solid_a, solid_b)
         }
     }
 }

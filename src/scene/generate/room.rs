@@ -16,6 +16,7 @@ use super::{
     WALL_GAP,
 };
 use crate::cad::ParametricLibrary;
+use crate::geometry::GravityBox;
 use crate::render::sequence::DEFAULT_FRAMES;
 use crate::scene::overlap::deepest_overlap_of;
 use crate::scene::spec::{CameraSpec, ModelSource, ObjectSpec, RoomSpec, SceneSpec};
@@ -348,21 +349,37 @@ impl<'a> RoomBuilder<'a> {
                 break;
             }
             let half = 0.5 * if side.x != 0.0 { b.size.x } else { b.size.y };
-            for pull in [0.1f32, 0.2, 0.32] {
-                let local = side * (half + pull);
-                let p = b.world_from_box().transform_point3(local);
-                let facing = (b.center - p).with_z(0.0).normalize_or_zero();
-                let yaw = yaw_facing(facing).to_degrees() + rng.random_range(-8.0f32..8.0);
-                let id = self.next_id("chair");
-                if self
-                    .try_add(object_spec(&id, "chair", chair_model.clone(), None).at(p.x, p.y, yaw))
-                {
-                    placed += 1;
-                    break;
-                }
-                self.release_id("chair");
+            let pulls = [0.1f32, 0.2, 0.32];
+            if self.chair_facing(&b, side, half, &pulls, 8.0, &chair_model, rng) {
+                placed += 1;
             }
         }
+    }
+
+    /// A chair `half + pull` out along `side` in `b`'s frame, facing `b`'s centre (yaw jittered
+    /// by up to `jitter_deg`), at the first of `pulls` where it stands free; whether one did.
+    #[allow(clippy::too_many_arguments)]
+    fn chair_facing(
+        &mut self,
+        b: &GravityBox,
+        side: Vec3,
+        half: f32,
+        pulls: &[f32],
+        jitter_deg: f32,
+        model: &Option<String>,
+        rng: &mut ChaCha8Rng,
+    ) -> bool {
+        for &pull in pulls {
+            let p = b.world_from_box().transform_point3(side * (half + pull));
+            let facing = (b.center - p).with_z(0.0).normalize_or_zero();
+            let yaw = yaw_facing(facing).to_degrees() + rng.random_range(-jitter_deg..jitter_deg);
+            let id = self.next_id("chair");
+            if self.try_add(object_spec(&id, "chair", model.clone(), None).at(p.x, p.y, yaw)) {
+                return true;
+            }
+            self.release_id("chair");
+        }
+        false
     }
 
     /// A desk against `wall` with a chair in front of it and a monitor on it.
@@ -397,18 +414,8 @@ impl<'a> RoomBuilder<'a> {
             return;
         };
         let model = self.pick_model("chair", rng);
-        for pull in [0.15f32, 0.3, 0.45] {
-            let p = b
-                .world_from_box()
-                .transform_point3(-Vec3::Y * (0.5 * b.size.y + pull));
-            let facing = (b.center - p).with_z(0.0).normalize_or_zero();
-            let yaw = yaw_facing(facing).to_degrees() + rng.random_range(-10.0f32..10.0);
-            let id = self.next_id("chair");
-            if self.try_add(object_spec(&id, "chair", model.clone(), None).at(p.x, p.y, yaw)) {
-                return;
-            }
-            self.release_id("chair");
-        }
+        let pulls = [0.15f32, 0.3, 0.45];
+        self.chair_facing(&b, -Vec3::Y, 0.5 * b.size.y, &pulls, 10.0, &model, rng);
     }
 
     /// A sofa against `wall` with a low table in front of it.
