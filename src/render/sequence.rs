@@ -9,8 +9,6 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::cad::database::SCENE_MODELS;
-use crate::cad::export::write_models;
 use crate::error::{InputError, IsceneError};
 use crate::geometry::Pinhole;
 use crate::io::atomic::StagedDir;
@@ -182,10 +180,7 @@ pub fn render_sequence(
         &gt.join("contact_graph.json"),
         &world.contact_graph().to_json(),
     )?;
-    let own_models = world.models_outside_library();
-    if !own_models.is_empty() {
-        write_models(&gt.join(SCENE_MODELS), &own_models, "iscene render")?;
-    }
+    world.write_own_models(&gt)?;
     for (id, mesh, color) in world.entity_meshes() {
         let bytes = mesh_ply_bytes(&mesh, color)
             .map_err(|e| IsceneError::Internal(format!("PLY of {id}: {e}")))?;

@@ -6,6 +6,8 @@ use std::collections::BTreeMap;
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::cad::database::SCENE_MODELS;
+use crate::cad::export::write_models;
 use crate::cad::library::ParametricLibrary;
 use crate::cad::model::CadModel;
 use crate::cad::model_parts::model_parts;
@@ -84,6 +86,16 @@ impl SceneWorld {
         }
         models.sort_by(|a, b| a.id.cmp(&b.id));
         models
+    }
+
+    /// Writes [`Self::models_outside_library`] as the CAD database `<gt>/cad` (nothing when
+    /// there are none), which `CadDatabase::for_scene` reads back.
+    pub fn write_own_models(&self, gt: &std::path::Path) -> Result<(), crate::error::IsceneError> {
+        let own = self.models_outside_library();
+        if !own.is_empty() {
+            write_models(&gt.join(SCENE_MODELS), &own, "iscene render")?;
+        }
+        Ok(())
     }
 
     /// The layout entity's box: a slab of the room-facing rectangle, `LAYOUT_THICKNESS` deep behind it.
