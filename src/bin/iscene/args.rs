@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
+use iscene::batch::Shard;
 use iscene::cad::body_tree::ImportScale;
 use iscene::render::noise::NoiseChoice;
 use iscene::scene::generate::RoomStyle;
@@ -81,7 +82,14 @@ pub(crate) enum Command {
         jobs: Option<usize>,
         #[arg(long)]
         out: PathBuf,
+        /// Run only shard I of N (0-based: rooms I, I+N, ...); `iscene batch merge DIR` then
+        /// writes the summary of every shard's rooms.
+        #[arg(long, value_parser = Shard::parse)]
+        shard: Option<Shard>,
     },
+    /// Reconstruct (and score) the inputs of a manifest into one folder, whole or as a shard,
+    /// locally or as a Slurm job array; `iscene batch merge DIR` summarises.
+    Batch(BatchArgs),
     /// Score a reconstruction against a rendered sequence's ground truth; one JSON object on stdout.
     Eval {
         dir: PathBuf,
@@ -145,6 +153,56 @@ pub(crate) enum Command {
         #[command(subcommand)]
         command: CadCommand,
     },
+}
+
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
+pub(crate) struct BatchArgs {
+    #[command(subcommand)]
+    pub(crate) command: Option<BatchCommand>,
+    /// The manifest (JSON: inputs of seeds, specifications and sequence folders, with options);
+    /// default: the one DIR/batch.json holds.
+    pub(crate) manifest: Option<PathBuf>,
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Run only shard I of N (0-based: inputs I, I+N, ...), as a Slurm array task or a
+    /// Kubernetes Indexed Job pod does.
+    #[arg(long, value_parser = Shard::parse)]
+    pub(crate) shard: Option<Shard>,
+    /// Inputs run at once (default: what cores and memory allow).
+    #[arg(long)]
+    pub(crate) jobs: Option<usize>,
+    /// DIR must hold this batch already: run (or with --slurm, submit) only what is not done.
+    #[arg(long)]
+    pub(crate) resume: bool,
+    /// Write a Slurm job array (one task per shard) and a merge job into DIR/slurm and submit them.
+    #[arg(long, conflicts_with = "shard")]
+    pub(crate) slurm: bool,
+    /// With --slurm: the partition.
+    #[arg(long, requires = "slurm")]
+    pub(crate) partition: Option<String>,
+    /// With --slurm: minutes per task (default: from measured time per input, with margin).
+    #[arg(long, requires = "slurm")]
+    pub(crate) time: Option<u64>,
+    /// With --slurm: memory per task in MB (default: from measured peak memory per input).
+    #[arg(long, requires = "slurm")]
+    pub(crate) mem: Option<u64>,
+    /// With --slurm: cores per task (default 2; a task runs one input per 2 cores).
+    #[arg(long, requires = "slurm")]
+    pub(crate) cpus: Option<usize>,
+    /// With --slurm: array tasks (default: one per input).
+    #[arg(long, requires = "slurm")]
+    pub(crate) shards: Option<usize>,
+    /// Internal: run one input of a prepared batch folder (what each shard starts per input).
+    #[arg(long, hide = true, requires = "out")]
+    pub(crate) run_input: Option<String>,
+}
+
+#[derive(Subcommand)]
+pub(crate) enum BatchCommand {
+    /// Write DIR/summary.json (and .csv, .md) from every shard's results; lists failures and
+    /// inputs not finished.
+    Merge { dir: PathBuf },
 }
 
 #[derive(clap::Args)]
@@ -347,15 +405,5 @@ pub(crate) fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), Str
 
 /// `A:B` seeds, B excluded and greater than A.
 fn parse_seeds(text: &str) -> Result<(u64, u64), String> {
-    let (a, b) = text
-        .split_once(':')
-        .ok_or_else(|| format!("{text:?} is not A:B"))?;
-    let a: u64 = a.parse().map_err(|e| format!("{a:?}: {e}"))?;
-    let b: u64 = b.parse().map_err(|e| format!("{b:?}: {e}"))?;
-    if b <= a || b - a > 10_000 {
-        return Err(format!(
-            "{text:?}: B must be greater than A, by at most 10000"
-        ));
-    }
-    Ok((a, b))
+    iscene::batch::manifest::parse_seed_range(text).map(|r| (r.start, r.end))
 }

@@ -14,6 +14,9 @@ use iscene::scene::SceneSpec;
 use iscene::scene::generate::GenerateOptions;
 
 mod args;
+mod batch;
+
+use batch::{batch, executable, print_batch_outcome};
 
 use args::{
     Align, Baseline, BenchCommand, CadCommand, Cli, Command, ImportFormat, ReconstructArgs,
@@ -332,8 +335,9 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
             frames,
             jobs,
             out,
+            shard,
         }) => {
-            let summary = iscene::benchmark::run(&iscene::benchmark::BenchmarkOptions {
+            let outcome = iscene::benchmark::run(&iscene::benchmark::BenchmarkOptions {
                 seeds: seeds.0..seeds.1,
                 style,
                 noise,
@@ -342,10 +346,12 @@ fn run(cli: Cli) -> Result<(), IsceneError> {
                 frames,
                 jobs,
                 out,
-                progress: interactive,
+                shard,
+                executable: executable()?,
             })?;
-            println!("{summary}");
+            print_batch_outcome(&outcome);
         }
+        Some(Command::Batch(args)) => batch(args)?,
         Some(Command::Eval { dir, gt }) => {
             let report = iscene::eval::evaluate_reconstruction(&dir, &gt)?;
             print_json(&report)?;
