@@ -28,6 +28,9 @@ echo "== validators (check_urdf, MuJoCo, PyBullet, Khronos glTF validator)"
 echo "== Sweet Home 3D furniture catalogues (Debian packages, unpacked into .sh3d)"
 ./scripts/setup-sh3d.sh
 
+echo "== Slurm and MUNGE from Debian (the batch test starts a one-node cluster: scripts/slurm-local.sh)"
+./scripts/setup-slurm.sh
+
 echo "== viewer runtime: Mesa's software Vulkan driver and Xvfb"
 ./scripts/setup-viewer.sh
 

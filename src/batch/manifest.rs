@@ -97,6 +97,16 @@ impl BatchInput {
         }
     }
 
+    /// The files and folders it reads.
+    pub fn paths(&self) -> Vec<&Path> {
+        let source = match &self.source {
+            InputSource::Seed { .. } => None,
+            InputSource::Spec { spec } => Some(spec.as_path()),
+            InputSource::Sequence { sequence } => Some(sequence.as_path()),
+        };
+        source.into_iter().chain(self.cad.as_deref()).collect()
+    }
+
     /// The reconstruction's CAD database: the input's, unless it is unseen.
     pub fn searched_cad(&self) -> Option<PathBuf> {
         self.cad.clone().filter(|_| !self.unseen)

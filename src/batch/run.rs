@@ -64,6 +64,10 @@ pub struct ShardReport {
 /// empty, or an earlier batch or benchmark folder: nothing else is written into. Shards that
 /// start together all write the same `batch.json`, each whole (a rename).
 pub fn claim_folder(out: &Path, manifest: &Manifest) -> Result<(), IsceneError> {
+    let inputs: Vec<&Path> = manifest.inputs.iter().flat_map(BatchInput::paths).collect();
+    if let Some(why) = crate::io::output_folder::input_clash(out, &inputs) {
+        return Err(InputError::invalid(out, format!("--out {why}; nothing was written")).into());
+    }
     if std::fs::symlink_metadata(out).is_ok_and(|m| m.file_type().is_symlink()) {
         return Err(InputError::invalid(out, "--out is a symbolic link; name a folder").into());
     }
@@ -393,4 +397,71 @@ fn available_memory_gb() -> Option<f64> {
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb / 1e6)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn manifest() -> Manifest {
+        let value = serde_json::json!({"inputs": [{"seeds": "0:3", "frames": 10}]});
+        Manifest::from_value(&value, Path::new(".")).expect("manifest")
+    }
+
+    #[test]
+    fn an_input_whose_process_dies_is_recorded_failed_and_the_shard_goes_on() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("batch");
+        let manifest = manifest();
+        claim_folder(&out, &manifest).expect("claim");
+        // `false` exits 1 without writing a status record, as a process killed mid-way does.
+        let report = run_shard(
+            &manifest,
+            &ShardOptions {
+                out: out.clone(),
+                shard: Shard { index: 1, count: 2 },
+                jobs: Some(1),
+                executable: PathBuf::from("false"),
+                report: false,
+            },
+        )
+        .expect("shard");
+        assert_eq!(report.failed.len(), 1, "{report:?}");
+        let status = read_status(&out, "seed_1").expect("status");
+        assert_eq!(status.state, State::Failed);
+        assert!(
+            status
+                .error
+                .as_deref()
+                .is_some_and(|e| e.contains("before it finished")),
+            "{status:?}"
+        );
+        // Shard 1 of 2 holds input 1 only; the others were not touched.
+        assert!(read_status(&out, "seed_0").is_none() && read_status(&out, "seed_2").is_none());
+        assert_eq!(unfinished(&out, &manifest), [0, 1, 2]);
+    }
+
+    #[test]
+    fn a_folder_iscene_did_not_write_or_an_input_is_refused() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mine = dir.path().join("mine");
+        std::fs::create_dir(&mine).expect("mkdir");
+        std::fs::write(mine.join("thesis.tex"), "x").expect("write");
+        assert!(claim_folder(&mine, &manifest()).is_err());
+        assert_eq!(std::fs::read_dir(&mine).expect("list").count(), 1);
+        let sequence = dir.path().join("seq");
+        std::fs::create_dir(&sequence).expect("mkdir");
+        let value = serde_json::json!({"inputs": [{"sequence": "seq"}]});
+        let with_input = Manifest::from_value(&value, dir.path()).expect("manifest");
+        for out in [
+            sequence.clone(),
+            dir.path().to_path_buf(),
+            sequence.join("out"),
+        ] {
+            let err = claim_folder(&out, &with_input).expect_err("refused");
+            assert!(err.to_string().contains("input"), "{err}");
+        }
+        claim_folder(&dir.path().join("new"), &with_input).expect("a new folder");
+        assert!(read_batch(&dir.path().join("new")).is_ok_and(|m| m == with_input));
+    }
 }

@@ -113,6 +113,27 @@ fn list_files(dir: &Path) -> std::io::Result<BTreeMap<String, FileStamp>> {
     Ok(files)
 }
 
+/// Why the output folder `path` may not be written, when it is one of `inputs`, holds one, or
+/// lies inside an input folder.
+pub fn input_clash(path: &Path, inputs: &[&Path]) -> Option<String> {
+    let out = resolved(path);
+    inputs.iter().find_map(|input| {
+        let input_abs = resolved(input);
+        if out == input_abs {
+            Some(format!("is the input {}", input.display()))
+        } else if input_abs.starts_with(&out) {
+            Some(format!(
+                "holds the input {}; writing there would delete it",
+                input.display()
+            ))
+        } else if input.is_dir() && out.starts_with(&input_abs) {
+            Some(format!("lies inside the input {}", input.display()))
+        } else {
+            None
+        }
+    })
+}
+
 /// An output folder a command has been allowed to write: checked against the rule, not yet
 /// written.
 #[derive(Clone, Debug)]
@@ -146,21 +167,8 @@ impl OutputTarget {
             flag,
             force,
         };
-        let out = resolved(path);
-        for input in inputs {
-            let input_abs = resolved(input);
-            if out == input_abs {
-                return Err(target.refuse(format!("is the input {}", input.display())));
-            }
-            if input_abs.starts_with(&out) {
-                return Err(target.refuse(format!(
-                    "holds the input {}; writing there would delete it",
-                    input.display()
-                )));
-            }
-            if input.is_dir() && out.starts_with(&input_abs) {
-                return Err(target.refuse(format!("lies inside the input {}", input.display())));
-            }
+        if let Some(why) = input_clash(path, inputs) {
+            return Err(target.refuse(why));
         }
         // A run killed earlier in the same place left its staging folder, or an earlier output
         // moved aside: cleared (or put back) before the folder is judged.

@@ -7,6 +7,7 @@
 mod common;
 
 mod bad_input;
+mod batch;
 mod cad_import;
 mod cad_library;
 mod cad_replacement;
