@@ -1,6 +1,6 @@
 //! What one input costs, for sizing cluster requests: time and peak memory per input, from the
 //! batch folder's own finished inputs when it has some, otherwise from the figures measured on
-//! this project's reference machine (README, "Scaling"), scaled by frames and voxel size.
+//! this project's reference machine (README, "Batches and clusters"), scaled by frames and voxel size.
 
 use super::manifest::{BatchInput, InputSource};
 use super::summary::InputCost;
@@ -10,11 +10,11 @@ use super::summary::InputCost;
 pub const INPUT_MEMORY_BUDGET_GB: f64 = 3.0;
 
 /// Measured with `iscene batch` on the reference machine (2 cores, one input at a time, 2 cm
-/// voxels, the oracle segmentation, generated rooms of 300 frames): seconds per frame of an
-/// input, everything included (generate, render, reconstruct, eval).
-pub const SECONDS_PER_FRAME: f64 = 0.075;
-/// The largest peak resident memory of one such input, MB.
-pub const PEAK_MEMORY_MB: f64 = 1200.0;
+/// voxels, the oracle segmentation, seeds 0-7 of 300 frames; 2026-11-27): seconds per frame of
+/// an input, everything included (generate, render, reconstruct, eval): 24.2 s per room.
+pub const SECONDS_PER_FRAME: f64 = 0.081;
+/// The largest peak resident memory of one such input, MB (533 MB measured, rounded up).
+pub const PEAK_MEMORY_MB: f64 = 550.0;
 /// Frames assumed for a sequence input without `"frames"` (7-Scenes sequences hold 1000).
 const SEQUENCE_FRAMES_ASSUMED: usize = 1000;
 /// Frames of a specification rendered without `"frames"` (the renderer's default).
@@ -69,7 +69,8 @@ pub fn task_request(costs: &[Cost], cpus: usize, jobs: usize) -> TaskRequest {
     TaskRequest {
         cpus,
         jobs,
-        memory_mb: ((memory * jobs as f64 * 4.0 / 3.0 / 100.0).ceil() as u64).max(1) * 100,
+        // Rounded up to 100 MB (less a hair, so that 1600.0000001 stays 1600).
+        memory_mb: ((memory * jobs as f64 * 4.0 / 3.0 / 100.0 - 1e-6).ceil() as u64).max(1) * 100,
         minutes: (2.0 * seconds / 60.0).ceil() as u64 + 10,
     }
 }

@@ -75,11 +75,14 @@ pub fn claim_folder(out: &Path, manifest: &Manifest) -> Result<(), IsceneError> 
         if !out.is_dir() {
             return Err(InputError::invalid(out, "--out is a file; name a folder").into());
         }
-        let empty = std::fs::read_dir(out)
+        // Shards started together (pods of an Indexed Job) claim the folder at once: another
+        // shard's batch.json on its way in counts as the batch's own.
+        let partial = format!(".{BATCH_FILE}.");
+        let foreign = std::fs::read_dir(out)
             .map_err(|e| InputError::io(out, &e))?
-            .next()
-            .is_none();
-        if !empty && !out.join(BATCH_FILE).is_file() && !out.join(OLD_BENCHMARK_MARKER).is_file() {
+            .flatten()
+            .any(|e| !e.file_name().to_string_lossy().starts_with(&partial));
+        if foreign && !out.join(BATCH_FILE).is_file() && !out.join(OLD_BENCHMARK_MARKER).is_file() {
             return Err(InputError::invalid(
                 out,
                 "--out is a folder iscene batch or benchmark did not write; it is left alone (choose a new or empty folder)",
@@ -96,7 +99,18 @@ pub fn claim_folder(out: &Path, manifest: &Manifest) -> Result<(), IsceneError> 
     let text = serde_json::to_string_pretty(&file)
         .map_err(|e| IsceneError::Internal(format!("batch JSON: {e}")))?;
     let path = out.join(BATCH_FILE);
-    let temporary = out.join(format!(".{BATCH_FILE}.{}.partial", std::process::id()));
+    // Unique among shards on other machines and in containers, where process ids repeat.
+    let unique = format!(
+        "{}.{}.{}",
+        std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .unwrap_or_default()
+            .trim(),
+        std::process::id(),
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos())
+    );
+    let temporary = out.join(format!(".{BATCH_FILE}.{unique}.partial"));
     std::fs::write(&temporary, text + "\n")
         .and_then(|()| std::fs::rename(&temporary, &path))
         .map_err(|e| IsceneError::io(format!("writing {}", path.display()), e))

@@ -147,7 +147,7 @@ pub fn submit(
             minutes: request.minutes,
             figures: match &measured {
                 Some(m) => format!("this batch's {} finished inputs", m.inputs),
-                None => "the reference machine (README, Scaling)".into(),
+                None => "the reference machine (README, Batches and clusters)".into(),
             },
         },
         scripts: [shard_script, merge_script],

@@ -334,10 +334,10 @@ fn an_unseen_database_is_drawn_from_but_never_searched() {
     for seed in 0..2 {
         let room = dir.path().join(format!("bench/seed_{seed}"));
         let record: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(room.join("room.json")).expect("room.json"),
+            &std::fs::read_to_string(room.join("status.json")).expect("status.json"),
         )
         .expect("JSON");
-        assert_eq!(record["unseen"], true, "{record}");
+        assert_eq!(record["input"]["unseen"], true, "{record}");
         drawn += std::fs::read_to_string(room.join("spec.json"))
             .expect("spec")
             .matches("\"mjcf_")
