@@ -102,9 +102,7 @@ pub fn claim_folder(out: &Path, manifest: &Manifest) -> Result<(), IsceneError> 
     // Unique among shards on other machines and in containers, where process ids repeat.
     let unique = format!(
         "{}.{}.{}",
-        std::fs::read_to_string("/proc/sys/kernel/hostname")
-            .unwrap_or_default()
-            .trim(),
+        super::status::host_name(),
         std::process::id(),
         std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
