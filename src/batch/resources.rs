@@ -15,6 +15,11 @@ pub const INPUT_MEMORY_BUDGET_GB: f64 = 3.0;
 pub const SECONDS_PER_FRAME: f64 = 0.081;
 /// The largest peak resident memory of one such input, MB (533 MB measured, rounded up).
 pub const PEAK_MEMORY_MB: f64 = 550.0;
+/// How time and memory grow with the resolution: cost x (0.02 m / voxel)^exponent, from seeds
+/// 0-3 at 2 cm and at 1 cm (22 s and 48 s per room; 533 MB and 3014 MB at most). Memory grows
+/// faster than the surface's square because the CAD and physics stages keep the finer meshes.
+const TIME_EXPONENT: f64 = 1.1;
+const MEMORY_EXPONENT: f64 = 2.5;
 /// Frames assumed for a sequence input without `"frames"` (7-Scenes sequences hold 1000).
 const SEQUENCE_FRAMES_ASSUMED: usize = 1000;
 /// Frames of a specification rendered without `"frames"` (the renderer's default).
@@ -40,12 +45,10 @@ pub fn input_cost(input: &BatchInput, measured: Option<&InputCost>) -> Cost {
         InputSource::Sequence { .. } => SEQUENCE_FRAMES_ASSUMED,
         _ => SPEC_FRAMES_DEFAULT,
     });
-    // A map's surface voxels grow with the square of the resolution; integration time hardly
-    // does (it is per pixel), so only memory is scaled by the voxel size.
-    let resolution = (0.02 / f64::from(input.voxel)).max(1.0);
+    let resolution = 0.02 / f64::from(input.voxel);
     Cost {
-        seconds: SECONDS_PER_FRAME * frames as f64,
-        memory_mb: PEAK_MEMORY_MB * resolution * resolution,
+        seconds: SECONDS_PER_FRAME * frames as f64 * resolution.powf(TIME_EXPONENT),
+        memory_mb: PEAK_MEMORY_MB * resolution.powf(MEMORY_EXPONENT),
     }
 }
 
@@ -99,8 +102,10 @@ mod tests {
         let long = input_cost(&input(serde_json::json!({"frames": 600})), None);
         assert!((long.seconds - 2.0 * base.seconds).abs() < 1e-9);
         let fine = input_cost(&input(serde_json::json!({"voxel": 0.01})), None);
-        assert!((fine.memory_mb - 4.0 * base.memory_mb).abs() < 1e-9);
-        assert_eq!(fine.seconds, base.seconds);
+        assert!((fine.memory_mb / base.memory_mb - 2f64.powf(MEMORY_EXPONENT)).abs() < 1e-9);
+        assert!((fine.seconds / base.seconds - 2f64.powf(TIME_EXPONENT)).abs() < 1e-9);
+        let coarse = input_cost(&input(serde_json::json!({"voxel": 0.04})), None);
+        assert!(coarse.memory_mb < base.memory_mb && coarse.seconds < base.seconds);
     }
 
     #[test]

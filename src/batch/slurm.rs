@@ -9,7 +9,7 @@ use std::process::Command;
 use serde::Serialize;
 
 use super::manifest::{Manifest, Shard};
-use super::resources::{TaskRequest, input_cost, task_request};
+use super::resources::{Cost, TaskRequest, input_cost, task_request};
 use super::run::unfinished;
 use super::summary::summarise;
 use crate::error::{InputError, IsceneError};
@@ -71,34 +71,28 @@ pub fn submit(
     }
     // Resuming submits only the shards that hold an unfinished input; their finished inputs
     // are skipped by the tasks themselves.
-    let mut tasks: Vec<usize> = (0..shards)
-        .filter(|&i| {
-            let shard = Shard {
-                index: i,
-                count: shards,
-            };
-            !options.resume || pending.iter().any(|&k| shard.holds(k))
-        })
+    let shard = |index| Shard {
+        index,
+        count: shards,
+    };
+    let tasks: Vec<usize> = (0..shards)
+        .filter(|&i| !options.resume || pending.iter().any(|&k| shard(i).holds(k)))
         .collect();
-    tasks.dedup();
+    // Sized for the task with the most work left: its unfinished inputs (the others it skips).
     let measured = summarise(dir, manifest).cost;
     let cpus = options.cpus.unwrap_or(2).max(1);
     let jobs = (cpus / 2).max(1);
-    let largest_share = (0..shards)
-        .map(|i| {
-            manifest
-                .share(Shard {
-                    index: i,
-                    count: shards,
-                })
+    let total = |costs: &Vec<Cost>| costs.iter().map(|c| c.seconds).sum::<f64>();
+    let largest_share = tasks
+        .iter()
+        .map(|&i| {
+            pending
                 .iter()
+                .filter(|&&k| shard(i).holds(k))
                 .map(|&k| input_cost(&manifest.inputs[k], measured.as_ref()))
                 .collect::<Vec<_>>()
         })
-        .max_by(|a, b| {
-            let total = |c: &Vec<super::resources::Cost>| c.iter().map(|c| c.seconds).sum::<f64>();
-            total(a).total_cmp(&total(b))
-        })
+        .max_by(|a, b| total(a).total_cmp(&total(b)))
         .unwrap_or_default();
     let derived = task_request(&largest_share, cpus, jobs);
     let request = TaskRequest {
