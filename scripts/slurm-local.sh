@@ -65,7 +65,7 @@ print(*[s.getsockname()[1] for s in ports])')
     cat >"$conf" <<CONF
 # Written by scripts/slurm-local.sh: a one-node cluster for iscene's batch test.
 ClusterName=iscene-local
-SlurmctldHost=$node
+SlurmctldHost=$node(127.0.0.1)
 SlurmctldPort=$ctld_port
 SlurmdPort=$slurmd_port
 AuthType=auth/munge
@@ -87,7 +87,7 @@ SelectType=select/cons_tres
 SelectTypeParameters=CR_Core_Memory
 ReturnToService=2
 MpiDefault=none
-NodeName=$node CPUs=$cpus RealMemory=$memory State=UNKNOWN
+NodeName=$node NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$memory State=UNKNOWN
 PartitionName=local Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 CONF
     slurmctld -f "$conf"
