@@ -5,11 +5,11 @@ use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use iscene::geometry::Pinhole;
-use iscene::render::render_scene::RenderScene;
-use iscene::render::sequence::{DEFAULT_CAMERA_HEIGHT, render_frame};
 use iscene::render::shading::shade;
 use iscene::render::trajectory::room_loop;
-use iscene::render::{DepthNoise, RenderOptions, rasterize, render_sequence};
+use iscene::render::{DepthNoise, rasterize};
+use iscene::scene::render_sequence::{DEFAULT_CAMERA_HEIGHT, render_frame};
+use iscene::scene::{RenderOptions, render_sequence};
 use iscene::scene::{SceneSpec, SceneWorld};
 use rand::SeedableRng;
 
@@ -21,7 +21,7 @@ fn kitchen() -> SceneSpec {
 fn one_frame(c: &mut Criterion) {
     let spec = kitchen();
     let world = SceneWorld::from_spec(&spec, Path::new("kitchen.json")).expect("world");
-    let scene = RenderScene::from_world(&world);
+    let scene = world.render_scene();
     let poses = room_loop(world.room_size, 300, DEFAULT_CAMERA_HEIGHT);
     let camera = Pinhole::KINECT;
     let pose = poses[40];

@@ -12,7 +12,7 @@ use crate::io::atomic::write_file_atomically;
 use crate::map::agreement::{DepthAgreement, depth_residuals, summarise};
 use crate::map::memory_budget::{check_map_fits, check_memory_budget, check_voxel_size};
 use crate::map::{SegmentLabel, TsdfFrame, TsdfMap, extract_mesh};
-use crate::panoptic::geometric::{GeometricParams, segment_depth};
+use crate::segmentation::geometric::{GeometricParams, segment_depth};
 
 pub struct TsdfBenchOptions {
     pub sequence: PathBuf,

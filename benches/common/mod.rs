@@ -4,10 +4,10 @@ use std::path::Path;
 
 use iscene::geometry::TriMesh;
 use iscene::graph::build::GraphEntity;
-use iscene::io::panoptic_dir::read_panoptic;
 use iscene::io::ply::read_mesh_ply;
 use iscene::panoptic::InstanceFusion;
 use iscene::panoptic::PanopticEntity;
+use iscene::panoptic::panoptic_dir::read_panoptic;
 use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
 
 /// Renders `scenes/<scene>.json`, maps every third frame at 2 cm with the oracle segmentation

@@ -16,9 +16,9 @@ use super::status::{InputStatus, State, peak_memory_mb, read_status, status_path
 use crate::error::{InputError, IsceneError};
 use crate::pipeline::{AlignMethod, ReconstructOptions, reconstruct};
 use crate::render::noise::NoiseChoice;
-use crate::render::{RenderOptions, render_sequence};
 use crate::scene::SceneSpec;
 use crate::scene::generate::{GenerateOptions, RoomStyle, generate, write_generated};
+use crate::scene::{RenderOptions, render_sequence};
 
 /// The file that marks a folder as a batch's and holds its resolved manifest.
 pub const BATCH_FILE: &str = "batch.json";

@@ -119,7 +119,7 @@ pub fn microwave_full_door(id: &str, s: Vec3) -> CadModel {
         "cavity",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         INSIDE,
     );
     b.add(
@@ -205,7 +205,7 @@ pub fn oven_range(id: &str, s: Vec3) -> CadModel {
         "hob",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         BLACK,
     );
     for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
@@ -260,7 +260,7 @@ pub fn dishwasher_rack(id: &str, s: Vec3) -> CadModel {
         "rack",
         PartsBuilder::BODY,
         glam::Affine3A::from_translation(Vec3::new(0.0, front + 0.02, 0.25 * s.z)),
-        crate::kinematics::JointSpec::prismatic(-Vec3::Y, 0.0, 0.6 * s.y),
+        crate::base::JointSpec::prismatic(-Vec3::Y, 0.0, 0.6 * s.y),
         INSIDE,
     );
     let w = 0.5 * s.x - SHELL - 0.01;

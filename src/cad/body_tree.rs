@@ -10,10 +10,10 @@
 
 use glam::{Affine3A, Mat3, Vec3};
 
+use crate::base::{JointKind, JointSpec};
 use crate::cad::model::{CadModel, CadPart};
 use crate::classes::ClassTable;
 use crate::geometry::TriMesh;
-use crate::kinematics::{JointKind, JointSpec};
 
 /// Colour of a part whose bodies name none (linear RGB).
 const DEFAULT_COLOR: [f32; 3] = [0.6, 0.6, 0.6];

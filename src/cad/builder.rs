@@ -2,9 +2,9 @@
 
 use glam::{Affine3A, Vec3};
 
+use crate::base::JointSpec;
 use crate::cad::model::{CadModel, CadPart};
 use crate::geometry::TriMesh;
-use crate::kinematics::JointSpec;
 
 /// Panel thickness of furniture boards, metres.
 pub const BOARD: f32 = 0.018;

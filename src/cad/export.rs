@@ -5,6 +5,7 @@ use std::path::Path;
 use glam::{Affine3A, Mat4};
 use serde::{Deserialize, Serialize};
 
+use crate::base::JointSpec;
 use crate::cad::database::{CadDatabase, SCENE_MODELS};
 use crate::cad::library::ParametricLibrary;
 use crate::cad::model::CadModel;
@@ -12,7 +13,6 @@ use crate::error::IsceneError;
 use crate::graph::ContactGraph;
 use crate::io::atomic::write_file_atomically;
 use crate::io::gltf_write::{GltfNode, glb_bytes, nest};
-use crate::kinematics::JointSpec;
 
 /// The metadata file `<id>.json` beside `<id>.glb`.
 #[derive(Debug, Serialize, Deserialize)]

@@ -249,8 +249,8 @@ impl ParametricLibrary {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::JointKind;
     use crate::classes::{ClassTable, EntityKind};
-    use crate::kinematics::JointKind;
 
     #[test]
     fn a_model_built_to_another_size_says_so_in_its_id() {

@@ -3,8 +3,8 @@
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::base::JointSpec;
 use crate::geometry::TriMesh;
-use crate::kinematics::JointSpec;
 
 /// One rigid part. Its mesh is in the part's own frame, which is also its joint frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

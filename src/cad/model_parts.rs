@@ -2,9 +2,9 @@
 
 use glam::Affine3A;
 
+use crate::base::JointKind;
 use crate::cad::CadModel;
 use crate::graph::parts::{PartFront, PartJoint, PartJointType, PartJson, PartSource};
-use crate::kinematics::JointKind;
 
 /// The moving parts of `model` placed by `world_from_model`, listed from the model (`Cad`).
 pub fn model_parts(model: &CadModel, world_from_model: &Affine3A) -> Vec<PartJson> {

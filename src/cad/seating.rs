@@ -234,7 +234,7 @@ pub fn bed_headboard(id: &str, s: Vec3) -> CadModel {
         "mattress",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         LINEN,
     );
     b.slab(
@@ -264,7 +264,7 @@ pub fn bed_legs(id: &str, s: Vec3) -> CadModel {
         "mattress",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         LINEN,
     );
     b.legs(s.x, s.y, 0.2 * h, 0.0, 0.06)

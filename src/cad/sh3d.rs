@@ -21,12 +21,12 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Mat3, Vec3};
 use rayon::prelude::*;
 
+use crate::base::JointSpec;
 use crate::cad::class_words::class_of_name;
 use crate::cad::import::imported_model_id;
 use crate::cad::mesh_files::obj_groups;
 use crate::cad::model::{CadModel, CadPart};
 use crate::geometry::TriMesh;
-use crate::kinematics::JointSpec;
 
 /// The catalogue file inside a plugin catalogue (`*.sh3f`).
 const PLUGIN_CATALOGUE: &str = "PluginFurnitureCatalog.properties";

@@ -27,7 +27,7 @@ pub fn monitor_stand(id: &str, s: Vec3) -> CadModel {
         "screen",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         SCREEN,
     );
     b.slab(
@@ -150,7 +150,7 @@ pub fn bottle_water(id: &str, s: Vec3) -> CadModel {
         "cap",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         BLUE,
     );
     let profile = [
@@ -181,7 +181,7 @@ pub fn book_hardback(id: &str, s: Vec3) -> CadModel {
         "pages",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         PAPER,
     );
     b.slab(
@@ -233,7 +233,7 @@ pub fn box_lidded(id: &str, s: Vec3) -> CadModel {
         "lid",
         PartsBuilder::BODY,
         glam::Affine3A::IDENTITY,
-        crate::kinematics::JointSpec::FIXED,
+        crate::base::JointSpec::FIXED,
         CERAMIC,
     );
     b.slab(

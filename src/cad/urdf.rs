@@ -14,13 +14,13 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 
+use crate::base::JointKind;
 use crate::cad::body_tree::{
     Body, BodyJoint, BodyTree, MAX_BODIES, ModelFileError, check_xml_depth,
 };
 use crate::cad::mesh_files::read_mesh_file;
 use crate::file_name::inside_folder;
 use crate::geometry::TriMesh;
-use crate::kinematics::JointKind;
 
 /// Facets around cylinders, capsules and spheres.
 const ROUND_SEGMENTS: u32 = 16;

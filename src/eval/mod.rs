@@ -20,8 +20,8 @@ use crate::cad::database::CadDatabase;
 use crate::classes::{ClassTable, EntityKind};
 use crate::error::InputError;
 use crate::io::Sequence;
-use crate::io::panoptic_dir::read_panoptic;
 use crate::io::ply::read_mesh_ply;
+use crate::panoptic::panoptic_dir::read_panoptic;
 use panoptic_quality::{PanopticMetrics, Segment, evaluate};
 use truth::NearestMesh;
 

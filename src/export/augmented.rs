@@ -13,8 +13,8 @@ use glam::{Affine3A, IVec3, Mat4, Vec3};
 use crate::cad::database::CadDatabase;
 use crate::graph::ContactGraph;
 use crate::graph::build::surface_points;
-use crate::io::panoptic_dir::class_color;
 use crate::panoptic::PanopticEntity;
+use crate::panoptic::panoptic_dir::class_color;
 
 /// One point of the augmented geometry.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -7,9 +7,9 @@ use glam::Vec3;
 
 use crate::error::InputError;
 use crate::io::intrinsics::{self, CameraJson};
+use crate::io::labels::Labels;
 use crate::io::pose::read_pose_file;
 use crate::io::sequence::{FrameRecord, Sequence, SequenceFormat};
-use crate::scene::ground_truth::Labels;
 
 pub fn open(root: &Path) -> Result<Sequence, InputError> {
     let mut depth_files: BTreeMap<usize, PathBuf> = BTreeMap::new();

@@ -7,8 +7,8 @@ use glam::{Affine3A, Vec3};
 use crate::error::InputError;
 use crate::geometry::Pinhole;
 use crate::io::images::{read_color, read_depth, read_labels};
+use crate::io::labels::Labels;
 use crate::io::{native, open3d_log, tum};
-use crate::scene::ground_truth::Labels;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SequenceFormat {

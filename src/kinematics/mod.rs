@@ -2,11 +2,13 @@
 
 pub mod contact_pieces;
 pub mod inertial;
-pub mod joint;
 pub mod joint_sweep;
 pub mod link;
 pub mod ray_pick;
 pub mod rest_test;
 pub mod tree;
 
-pub use joint::{JointKind, JointSpec};
+// The joint types live in the base layer (the CAD models carry them too); named here as well
+// because a joint is the kinematic tree's vocabulary.
+pub use crate::base::joint;
+pub use crate::base::{JointKind, JointSpec};

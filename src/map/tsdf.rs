@@ -521,9 +521,8 @@ impl Integrator<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::render_scene::RenderScene;
-    use crate::render::sequence::render_frame;
     use crate::render::trajectory::room_loop;
+    use crate::scene::render_sequence::render_frame;
     use crate::scene::{SceneSpec, SceneWorld};
 
     #[test]
@@ -532,7 +531,7 @@ mod tests {
             .expect("spec");
         let world =
             SceneWorld::from_spec(&spec, std::path::Path::new("kitchen.json")).expect("world");
-        let scene = RenderScene::from_world(&world);
+        let scene = world.render_scene();
         let camera = Pinhole::KINECT;
         let poses = room_loop(world.room_size, 60, 1.45);
         let mut map = TsdfMap::new(0.02);

@@ -15,8 +15,8 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use foldhash::fast::FixedState;
 use glam::IVec3;
 
-use crate::panoptic::geometric::{GeometricSegmentation, find, union};
 use crate::segmentation::PanopticFrame;
+use crate::segmentation::geometric::{GeometricSegmentation, find, union};
 
 #[derive(Clone, Copy, Debug)]
 pub struct FusionParams {

@@ -10,9 +10,9 @@ use rayon::prelude::*;
 use crate::geometry::Pinhole;
 use crate::map::{FrameLabels, SegmentLabel, TsdfFrame, TsdfMap};
 use crate::panoptic::fusion::{FusedFrame, FusionParams, cut_to_exact_masks, fuse_masks};
-use crate::panoptic::geometric::{GeometricParams, GeometricSegmentation};
 use crate::panoptic::instances::{ClassId, InstanceCounts, InstanceFusion, MaskObservation};
 use crate::segmentation::PanopticFrame;
+use crate::segmentation::geometric::{GeometricParams, GeometricSegmentation};
 
 #[derive(Clone, Debug)]
 pub struct MapperParams {
@@ -370,13 +370,13 @@ impl PanopticMapper {
                     .instances
                     .of_different_classes(a, b, self.params.merge_frames)
             {
-                crate::panoptic::geometric::union(&mut parent, a, b);
+                crate::segmentation::geometric::union(&mut parent, a, b);
                 merged += 1;
             }
         }
         if merged > 0 {
             let roots: Vec<SegmentLabel> = (0..self.next_label)
-                .map(|l| crate::panoptic::geometric::find(&mut parent, l))
+                .map(|l| crate::segmentation::geometric::find(&mut parent, l))
                 .collect();
             for (l, &root) in roots.iter().enumerate() {
                 if root != l as SegmentLabel {

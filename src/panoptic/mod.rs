@@ -5,9 +5,9 @@
 pub mod carve;
 pub mod entities;
 pub mod fusion;
-pub mod geometric;
 pub mod instances;
 pub mod mapper;
+pub mod panoptic_dir;
 pub mod run;
 pub mod sighted;
 

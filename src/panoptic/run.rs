@@ -6,9 +6,9 @@ use rayon::prelude::*;
 use crate::error::IsceneError;
 use crate::io::Sequence;
 use crate::panoptic::entities::ClassIds;
-use crate::panoptic::geometric::segment_depth;
 use crate::panoptic::mapper::{MapperFrame, MapperParams, PanopticMapper, segment_frame};
 use crate::segmentation::SegmentationService;
+use crate::segmentation::geometric::segment_depth;
 
 pub fn map_sequence(
     sequence: &Sequence,

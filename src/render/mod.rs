@@ -5,11 +5,9 @@ pub mod noise;
 pub mod pose_noise;
 pub mod raster;
 pub mod render_scene;
-pub mod sequence;
 pub mod shading;
 pub mod trajectory;
 
 pub use noise::{DepthNoise, NoiseSettings};
 pub use raster::{RasterFrame, rasterize};
 pub use render_scene::RenderScene;
-pub use sequence::{RenderOptions, RenderSummary, render_sequence};

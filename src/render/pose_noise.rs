@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::scene::placement::stable_hash;
+use crate::base::stable_hash;
 
 /// Parameters of the pose noise. Lengths in metres, angles in degrees, per frame.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

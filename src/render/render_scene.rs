@@ -1,9 +1,7 @@
-//! The world flattened into triangles the rasteriser can walk: world-space corners, instance id,
+//! A world flattened into triangles the rasteriser can walk: world-space corners, instance id,
 //! colour and normal per triangle.
 
 use glam::Vec3;
-
-use crate::scene::SceneWorld;
 
 /// How a triangle's colour is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,30 +21,8 @@ pub struct RenderScene {
 }
 
 impl RenderScene {
-    pub fn from_world(world: &SceneWorld) -> RenderScene {
-        let mut scene = RenderScene::default();
-        for l in &world.layout {
-            let surface = if l.class == "floor" {
-                Surface::FloorTiles
-            } else {
-                Surface::Plain
-            };
-            scene.push_mesh(&l.mesh, l.instance, l.color, surface);
-        }
-        for o in &world.objects {
-            for (part, world_from_part) in o.model.parts.iter().zip(o.world_from_parts()) {
-                scene.push_mesh(
-                    &part.visual_mesh().transformed(&world_from_part),
-                    o.instance,
-                    part.color,
-                    Surface::Plain,
-                );
-            }
-        }
-        scene
-    }
-
-    fn push_mesh(
+    /// Adds the triangles of `mesh` with one instance id, colour and surface.
+    pub fn push_mesh(
         &mut self,
         mesh: &crate::geometry::TriMesh,
         instance: u16,

@@ -15,7 +15,7 @@ use crate::error::{InputError, IsceneError};
 use crate::geometry::{GravityBox, Pinhole, Plane, TriMesh};
 use crate::graph::{ContactGraph, GraphEdge};
 use crate::io::Sequence;
-use crate::io::panoptic_dir::{read_index, read_segment_meshes};
+use crate::panoptic::panoptic_dir::{read_index, read_segment_meshes};
 
 pub use first_seen::{first_seen, seen_in_frame};
 pub use vertex_colours::vertex_colours;

@@ -4,7 +4,6 @@
 use std::collections::BTreeMap;
 
 use glam::{Mat4, Vec3};
-use serde::{Deserialize, Serialize};
 
 use crate::cad::database::SCENE_MODELS;
 use crate::cad::export::write_models;
@@ -16,6 +15,7 @@ use crate::geometry::plane::dominant_planes;
 use crate::geometry::{GravityBox, TriMesh};
 use crate::graph::proximal::{ProximalMargins, proximal_edges};
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
+use crate::io::labels::{LabelEntry, Labels};
 use crate::scene::world::{SceneWorld, Support};
 
 /// Smallest surface, in square metres, that is listed as a plane of an object.
@@ -23,30 +23,6 @@ const MIN_PLANE_AREA: f32 = 0.01;
 const MAX_PLANES: usize = 8;
 /// Layout boxes are slabs this thick behind their surface.
 const LAYOUT_THICKNESS: f32 = 0.1;
-
-/// `labels.json` of the sequence format.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Labels {
-    pub instances: BTreeMap<String, LabelEntry>,
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LabelEntry {
-    pub class: String,
-    pub entity: String,
-}
-
-impl Labels {
-    /// Instance id -> entry, with numeric keys.
-    pub fn by_instance(&self) -> BTreeMap<u16, &LabelEntry> {
-        self.instances
-            .iter()
-            .filter_map(|(k, v)| k.parse().ok().map(|id| (id, v)))
-            .collect()
-    }
-}
 
 impl SceneWorld {
     pub fn labels(&self) -> Labels {

@@ -4,9 +4,11 @@ pub mod generate;
 pub mod ground_truth;
 pub mod overlap;
 pub mod placement;
+pub mod render_sequence;
 pub mod spec;
 pub mod world;
 
+pub use render_sequence::{RenderOptions, RenderSummary, render_sequence};
 pub use spec::SceneSpec;
 pub use world::{SceneWorld, Support};
 

@@ -41,7 +41,9 @@ impl SceneWorld {
                     let variants: Vec<_> = ParametricLibrary::variants(&o.class).collect();
                     variants
                         .get(
-                            (stable_hash(spec.seed, &o.id) % variants.len().max(1) as u64) as usize,
+                            (crate::base::stable_hash(spec.seed, &o.id)
+                                % variants.len().max(1) as u64)
+                                as usize,
                         )
                         .map(|e| ModelSource::Parametric(e))
                 }
@@ -272,16 +274,6 @@ fn surface_below(mesh: &crate::geometry::TriMesh, start: Vec3) -> Option<f32> {
         }
     }
     best
-}
-
-/// A hash that is the same on every machine and run (FNV-1a over the seed and the id).
-pub fn stable_hash(seed: u64, id: &str) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for byte in seed.to_le_bytes().iter().chain(id.as_bytes()) {
-        h ^= u64::from(*byte);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    h
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use glam::{Affine3A, Vec2, Vec3};
 use crate::cad::CadModel;
 use crate::classes::EntityKind;
 use crate::geometry::{GravityBox, Plane, TriMesh};
+use crate::render::render_scene::{RenderScene, Surface};
 
 /// What holds an object up.
 #[derive(Clone, Debug, PartialEq)]
@@ -204,4 +205,30 @@ pub fn yaw_facing(inward: Vec3) -> f32 {
     // Rz(yaw) * (0, -1) = (sin yaw, -cos yaw) = inward.xy
     let d = Vec2::new(inward.x, inward.y);
     d.x.atan2(-d.y)
+}
+
+impl SceneWorld {
+    /// The world flattened into triangles for the rasteriser.
+    pub fn render_scene(&self) -> RenderScene {
+        let mut scene = RenderScene::default();
+        for l in &self.layout {
+            let surface = if l.class == "floor" {
+                Surface::FloorTiles
+            } else {
+                Surface::Plain
+            };
+            scene.push_mesh(&l.mesh, l.instance, l.color, surface);
+        }
+        for o in &self.objects {
+            for (part, world_from_part) in o.model.parts.iter().zip(o.world_from_parts()) {
+                scene.push_mesh(
+                    &part.visual_mesh().transformed(&world_from_part),
+                    o.instance,
+                    part.color,
+                    Surface::Plain,
+                );
+            }
+        }
+        scene
+    }
 }

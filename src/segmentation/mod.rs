@@ -1,6 +1,7 @@
 //! The per-frame panoptic segmentation service: its output type, the trait every backend
 //! implements, and the oracle backend (ground truth through a realistic noise model).
 
+pub mod geometric;
 pub mod noise;
 pub mod onnx;
 pub mod oracle;
@@ -38,7 +39,7 @@ pub trait SegmentationService: Send + Sync {
     fn segment(
         &self,
         frame: &crate::io::Frame,
-        geometry: &crate::panoptic::geometric::GeometricSegmentation,
+        geometry: &crate::segmentation::geometric::GeometricSegmentation,
     ) -> Result<PanopticFrame, crate::error::IsceneError>;
 
     /// The masks this service gives without running its networks, for the frames between
@@ -47,7 +48,7 @@ pub trait SegmentationService: Send + Sync {
     fn segment_without_networks(
         &self,
         _frame: &crate::io::Frame,
-        _geometry: &crate::panoptic::geometric::GeometricSegmentation,
+        _geometry: &crate::segmentation::geometric::GeometricSegmentation,
     ) -> Option<PanopticFrame> {
         None
     }

@@ -6,9 +6,9 @@ use std::collections::BTreeMap;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use crate::base::stable_hash;
 use crate::error::{InputError, IsceneError};
 use crate::io::{Frame, Sequence};
-use crate::scene::placement::stable_hash;
 use crate::segmentation::noise::SegmentationNoise;
 use crate::segmentation::{PanopticFrame, PanopticSegment, SegmentationService};
 
@@ -72,7 +72,7 @@ impl SegmentationService for OracleSegmentation {
     fn segment(
         &self,
         frame: &Frame,
-        _geometry: &crate::panoptic::geometric::GeometricSegmentation,
+        _geometry: &crate::segmentation::geometric::GeometricSegmentation,
     ) -> Result<PanopticFrame, IsceneError> {
         let Some(labels) = &frame.labels else {
             return Err(IsceneError::Internal(format!(

@@ -11,7 +11,7 @@ use bevy::prelude::*;
 
 use crate::error::IsceneError;
 use crate::geometry::TriMesh;
-use crate::io::panoptic_dir::{read_index, read_segment_meshes};
+use crate::panoptic::panoptic_dir::{read_index, read_segment_meshes};
 use crate::replay::{read_report, reconstruction_sequence, vertex_colours};
 use crate::viewer::interaction::ViewerStatus;
 use crate::viewer::layers::{ActiveLayers, Layer};

@@ -140,8 +140,8 @@ fn issue_bar(name: &str, seq: &Path, out: &Path) -> Vec<String> {
 #[test]
 fn the_augmented_geometry_swaps_replaced_segments_for_model_surfaces() {
     let (_, out) = common::shared_noisy_map("kitchen");
-    let (index, voxels) =
-        iscene::io::panoptic_dir::read_panoptic(&out.join("panoptic")).expect("panoptic folder");
+    let (index, voxels) = iscene::panoptic::panoptic_dir::read_panoptic(&out.join("panoptic"))
+        .expect("panoptic folder");
     let graph = ContactGraph::load(&out.join("contact_graph.json")).expect("graph");
     let points = read_augmented(&out.join("augmented.ply"));
     let mut replaced = 0;

@@ -17,6 +17,7 @@ mod fuzz_corpora;
 mod gravity;
 mod held_out;
 mod hostile_input;
+mod layers;
 mod model_import;
 mod onnx;
 mod panoptic;

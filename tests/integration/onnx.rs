@@ -9,8 +9,8 @@ use crate::common;
 use std::path::Path;
 
 use iscene::io::Sequence;
-use iscene::panoptic::geometric::{GeometricParams, segment_depth};
 use iscene::segmentation::SegmentationService;
+use iscene::segmentation::geometric::{GeometricParams, segment_depth};
 use iscene::segmentation::onnx::layout::{LayoutLabel, LayoutParams, RoomLayout};
 use iscene::segmentation::onnx::{OnnxModels, OnnxParams, OnnxSegmentation};
 

@@ -12,11 +12,11 @@ use iscene::geometry::{Pinhole, TriMesh};
 use iscene::io::Sequence;
 use iscene::io::ply::read_mesh_ply;
 use iscene::render::render_scene::RenderScene;
-use iscene::render::sequence::{
-    DEFAULT_CAMERA_HEIGHT, DEFAULT_FRAMES, render_frame, visible_instances,
-};
 use iscene::render::trajectory::room_loop;
 use iscene::render::{DepthNoise, rasterize};
+use iscene::scene::render_sequence::{
+    DEFAULT_CAMERA_HEIGHT, DEFAULT_FRAMES, render_frame, visible_instances,
+};
 use iscene::scene::{SceneSpec, SceneWorld, Support};
 
 fn world_of(spec_path: &Path) -> (SceneSpec, SceneWorld) {
@@ -64,7 +64,7 @@ fn every_spec_has_enough_objects_stacked_and_articulated_ones() {
 fn the_default_trajectory_sees_every_object_and_occludes_some() {
     for path in common::scene_specs() {
         let (spec, world) = world_of(&path);
-        let scene = RenderScene::from_world(&world);
+        let scene = world.render_scene();
         let poses = room_loop(
             world.room_size,
             spec.camera.frames.unwrap_or(DEFAULT_FRAMES),
@@ -209,7 +209,7 @@ fn back_projected_depth_lands_on_the_ground_truth_meshes() {
 #[test]
 fn depth_noise_statistics_follow_the_model() {
     let (_, world) = world_of(&common::root().join("scenes/kitchen.json"));
-    let scene = RenderScene::from_world(&world);
+    let scene = world.render_scene();
     let camera = Pinhole::KINECT;
     let model = DepthNoise::KINECT;
     let poses: Vec<Affine3A> = room_loop(world.room_size, 40, DEFAULT_CAMERA_HEIGHT);

@@ -9,9 +9,9 @@ use iscene::cad::import::{ModelFormat, import_model_files};
 use iscene::error::IsceneError;
 use iscene::panoptic::InstanceFusion;
 use iscene::pipeline::{AlignMethod, ReconstructOptions, SegmentationChoice, reconstruct};
-use iscene::render::{RenderOptions, render_sequence};
 use iscene::scene::SceneSpec;
 use iscene::scene::generate::GenerateOptions;
+use iscene::scene::{RenderOptions, render_sequence};
 
 mod args;
 mod batch;

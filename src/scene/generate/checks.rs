@@ -4,10 +4,9 @@
 use crate::cad::placed_solid::{PlacedSolid, layout_penetration, penetration_depth};
 use crate::geometry::Pinhole;
 use crate::render::raster::{NO_TRIANGLE, rasterize};
-use crate::render::render_scene::RenderScene;
-use crate::render::sequence::DEFAULT_CAMERA_HEIGHT;
 use crate::render::trajectory::room_loop;
 use crate::scene::overlap::MAX_OVERLAP_M;
+use crate::scene::render_sequence::DEFAULT_CAMERA_HEIGHT;
 use crate::scene::world::SceneWorld;
 
 use super::{MIN_VISIBLE_PIXELS, VISIBILITY_FRAMES};
@@ -16,7 +15,7 @@ use super::{MIN_VISIBLE_PIXELS, VISIBILITY_FRAMES};
 /// with `MIN_VISIBLE_PIXELS` at a quarter of the resolution.
 pub fn unseen_objects(world: &SceneWorld, frames: usize) -> Vec<usize> {
     use rayon::prelude::*;
-    let scene = RenderScene::from_world(world);
+    let scene = world.render_scene();
     let k = Pinhole::KINECT;
     let camera = Pinhole {
         width: k.width / 4,

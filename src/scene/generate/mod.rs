@@ -14,9 +14,9 @@ use rand::seq::IndexedRandom;
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
 
+use crate::base::stable_hash;
 use crate::error::InputError;
 use crate::render::noise::NoiseChoice;
-use crate::scene::placement::stable_hash;
 use crate::scene::spec::{CameraSpec, RoomSpec, SceneSpec};
 
 mod checks;

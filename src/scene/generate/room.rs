@@ -17,8 +17,8 @@ use super::{
 };
 use crate::cad::ParametricLibrary;
 use crate::geometry::GravityBox;
-use crate::render::sequence::DEFAULT_FRAMES;
 use crate::scene::overlap::deepest_overlap_of;
+use crate::scene::render_sequence::DEFAULT_FRAMES;
 use crate::scene::spec::{CameraSpec, ModelSource, ObjectSpec, RoomSpec, SceneSpec};
 use crate::scene::world::{SceneWorld, wall_frame, wall_length, yaw_facing};
 

@@ -7,8 +7,8 @@ use std::time::Instant;
 
 use crate::error::{InputError, IsceneError};
 use crate::io::Sequence;
-use crate::panoptic::geometric::{GeometricParams, segment_depth};
 use crate::segmentation::SegmentationService;
+use crate::segmentation::geometric::{GeometricParams, segment_depth};
 use crate::segmentation::onnx::{OnnxModels, OnnxParams, OnnxSegmentation};
 
 pub struct SegmentationBenchOptions {

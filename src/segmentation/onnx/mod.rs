@@ -22,7 +22,7 @@ use crate::classes::ClassTable;
 use crate::error::{InputError, IsceneError};
 use crate::geometry::TriMesh;
 use crate::io::{Frame, Sequence};
-use crate::panoptic::geometric::GeometricSegmentation;
+use crate::segmentation::geometric::GeometricSegmentation;
 use crate::segmentation::onnx::layout::{LayoutLabel, LayoutParams, RoomLayout};
 use crate::segmentation::onnx::masks::{MaskInputs, MaskParams, ObjectDetection, panoptic_masks};
 use crate::segmentation::onnx::yolox::Detection;

@@ -9,6 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::base::stable_hash;
 use crate::error::{InputError, IsceneError};
 use crate::geometry::Pinhole;
 use crate::io::atomic::StagedDir;
@@ -23,7 +24,6 @@ use crate::render::raster::{NO_TRIANGLE, rasterize};
 use crate::render::render_scene::RenderScene;
 use crate::render::shading::shade;
 use crate::render::trajectory::room_loop;
-use crate::scene::placement::stable_hash;
 use crate::scene::{SceneSpec, SceneWorld};
 use crate::segmentation::noise::SegmentationNoise;
 
@@ -142,7 +142,7 @@ pub fn render_sequence(
     inputs.extend(spec.databases.iter().map(|db| db.dir.as_path()));
     let target = OutputTarget::claim("--out", out, OutputCommand::Render, &inputs, options.force)?;
     let world = SceneWorld::from_spec(spec, spec_path)?;
-    let scene = RenderScene::from_world(&world);
+    let scene = world.render_scene();
     let camera = Pinhole::KINECT;
     let frames = options
         .frames

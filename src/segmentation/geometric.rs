@@ -218,9 +218,8 @@ pub fn union(parent: &mut [u32], a: u32, b: u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::render_scene::RenderScene;
-    use crate::render::sequence::render_frame;
     use crate::render::trajectory::room_loop;
+    use crate::scene::render_sequence::render_frame;
     use crate::scene::{SceneSpec, SceneWorld};
 
     /// On a rendered kitchen frame, most geometric segments lie on one object: the cut at
@@ -230,7 +229,7 @@ mod tests {
         let path = std::path::Path::new("kitchen.json");
         let spec = SceneSpec::parse(crate::BUILTIN_KITCHEN, path).expect("spec");
         let world = SceneWorld::from_spec(&spec, path).expect("world");
-        let scene = RenderScene::from_world(&world);
+        let scene = world.render_scene();
         let camera = Pinhole::KINECT;
         let poses = room_loop(world.room_size, 40, 1.45);
         let mut pure = 0usize;

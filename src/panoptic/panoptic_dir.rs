@@ -30,7 +30,7 @@ pub struct PanopticIndex {
 
 /// A colour per class name, stable across runs.
 pub fn class_color(class: &str) -> [f32; 3] {
-    let h = crate::scene::placement::stable_hash(0, class);
+    let h = crate::base::stable_hash(0, class);
     [
         0.25 + 0.7 * ((h & 0xff) as f32 / 255.0),
         0.25 + 0.7 * (((h >> 8) & 0xff) as f32 / 255.0),
