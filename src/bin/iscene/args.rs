@@ -22,127 +22,24 @@ pub(crate) struct Cli {
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// Render a scene specification to an RGB-D sequence folder with ground truth.
-    Render {
-        spec: PathBuf,
-        #[arg(long)]
-        out: PathBuf,
-        /// Number of frames (default: the specification's, else 300).
-        #[arg(long)]
-        frames: Option<usize>,
-        /// Turn every noise model off.
-        #[arg(long)]
-        no_noise: bool,
-        /// Replace an earlier output of another iscene command at --out (a folder iscene did
-        /// not write is never replaced).
-        #[arg(long)]
-        force: bool,
-    },
+    Render(RenderArgs),
     /// Reconstruct a scene from a specification (rendered first), a sequence folder or a TUM folder.
     Reconstruct(ReconstructArgs),
     /// Write the scene specification of a procedural room, the same for the same seed.
-    Generate {
-        #[arg(long)]
-        seed: u64,
-        /// The specification file to write.
-        #[arg(long)]
-        out: PathBuf,
-        #[arg(long, value_enum, default_value_t = RoomStyle::Any)]
-        style: RoomStyle,
-        /// CAD databases (`iscene cad import`) whose models the room may use (repeatable).
-        #[arg(long, value_name = "DB")]
-        cad: Vec<PathBuf>,
-        /// Noise of the rendering: Kinect depth, realistic segmentation and tracker poses, or none.
-        #[arg(long, value_enum, default_value_t = NoiseChoice::Realistic)]
-        noise: NoiseChoice,
-        /// Frames of the default camera path.
-        #[arg(long, default_value_t = 300)]
-        frames: usize,
-    },
+    Generate(GenerateArgs),
     /// Generate, render, reconstruct and score a range of procedural rooms; summary in --out.
-    Benchmark {
-        /// Seeds as A:B (B excluded).
-        #[arg(long, value_parser = parse_seeds)]
-        seeds: (u64, u64),
-        #[arg(long, value_enum, default_value_t = RoomStyle::Any)]
-        style: RoomStyle,
-        #[arg(long, value_enum, default_value_t = NoiseChoice::Realistic)]
-        noise: NoiseChoice,
-        /// A CAD database the rooms draw models from and the reconstruction searches.
-        #[arg(long, value_name = "DB")]
-        cad: Option<PathBuf>,
-        /// With --cad: the reconstruction searches only its own library, so the database's
-        /// models are ones it has never seen.
-        #[arg(long, requires = "cad")]
-        unseen: bool,
-        /// Frames per room.
-        #[arg(long, default_value_t = 300)]
-        frames: usize,
-        /// Rooms run at once (default: what cores and memory allow).
-        #[arg(long)]
-        jobs: Option<usize>,
-        #[arg(long)]
-        out: PathBuf,
-        /// Run only shard I of N (0-based: rooms I, I+N, ...); `iscene batch merge DIR` then
-        /// writes the summary of every shard's rooms.
-        #[arg(long, value_parser = Shard::parse)]
-        shard: Option<Shard>,
-    },
+    Benchmark(BenchmarkArgs),
     /// Reconstruct (and score) the inputs of a manifest into one folder, whole or as a shard,
     /// locally or as a Slurm job array; `iscene batch merge DIR` summarises.
     Batch(BatchArgs),
     /// Score a reconstruction against a rendered sequence's ground truth; one JSON object on stdout.
-    Eval {
-        dir: PathBuf,
-        #[arg(long)]
-        gt: PathBuf,
-    },
+    Eval(EvalArgs),
     /// Run a task (actions, or goals to plan for) in a reconstructed scene folder (or a rendered
     /// sequence's gt/); writes the trace, the task's PDDL and the exports after the last step.
-    Simulate {
-        /// A folder with contact_graph.json.
-        dir: PathBuf,
-        #[arg(long)]
-        task: PathBuf,
-        #[arg(long)]
-        out: PathBuf,
-        /// Replace an earlier output of another iscene command at --out (a folder iscene did
-        /// not write is never replaced).
-        #[arg(long)]
-        force: bool,
-    },
+    Simulate(SimulateArgs),
     /// Look at a scene folder (a reconstruction, or a rendered sequence's gt/) in a window, or
     /// render it off screen into a PNG (built with `--features viewer`).
-    View {
-        /// A folder with contact_graph.json; with --replay, a reconstruction's output folder.
-        dir: PathBuf,
-        /// Render off screen into this PNG and exit.
-        #[arg(long)]
-        screenshot: Option<PathBuf>,
-        /// Layers shown: colour, segments, boxes, graph, planes, collision, occupancy, physics,
-        /// map (repeat or separate with commas).
-        #[arg(long, value_delimiter = ',')]
-        layer: Vec<String>,
-        /// Frames rendered before the screenshot.
-        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
-        frames: u32,
-        /// Screenshot size in pixels, WIDTHxHEIGHT.
-        #[arg(long, default_value = "960x720", value_parser = parse_size)]
-        size: (u32, u32),
-        /// Open this object's main door or drawer first (repeatable).
-        #[arg(long)]
-        open: Vec<String>,
-        /// Play back the reconstruction in DIR (written by `iscene reconstruct`) frame by frame.
-        #[arg(long)]
-        replay: bool,
-        /// A task script (scenes/tasks/*.json) to run in the window: N does the next action, P
-        /// plays them; with --screenshot, the picture is taken after the last action.
-        #[arg(long)]
-        task: Option<PathBuf>,
-        /// With --replay and --screenshot: this many pictures from the first frame to the last
-        /// (FILE.gif: one animated GIF; otherwise numbered PNGs FILE_00.png ...).
-        #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=200))]
-        shots: u32,
-    },
+    View(ViewArgs),
     /// Benchmarks that print their figures as one JSON object on stdout.
     Bench {
         #[command(subcommand)]
@@ -153,6 +50,127 @@ pub(crate) enum Command {
         #[command(subcommand)]
         command: CadCommand,
     },
+}
+
+#[derive(clap::Args)]
+pub(crate) struct RenderArgs {
+    pub(crate) spec: PathBuf,
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+    /// Number of frames (default: the specification's, else 300).
+    #[arg(long)]
+    pub(crate) frames: Option<usize>,
+    /// Turn every noise model off.
+    #[arg(long)]
+    pub(crate) no_noise: bool,
+    /// Replace an earlier output of another iscene command at --out (a folder iscene did
+    /// not write is never replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct GenerateArgs {
+    #[arg(long)]
+    pub(crate) seed: u64,
+    /// The specification file to write.
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+    #[arg(long, value_enum, default_value_t = RoomStyle::Any)]
+    pub(crate) style: RoomStyle,
+    /// CAD databases (`iscene cad import`) whose models the room may use (repeatable).
+    #[arg(long, value_name = "DB")]
+    pub(crate) cad: Vec<PathBuf>,
+    /// Noise of the rendering: Kinect depth, realistic segmentation and tracker poses, or none.
+    #[arg(long, value_enum, default_value_t = NoiseChoice::Realistic)]
+    pub(crate) noise: NoiseChoice,
+    /// Frames of the default camera path.
+    #[arg(long, default_value_t = 300)]
+    pub(crate) frames: usize,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct BenchmarkArgs {
+    /// Seeds as A:B (B excluded).
+    #[arg(long, value_parser = parse_seeds)]
+    pub(crate) seeds: (u64, u64),
+    #[arg(long, value_enum, default_value_t = RoomStyle::Any)]
+    pub(crate) style: RoomStyle,
+    #[arg(long, value_enum, default_value_t = NoiseChoice::Realistic)]
+    pub(crate) noise: NoiseChoice,
+    /// A CAD database the rooms draw models from and the reconstruction searches.
+    #[arg(long, value_name = "DB")]
+    pub(crate) cad: Option<PathBuf>,
+    /// With --cad: the reconstruction searches only its own library, so the database's
+    /// models are ones it has never seen.
+    #[arg(long, requires = "cad")]
+    pub(crate) unseen: bool,
+    /// Frames per room.
+    #[arg(long, default_value_t = 300)]
+    pub(crate) frames: usize,
+    /// Rooms run at once (default: what cores and memory allow).
+    #[arg(long)]
+    pub(crate) jobs: Option<usize>,
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+    /// Run only shard I of N (0-based: rooms I, I+N, ...); `iscene batch merge DIR` then
+    /// writes the summary of every shard's rooms.
+    #[arg(long, value_parser = Shard::parse)]
+    pub(crate) shard: Option<Shard>,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct EvalArgs {
+    pub(crate) dir: PathBuf,
+    #[arg(long)]
+    pub(crate) gt: PathBuf,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct SimulateArgs {
+    /// A folder with contact_graph.json.
+    pub(crate) dir: PathBuf,
+    #[arg(long)]
+    pub(crate) task: PathBuf,
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+    /// Replace an earlier output of another iscene command at --out (a folder iscene did
+    /// not write is never replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct ViewArgs {
+    /// A folder with contact_graph.json; with --replay, a reconstruction's output folder.
+    pub(crate) dir: PathBuf,
+    /// Render off screen into this PNG and exit.
+    #[arg(long)]
+    pub(crate) screenshot: Option<PathBuf>,
+    /// Layers shown: colour, segments, boxes, graph, planes, collision, occupancy, physics,
+    /// map (repeat or separate with commas).
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) layer: Vec<String>,
+    /// Frames rendered before the screenshot.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) frames: u32,
+    /// Screenshot size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x720", value_parser = parse_size)]
+    pub(crate) size: (u32, u32),
+    /// Open this object's main door or drawer first (repeatable).
+    #[arg(long)]
+    pub(crate) open: Vec<String>,
+    /// Play back the reconstruction in DIR (written by `iscene reconstruct`) frame by frame.
+    #[arg(long)]
+    pub(crate) replay: bool,
+    /// A task script (scenes/tasks/*.json) to run in the window: N does the next action, P
+    /// plays them; with --screenshot, the picture is taken after the last action.
+    #[arg(long)]
+    pub(crate) task: Option<PathBuf>,
+    /// With --replay and --screenshot: this many pictures from the first frame to the last
+    /// (FILE.gif: one animated GIF; otherwise numbered PNGs FILE_00.png ...).
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=200))]
+    pub(crate) shots: u32,
 }
 
 #[derive(clap::Args)]

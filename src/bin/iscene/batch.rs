@@ -6,7 +6,7 @@ use iscene::batch::slurm::SlurmOptions;
 use iscene::batch::{BatchOptions, BatchOutcome};
 use iscene::error::{InputError, IsceneError};
 
-use crate::args::{BatchArgs, BatchCommand};
+use crate::args::{BatchArgs, BatchCommand, BenchmarkArgs};
 
 /// This program, which runs each input of a batch in a process of its own.
 pub(crate) fn executable() -> Result<PathBuf, IsceneError> {
@@ -31,6 +31,23 @@ pub(crate) fn print_batch_outcome(outcome: &BatchOutcome) {
             }
         }
     }
+}
+
+pub(crate) fn benchmark(args: BenchmarkArgs) -> Result<(), IsceneError> {
+    let outcome = iscene::benchmark::run(&iscene::benchmark::BenchmarkOptions {
+        seeds: args.seeds.0..args.seeds.1,
+        style: args.style,
+        noise: args.noise,
+        cad: args.cad,
+        unseen: args.unseen,
+        frames: args.frames,
+        jobs: args.jobs,
+        out: args.out,
+        shard: args.shard,
+        executable: executable()?,
+    })?;
+    print_batch_outcome(&outcome);
+    Ok(())
 }
 
 #[expect(clippy::print_stdout, reason = "the CLI's job is to print the summary")]

@@ -1,0 +1,120 @@
+//! `iscene reconstruct` (and `iscene` alone: the built-in kitchen): run the pipeline and print
+//! what it found.
+
+use std::path::PathBuf;
+
+use iscene::error::IsceneError;
+use iscene::panoptic::InstanceFusion;
+use iscene::pipeline::{AlignMethod, ReconstructOptions, SegmentationChoice, reconstruct as run};
+
+use clap::{Args, FromArgMatches};
+
+use crate::args::{Align, Baseline, ReconstructArgs, Segmentation};
+
+/// `iscene` alone is `iscene reconstruct` with every default of its flags (the built-in kitchen):
+/// the defaults are clap's, so they stand in one place.
+pub(crate) fn default_args() -> Result<ReconstructArgs, IsceneError> {
+    let matches = ReconstructArgs::augment_args(clap::Command::new("reconstruct"))
+        .try_get_matches_from(["reconstruct"])
+        .map_err(|e| IsceneError::Internal(format!("default arguments: {e}")))?;
+    ReconstructArgs::from_arg_matches(&matches)
+        .map_err(|e| IsceneError::Internal(format!("default arguments: {e}")))
+}
+
+#[expect(clippy::print_stdout, reason = "the CLI's job is to print the summary")]
+pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<(), IsceneError> {
+    let out = args.out.unwrap_or_else(|| {
+        let stem = args
+            .input
+            .as_ref()
+            .and_then(|p| p.file_stem())
+            .map_or("kitchen".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out").join(stem)
+    });
+    let segmentation = match args.segmentation {
+        Segmentation::Oracle => SegmentationChoice::Oracle,
+        Segmentation::Onnx => SegmentationChoice::Onnx,
+        Segmentation::None => SegmentationChoice::None,
+    };
+    let options = ReconstructOptions {
+        input: args.input,
+        out: out.clone(),
+        frames: args.frames,
+        voxel: args.voxel,
+        segmentation,
+        segment_every: args.segment_every as usize,
+        models: args.models,
+        fusion: match args.baseline {
+            None => InstanceFusion::Joint,
+            Some(Baseline::VoxbloxPlusPlus) => InstanceFusion::Voxblox,
+        },
+        estimate_gravity: args.estimate_gravity,
+        cad: args.cad,
+        align: match args.align {
+            Align::Lm => AlignMethod::Lm,
+            Align::Icp => AlignMethod::Icp,
+        },
+        progress: interactive,
+        force: args.force,
+        max_memory_gb: args.max_memory,
+    };
+    let r = run(&options)?;
+    println!(
+        "input      {} ({}{} frames, {}x{})",
+        r.input.display(),
+        if r.rendered { "rendered, " } else { "" },
+        r.ingest.frames,
+        r.ingest.width,
+        r.ingest.height
+    );
+    println!(
+        "depth      {:.1}% valid, {:.2}..{:.2} m; trajectory {:.2} m; gravity {}",
+        100.0 * r.ingest.valid_depth_fraction,
+        r.ingest.min_depth_m,
+        r.ingest.max_depth_m,
+        r.ingest.trajectory_length_m,
+        if r.ingest.has_gravity {
+            "given"
+        } else {
+            "to be estimated"
+        }
+    );
+    println!("entities   {}   relations {}", r.entities, r.relations);
+    if let Some(cad) = &r.cad {
+        println!(
+            "cad        {} of {} objects replaced from {} models, mean AE {}; {}",
+            cad.replaced.len(),
+            cad.objects,
+            cad.database_models,
+            cad.mean_alignment_error_m
+                .map_or("-".to_string(), |e| format!("{:.1} mm", 1000.0 * e)),
+            if cad.conflicted.is_empty() {
+                "no physical conflicts".to_string()
+            } else {
+                format!(
+                    "in conflict, kept as segments: {}",
+                    cad.conflicted.join(", ")
+                )
+            }
+        );
+        // Pulled apart by more than a voxel or two: the map's segmentation at fault.
+        let parted: Vec<String> = cad
+            .replaced
+            .iter()
+            .filter(|o| o.check.separated_m > 0.03)
+            .map(|o| format!("{} {:.0} cm", o.id, 100.0 * o.check.separated_m))
+            .collect();
+        if !parted.is_empty() {
+            println!(
+                "           pulled apart from overlapping neighbours: {}",
+                parted.join(", ")
+            );
+        }
+    }
+    for (stage, seconds) in &r.timings {
+        println!("  {stage:<20} {seconds:>8.3} s");
+    }
+    println!("not built yet: {}", r.stages_not_built.join(", "));
+    println!("wrote {}: {}", out.display(), r.outputs.join(", "));
+    Ok(())
+}
