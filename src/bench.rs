@@ -1,7 +1,7 @@
 //! Benchmarks that print figures (`iscene bench ...`): runs too long for criterion's repeated
 //! sampling, and figures a criterion run cannot give (peak memory, surface accuracy).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -121,7 +121,7 @@ pub fn bench_tsdf(options: &TsdfBenchOptions) -> Result<TsdfBenchReport, IsceneE
         mesh_triangles: mesh.triangles.len(),
         blocks: map.blocks.len(),
         map_bytes: map.memory_bytes(),
-        peak_resident_bytes: peak_resident_bytes(),
+        peak_resident_bytes: crate::base::process::peak_resident_bytes(),
         held_out: (evaluated > 0).then(|| summarise(residuals, misses, evaluated)),
     })
 }
@@ -174,12 +174,4 @@ fn integrate_frames(
         run.integrate_s += clock.elapsed().as_secs_f64();
     }
     Ok(run)
-}
-
-/// The process's peak resident set (VmHWM), where the OS reports it (Linux).
-pub fn peak_resident_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string(Path::new("/proc/self/status")).ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
 }

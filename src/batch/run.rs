@@ -397,18 +397,10 @@ pub fn run_input(input: &BatchInput, folder: &Path) -> Result<bool, IsceneError>
 /// One input per 2 cores (each reconstruction is parallel itself), as memory allows.
 fn default_jobs() -> usize {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let memory_gb = available_memory_gb().unwrap_or(8.0);
+    let memory_gb = crate::base::process::available_memory_bytes().map_or(8.0, |b| b as f64 / 1e9);
     (cores / 2)
         .min((memory_gb / super::resources::INPUT_MEMORY_BUDGET_GB) as usize)
         .max(1)
-}
-
-/// Available memory from /proc/meminfo, GB.
-fn available_memory_gb() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1e6)
 }
 
 #[cfg(test)]

@@ -118,10 +118,7 @@ pub fn host_name() -> String {
 
 /// The peak resident memory of this process so far (Linux `VmHWM`), MB.
 pub fn peak_memory_mb() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
+    crate::base::process::peak_resident_bytes().map(|b| b as f64 / (1024.0 * 1024.0))
 }
 
 #[cfg(test)]
