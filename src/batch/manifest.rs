@@ -89,12 +89,10 @@ impl BatchInput {
         }
     }
 
+    /// The segmentation, checked when the manifest was read.
     pub fn segmentation_choice(&self) -> SegmentationChoice {
-        match self.segmentation.as_str() {
-            "onnx" => SegmentationChoice::Onnx,
-            "none" => SegmentationChoice::None,
-            _ => SegmentationChoice::Oracle,
-        }
+        SegmentationChoice::from_str(&self.segmentation, false)
+            .unwrap_or(SegmentationChoice::Oracle)
     }
 
     /// The files and folders it reads.
@@ -429,10 +427,9 @@ impl Options {
             .transpose()?
             .unwrap_or(0.02) as f32;
         let segmentation = match enumerated("segmentation", "oracle, onnx or none")? {
-            None | Some("oracle") => SegmentationChoice::Oracle,
-            Some("onnx") => SegmentationChoice::Onnx,
-            Some("none") => SegmentationChoice::None,
-            Some(_) => return Err(bad("segmentation", "oracle, onnx or none")),
+            None => SegmentationChoice::Oracle,
+            Some(s) => SegmentationChoice::from_str(s, false)
+                .map_err(|_| bad("segmentation", "oracle, onnx or none"))?,
         };
         let style = match enumerated("style", "a room style")? {
             None => RoomStyle::Any,
@@ -483,12 +480,10 @@ impl Options {
             source,
             frames: self.frames,
             voxel: self.voxel,
-            segmentation: match self.segmentation {
-                SegmentationChoice::Oracle => "oracle",
-                SegmentationChoice::Onnx => "onnx",
-                SegmentationChoice::None => "none",
-            }
-            .into(),
+            segmentation: self
+                .segmentation
+                .to_possible_value()
+                .map_or_else(|| "oracle".into(), |v| v.get_name().to_string()),
             cad: self.cad.clone(),
             unseen: self.unseen,
             evaluate: self.evaluate,

@@ -123,8 +123,8 @@ fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Facing> {
         })
 }
 
-/// How candidates are chosen and aligned.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+/// How candidates are chosen and aligned (`--align`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum AlignMethod {
     /// Han et al.: the 10 best of the ranking by matching error, aligned by Levenberg-Marquardt

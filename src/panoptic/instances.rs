@@ -25,12 +25,15 @@ pub struct MaskObservation {
     pub labels: Vec<SegmentLabel>,
 }
 
-/// How instances are tracked.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// How instances are tracked. `--baseline voxblox++` picks the baseline; the joint fusion is
+/// the default and has no flag value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum InstanceFusion {
     /// Phi(l, c, p) with Eq. 5 instance merging.
+    #[value(skip)]
     Joint,
     /// Separate semantic and instance counts, as Voxblox++.
+    #[value(name = "voxblox++")]
     Voxblox,
 }
 

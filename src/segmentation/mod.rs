@@ -72,8 +72,8 @@ pub trait SegmentationService: Send + Sync {
     }
 }
 
-/// Which segmentation service labels the frames.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Which segmentation service labels the frames (`--segmentation`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum SegmentationChoice {
     /// Ground truth of a rendered sequence through the noise model it was rendered with.
     Oracle,

@@ -5,8 +5,11 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 use iscene::batch::Shard;
 use iscene::cad::body_tree::ImportScale;
+use iscene::cad::replacement::AlignMethod;
+use iscene::panoptic::InstanceFusion;
 use iscene::render::noise::NoiseChoice;
 use iscene::scene::generate::RoomStyle;
+use iscene::segmentation::SegmentationChoice;
 
 #[derive(Parser)]
 #[command(
@@ -235,8 +238,8 @@ pub(crate) struct ReconstructArgs {
     /// TSDF voxel size in metres.
     #[arg(long, default_value_t = 0.02)]
     pub(crate) voxel: f32,
-    #[arg(long, value_enum, default_value_t = Segmentation::Oracle)]
-    pub(crate) segmentation: Segmentation,
+    #[arg(long, value_enum, default_value_t = SegmentationChoice::Oracle)]
+    pub(crate) segmentation: SegmentationChoice,
     /// Segment every K-th frame (the others are fused with geometric segments only).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub(crate) segment_every: u64,
@@ -246,7 +249,7 @@ pub(crate) struct ReconstructArgs {
     pub(crate) models: Option<PathBuf>,
     /// Map like this baseline instead of the joint fusion (for the ablation).
     #[arg(long, value_enum)]
-    pub(crate) baseline: Option<Baseline>,
+    pub(crate) baseline: Option<InstanceFusion>,
     /// Estimate gravity from the map even when the sequence has a gravity file (which is then
     /// only compared with, in report.json).
     #[arg(long)]
@@ -260,8 +263,8 @@ pub(crate) struct ReconstructArgs {
     /// orientations and aligns the 10 best by Levenberg-Marquardt over per-axis scale, yaw and
     /// translation (Han et al.); `icp` aligns every upright model of the class by a yaw sweep
     /// and ICP over yaw, floor position and width and depth scales (Sivananda et al.).
-    #[arg(long, value_enum, default_value_t = Align::Lm)]
-    pub(crate) align: Align,
+    #[arg(long, value_enum, default_value_t = AlignMethod::Lm)]
+    pub(crate) align: AlignMethod,
     /// Replace an earlier output of another iscene command at --out (a folder iscene did not
     /// write is never replaced).
     #[arg(long)]
@@ -270,25 +273,6 @@ pub(crate) struct ReconstructArgs {
     /// surface a sample of the frames sees) is refused before mapping.
     #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
     pub(crate) max_memory: f64,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub(crate) enum Align {
-    Lm,
-    Icp,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub(crate) enum Baseline {
-    #[value(name = "voxblox++")]
-    VoxbloxPlusPlus,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub(crate) enum Segmentation {
-    Oracle,
-    Onnx,
-    None,
 }
 
 #[derive(Subcommand)]

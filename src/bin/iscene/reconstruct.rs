@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use iscene::error::IsceneError;
 use iscene::panoptic::InstanceFusion;
-use iscene::pipeline::{AlignMethod, ReconstructOptions, SegmentationChoice, reconstruct as run};
+use iscene::pipeline::{ReconstructOptions, reconstruct as run};
 
 use clap::{Args, FromArgMatches};
 
-use crate::args::{Align, Baseline, ReconstructArgs, Segmentation};
+use crate::args::ReconstructArgs;
 
 /// `iscene` alone is `iscene reconstruct` with every default of its flags (the built-in kitchen):
 /// the defaults are clap's, so they stand in one place.
@@ -31,29 +31,18 @@ pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<()
             .map_or("kitchen".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    let segmentation = match args.segmentation {
-        Segmentation::Oracle => SegmentationChoice::Oracle,
-        Segmentation::Onnx => SegmentationChoice::Onnx,
-        Segmentation::None => SegmentationChoice::None,
-    };
     let options = ReconstructOptions {
         input: args.input,
         out: out.clone(),
         frames: args.frames,
         voxel: args.voxel,
-        segmentation,
+        segmentation: args.segmentation,
         segment_every: args.segment_every as usize,
         models: args.models,
-        fusion: match args.baseline {
-            None => InstanceFusion::Joint,
-            Some(Baseline::VoxbloxPlusPlus) => InstanceFusion::Voxblox,
-        },
+        fusion: args.baseline.unwrap_or(InstanceFusion::Joint),
         estimate_gravity: args.estimate_gravity,
         cad: args.cad,
-        align: match args.align {
-            Align::Lm => AlignMethod::Lm,
-            Align::Icp => AlignMethod::Icp,
-        },
+        align: args.align,
         progress: interactive,
         force: args.force,
         max_memory_gb: args.max_memory,
