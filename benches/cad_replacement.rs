@@ -17,9 +17,9 @@ mod common;
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
 use iscene::cad::ParametricLibrary;
-use iscene::cad::database::CadDatabase;
-use iscene::cad::matching::ObservedObject;
-use iscene::cad::replacement::{
+use iscene::cad::db::database::CadDatabase;
+use iscene::cad::replace::matching::ObservedObject;
+use iscene::cad::replace::replacement::{
     AlignMethod, align_scene, check_and_place, observed_objects, rank_scene,
 };
 use iscene::graph::ContactGraph;

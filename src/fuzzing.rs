@@ -172,19 +172,19 @@ pub fn read(reader: Reader, bytes: &[u8]) -> bool {
         }
         Reader::CadIndex => {
             write(&dir, "index.json", bytes);
-            crate::cad::load::read_database(&dir).is_ok()
+            crate::cad::db::load::read_database(&dir).is_ok()
         }
         Reader::Mjcf => {
             let path = write(&dir, "model.xml", bytes);
-            crate::cad::mjcf::read_mjcf(&path).is_ok_and(|t| t.check_size().is_ok())
+            crate::cad::import::mjcf::read_mjcf(&path).is_ok_and(|t| t.check_size().is_ok())
         }
         Reader::Urdf => {
             let path = write(&dir, "model.urdf", bytes);
-            crate::cad::urdf::read_urdf(&path).is_ok_and(|t| t.check_size().is_ok())
+            crate::cad::import::urdf::read_urdf(&path).is_ok_and(|t| t.check_size().is_ok())
         }
         Reader::Sh3d => {
             let path = write(&dir, "catalogue.sh3f", bytes);
-            crate::cad::sh3d::import_catalogue(&path).is_ok()
+            crate::cad::import::sh3d::import_catalogue(&path).is_ok()
         }
     }
 }

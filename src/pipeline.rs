@@ -7,8 +7,8 @@ use std::time::Instant;
 use bevy::prelude::*;
 use serde::Serialize;
 
-use crate::cad::database::CadDatabase;
-use crate::cad::export::write_scene_models;
+use crate::cad::db::database::CadDatabase;
+use crate::cad::db::export::write_scene_models;
 use crate::error::{InputError, IsceneError};
 use crate::export::augmented::augmented_points;
 use crate::export::{write_augmented, write_occupancy, write_tree_exports};
@@ -32,7 +32,7 @@ use crate::systems::physics_validation::PhysicsReport;
 use crate::systems::stages::StageMarks;
 use crate::systems::{Reconstruct, ReconstructionStage};
 
-pub use crate::cad::replacement::AlignMethod;
+pub use crate::cad::replace::replacement::AlignMethod;
 pub use crate::segmentation::SegmentationChoice;
 
 #[derive(Clone, Debug)]

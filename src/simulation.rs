@@ -9,7 +9,7 @@ use std::time::Instant;
 use bevy::prelude::*;
 use serde::Serialize;
 
-use crate::cad::database::CadDatabase;
+use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
 use crate::export::write_tree_exports;
 use crate::graph::ContactGraph;

@@ -5,7 +5,7 @@
 use glam::{Affine3A, Vec2, Vec3};
 use parry3d::shape::ConvexPolyhedron;
 
-use crate::cad::database::DatabaseModel;
+use crate::cad::db::database::DatabaseModel;
 use crate::geometry::convex_depth::convex_penetration;
 use crate::geometry::{Plane, TriMesh};
 

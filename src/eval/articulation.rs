@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use glam::{Affine3A, Vec3};
 use serde::Serialize;
 
-use crate::cad::database::CadDatabase;
+use crate::cad::db::database::CadDatabase;
 use crate::cad::model_parts::model_parts;
 use crate::eval::pairing::greedy_pairs;
 use crate::graph::parts::{PartJointType, PartJson};

@@ -8,9 +8,9 @@ use std::collections::BTreeMap;
 use glam::{Affine3A, Mat4, Vec3};
 use serde::Serialize;
 
-use crate::cad::database::{CadDatabase, DatabaseModel};
+use crate::cad::db::database::{CadDatabase, DatabaseModel};
 use crate::cad::library::library_model_id;
-use crate::cad::physical_check::{
+use crate::cad::replace::physical_check::{
     MIN_SUPPORT_AREA, PlacedSolid, layout_penetration, penetration_depth, support_area,
 };
 use crate::classes::{ClassTable, EntityKind};

@@ -4,7 +4,7 @@
 use glam::Vec3;
 use parry3d::query::PointQuery;
 
-use crate::cad::database::parry_mesh;
+use crate::cad::db::database::parry_mesh;
 use crate::geometry::TriMesh;
 
 /// Points per surface, at most: a 1 m^2 cabinet front gets a point every ~7 mm.

@@ -16,7 +16,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::cad::database::CadDatabase;
+use crate::cad::db::database::CadDatabase;
 use crate::classes::{ClassTable, EntityKind};
 use crate::error::InputError;
 use crate::io::Sequence;

@@ -6,7 +6,7 @@
 use glam::{Affine3A, Quat, Vec3};
 use parry3d::query::PointQuery;
 
-use crate::cad::database::parry_mesh;
+use crate::cad::db::database::parry_mesh;
 use crate::eval::chamfer::surface_samples;
 use crate::geometry::TriMesh;
 

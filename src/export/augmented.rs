@@ -10,7 +10,7 @@ use std::collections::{HashMap, HashSet};
 
 use glam::{Affine3A, IVec3, Mat4, Vec3};
 
-use crate::cad::database::CadDatabase;
+use crate::cad::db::database::CadDatabase;
 use crate::graph::ContactGraph;
 use crate::graph::build::surface_points;
 use crate::panoptic::PanopticEntity;

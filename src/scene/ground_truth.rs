@@ -5,8 +5,8 @@ use std::collections::BTreeMap;
 
 use glam::{Mat4, Vec3};
 
-use crate::cad::database::SCENE_MODELS;
-use crate::cad::export::write_models;
+use crate::cad::db::database::SCENE_MODELS;
+use crate::cad::db::export::write_models;
 use crate::cad::library::ParametricLibrary;
 use crate::cad::model::CadModel;
 use crate::cad::model_parts::model_parts;

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::Deserialize;
 
+use crate::cad::db::load::read_database;
 use crate::cad::library::LibraryEntry;
-use crate::cad::load::read_database;
 use crate::cad::{CadModel, ParametricLibrary};
 use crate::classes::{ClassTable, EntityKind};
 use crate::error::InputError;

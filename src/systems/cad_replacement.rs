@@ -9,13 +9,13 @@ use std::sync::Arc;
 use bevy::prelude::*;
 use serde::Serialize;
 
-use crate::cad::alignment::Alignment;
-use crate::cad::database::CadDatabase;
-use crate::cad::matching::Candidate;
-use crate::cad::replacement::{
+use crate::cad::db::database::CadDatabase;
+use crate::cad::replace::alignment::Alignment;
+use crate::cad::replace::matching::Candidate;
+use crate::cad::replace::replacement::{
     AlignMethod, ReplacementRecord, align_scene, check_and_place, observed_objects, rank_scene,
 };
-use crate::cad::shape_filter::{Rejection, layout_planes, rejection};
+use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
 use crate::components::{ObservedSurface, SceneEntity};
 use crate::graph::ContactGraph;
 use crate::systems::contact_graph::SceneContactGraph;

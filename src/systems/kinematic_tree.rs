@@ -11,7 +11,7 @@ use bevy::prelude::*;
 use glam::Affine3A;
 use rayon::prelude::*;
 
-use crate::cad::database::CadDatabase;
+use crate::cad::db::database::CadDatabase;
 use crate::components::{CadModel, Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
 use crate::graph::ContactGraph;
 use crate::kinematics::JointSpec;

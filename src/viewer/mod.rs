@@ -32,7 +32,7 @@ use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
 
-use crate::cad::database::CadDatabase;
+use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
 use crate::graph::ContactGraph;
 use crate::replay::{Replay, load_replay};

@@ -8,8 +8,8 @@ use std::sync::OnceLock;
 
 use crate::common;
 
-use iscene::cad::database::{CadDatabase, SCENE_MODELS};
-use iscene::cad::load::{read_database, read_model};
+use iscene::cad::db::database::{CadDatabase, SCENE_MODELS};
+use iscene::cad::db::load::{read_database, read_model};
 use iscene::eval::evaluate_reconstruction;
 use iscene::graph::ContactGraph;
 

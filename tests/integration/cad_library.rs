@@ -4,7 +4,7 @@
 use crate::common;
 
 use iscene::cad::ParametricLibrary;
-use iscene::cad::export::ModelMetadata;
+use iscene::cad::db::export::ModelMetadata;
 
 #[test]
 fn assets_cad_is_what_the_generator_writes() {

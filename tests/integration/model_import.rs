@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use crate::common;
 
 use iscene::cad::CadModel;
-use iscene::cad::database::CadDatabase;
-use iscene::cad::load::read_database;
+use iscene::cad::db::database::CadDatabase;
+use iscene::cad::db::load::read_database;
 use iscene::classes::ClassTable;
 use iscene::eval::evaluate_reconstruction;
 use iscene::graph::ContactGraph;

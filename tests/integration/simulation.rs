@@ -7,7 +7,7 @@ use std::path::Path;
 
 use crate::common;
 
-use iscene::cad::database::CadDatabase;
+use iscene::cad::db::database::CadDatabase;
 use iscene::graph::ContactGraph;
 use iscene::sim::actions::Action;
 use iscene::sim::task::Task;

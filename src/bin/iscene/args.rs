@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 use iscene::batch::Shard;
-use iscene::cad::body_tree::ImportScale;
-use iscene::cad::replacement::AlignMethod;
+use iscene::cad::import::body_tree::ImportScale;
+use iscene::cad::replace::replacement::AlignMethod;
 use iscene::panoptic::InstanceFusion;
 use iscene::render::noise::NoiseChoice;
 use iscene::scene::generate::RoomStyle;

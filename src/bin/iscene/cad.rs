@@ -1,6 +1,6 @@
 //! `iscene cad generate` and `iscene cad import`: the CAD database.
 
-use iscene::cad::body_tree::ImportScale;
+use iscene::cad::import::body_tree::ImportScale;
 use iscene::cad::import::{ModelFormat, import_model_files};
 use iscene::error::IsceneError;
 
@@ -11,7 +11,7 @@ pub(crate) fn cad(command: CadCommand) -> Result<(), IsceneError> {
     match command {
         CadCommand::Generate { into } => {
             iscene::io::output_folder::check_database_folder(&into, None)?;
-            let n = iscene::cad::export::write_library(&into)?;
+            let n = iscene::cad::db::export::write_library(&into)?;
             println!(
                 "wrote {n} parametric models (glb + json) and index.json into {}",
                 into.display()

@@ -1,9 +1,15 @@
 //! The catalogue of parametric models: ids, classes, nominal sizes and their generators.
 
+pub mod appliances;
+pub mod builder;
+pub mod seating;
+pub mod storage;
+pub mod tables;
+pub mod tabletop;
+
 use glam::Vec3;
 
 use crate::cad::model::CadModel;
-use crate::cad::{appliances, seating, storage, tables, tabletop};
 
 /// Builds a model with the given id at the given overall size (metres, canonical frame).
 pub type ModelBuilder = fn(&str, Vec3) -> CadModel;

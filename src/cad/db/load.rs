@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::cad::export::{DatabaseIndex, ModelMetadata, visual_node_name};
+use crate::cad::db::export::{DatabaseIndex, ModelMetadata, visual_node_name};
 use crate::cad::model::{CadModel, CadPart};
 use crate::error::InputError;
 use crate::file_name::check_file_name;
@@ -195,7 +195,7 @@ mod tests {
             .iter()
             .map(|id| ParametricLibrary::get(id).expect(id).model())
             .collect();
-        crate::cad::export::write_models(dir.path(), &models, "test").expect("write");
+        crate::cad::db::export::write_models(dir.path(), &models, "test").expect("write");
         let read = read_database(dir.path()).expect("read");
         assert_eq!(read.len(), models.len());
         for (a, b) in models.iter().zip(&read) {

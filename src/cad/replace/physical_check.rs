@@ -9,11 +9,11 @@ use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::cad::database::DatabaseModel;
+use crate::cad::db::database::DatabaseModel;
 pub use crate::cad::placed_solid::{
     PlacedSolid, deepest_contact, layout_penetration, penetration_depth, support_area,
 };
-use crate::cad::separation::{parted, retreat_from_walls, separate_neighbours};
+use crate::cad::replace::separation::{parted, retreat_from_walls, separate_neighbours};
 use crate::geometry::Plane;
 
 /// Deeper interpenetration than this (metres) is a conflict (the bar).
@@ -361,7 +361,7 @@ fn support_order(holders: &[Holder]) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cad::database::CadDatabase;
+    use crate::cad::db::database::CadDatabase;
 
     fn model_of<'a>(db: &'a CadDatabase, id: &str) -> &'a DatabaseModel {
         db.models()

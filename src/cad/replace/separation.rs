@@ -3,9 +3,9 @@
 
 use glam::{Affine3A, Vec3};
 
-use crate::cad::database::DatabaseModel;
-use crate::cad::physical_check::{Holder, MAX_PENETRATION_M};
+use crate::cad::db::database::DatabaseModel;
 use crate::cad::placed_solid::{PlacedSolid, deepest_contact, layout_penetration, overlap_along};
+use crate::cad::replace::physical_check::{Holder, MAX_PENETRATION_M};
 use crate::geometry::Plane;
 
 /// Side by side, neighbours overlapping by at most this much (metres) are pulled apart when one
@@ -266,7 +266,7 @@ fn shrink_from(pose: Affine3A, solid: &PlacedSolid, away: Vec3, amount: f32) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cad::database::CadDatabase;
+    use crate::cad::db::database::CadDatabase;
     use crate::cad::placed_solid::penetration_depth;
 
     #[test]

@@ -22,9 +22,9 @@ use glam::{Affine3A, Mat3, Vec3};
 use rayon::prelude::*;
 
 use crate::base::JointSpec;
-use crate::cad::class_words::class_of_name;
+use crate::cad::import::class_words::class_of_name;
 use crate::cad::import::imported_model_id;
-use crate::cad::mesh_files::obj_groups;
+use crate::cad::import::mesh_files::obj_groups;
 use crate::cad::model::{CadModel, CadPart};
 use crate::geometry::TriMesh;
 

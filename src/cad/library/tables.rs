@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::cad::builder::{BOARD, PartsBuilder};
+use crate::cad::library::builder::{BOARD, PartsBuilder};
 use crate::cad::model::CadModel;
 use crate::geometry::TriMesh;
 

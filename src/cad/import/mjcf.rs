@@ -26,10 +26,10 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 use roxmltree::Node;
 
 use crate::base::JointKind;
-use crate::cad::body_tree::{Body, BodyJoint, BodyTree, ModelFileError, check_xml_depth};
-use crate::cad::mesh_files::read_mesh_file;
-use crate::cad::mjcf_include::{MAX_INCLUDED_BYTES, expanded_text};
-use crate::cad::mjcf_xml::{at, elements, euler_order, numbers, parse_numbers, pose, vec3};
+use crate::cad::import::body_tree::{Body, BodyJoint, BodyTree, ModelFileError, check_xml_depth};
+use crate::cad::import::mesh_files::read_mesh_file;
+use crate::cad::import::mjcf_include::{MAX_INCLUDED_BYTES, expanded_text};
+use crate::cad::import::mjcf_xml::{at, elements, euler_order, numbers, parse_numbers, pose, vec3};
 use crate::file_name::inside_folder;
 use crate::geometry::TriMesh;
 

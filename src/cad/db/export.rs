@@ -6,7 +6,7 @@ use glam::{Affine3A, Mat4};
 use serde::{Deserialize, Serialize};
 
 use crate::base::JointSpec;
-use crate::cad::database::{CadDatabase, SCENE_MODELS};
+use crate::cad::db::database::{CadDatabase, SCENE_MODELS};
 use crate::cad::library::ParametricLibrary;
 use crate::cad::model::CadModel;
 use crate::error::IsceneError;
@@ -143,7 +143,7 @@ impl IndexEntry {
 }
 
 /// Writes `models` into the database folder `dir`: `<id>.glb` and `<id>.json` per model and
-/// `index.json` listing them (what [`crate::cad::load::read_database`] reads back).
+/// `index.json` listing them (what [`crate::cad::db::load::read_database`] reads back).
 pub fn write_models(
     dir: &Path,
     models: &[CadModel],

@@ -5,8 +5,8 @@ use glam::{Mat3, Vec3};
 use pathfinding::kuhn_munkres::kuhn_munkres_min;
 use pathfinding::matrix::Matrix;
 
-use crate::cad::database::{CadDatabase, DatabaseModel};
-use crate::cad::orientation::axis_rotations;
+use crate::cad::db::database::{CadDatabase, DatabaseModel};
+use crate::cad::replace::orientation::axis_rotations;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 
@@ -209,7 +209,7 @@ fn plane_misalignment(object: &[Vec3], model: &[Vec3]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cad::orientation::upright_yaw;
+    use crate::cad::replace::orientation::upright_yaw;
     use crate::geometry::plane::dominant_planes;
 
     #[test]

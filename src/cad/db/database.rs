@@ -9,7 +9,7 @@ use parry3d::shape::TrianglePointLocation;
 use rayon::prelude::*;
 
 use crate::cad::ParametricLibrary;
-use crate::cad::load::read_database;
+use crate::cad::db::load::read_database;
 use crate::cad::model::CadModel;
 use crate::error::InputError;
 use crate::geometry::{Plane, TriMesh, plane::dominant_planes};

@@ -1,20 +1,28 @@
 //! `iscene cad import`: third-party models into a database folder that `reconstruct --cad`
 //! matches against. Models already in the folder stay; an imported model replaces one with its id.
 
+pub mod body_tree;
+pub mod class_words;
+pub mod mesh_files;
+pub mod mjcf;
+pub mod mjcf_include;
+pub mod mjcf_xml;
+pub mod sh3d;
+pub mod urdf;
+
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::Path;
 
 use rayon::prelude::*;
 
-use crate::cad::body_tree::{BodyTree, ImportScale, ModelFileError, canonical_model};
-use crate::cad::class_words::class_of_name;
-use crate::cad::export::{IndexEntry, model_file_bytes, write_index, write_model_files};
-use crate::cad::load::read_index;
-use crate::cad::mjcf::read_mjcf;
+use crate::cad::db::export::{IndexEntry, model_file_bytes, write_index, write_model_files};
+use crate::cad::db::load::read_index;
+use crate::cad::import::body_tree::{BodyTree, ImportScale, ModelFileError, canonical_model};
+use crate::cad::import::class_words::class_of_name;
+use crate::cad::import::mjcf::read_mjcf;
+use crate::cad::import::urdf::read_urdf;
 use crate::cad::model::CadModel;
-use crate::cad::sh3d;
-use crate::cad::urdf::read_urdf;
 use crate::error::{InputError, IsceneError};
 
 /// What an import did, for the CLI to print.
@@ -151,7 +159,9 @@ pub fn import_model_files(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        if matches!(format, ModelFormat::Mjcf) && crate::cad::mjcf_include::is_include_file(file) {
+        if matches!(format, ModelFormat::Mjcf)
+            && crate::cad::import::mjcf_include::is_include_file(file)
+        {
             summary.skipped += 1;
             continue;
         }

@@ -6,7 +6,7 @@
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::cad::matching::ObservedObject;
+use crate::cad::replace::matching::ObservedObject;
 use crate::classes::ClassTable;
 use crate::geometry::Plane;
 use crate::geometry::plane::fit_plane;

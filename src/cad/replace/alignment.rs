@@ -12,9 +12,9 @@ use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{Dyn, Owned, U6};
 use rayon::prelude::*;
 
-use crate::cad::database::{CadDatabase, DatabaseModel, parry_mesh};
-use crate::cad::matching::{Candidate, ObservedObject};
-use crate::cad::orientation::axis_rotations;
+use crate::cad::db::database::{CadDatabase, DatabaseModel, parry_mesh};
+use crate::cad::replace::matching::{Candidate, ObservedObject};
+use crate::cad::replace::orientation::axis_rotations;
 use crate::classes::ClassTable;
 
 /// Object points the optimisation works with (a deterministic stride through the mesh).
@@ -492,7 +492,7 @@ pub fn alignment_error(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cad::matching::{KEEP_CANDIDATES, rank_candidates};
+    use crate::cad::replace::matching::{KEEP_CANDIDATES, rank_candidates};
     use crate::geometry::{GravityBox, Plane, plane::dominant_planes};
     use glam::Quat;
 

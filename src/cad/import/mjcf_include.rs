@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use crate::cad::body_tree::ModelFileError;
-use crate::cad::mjcf_xml::at;
+use crate::cad::import::body_tree::ModelFileError;
+use crate::cad::import::mjcf_xml::at;
 use crate::file_name::inside_folder;
 
 /// Includes nest at most this deep, and a model with its includes is at most this long (bytes).

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::cad::builder::{BOARD, DRAWER_CLEARANCE, HingeSide, PartsBuilder};
+use crate::cad::library::builder::{BOARD, DRAWER_CLEARANCE, HingeSide, PartsBuilder};
 use crate::cad::model::CadModel;
 use crate::geometry::TriMesh;
 

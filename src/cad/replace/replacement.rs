@@ -8,11 +8,13 @@ use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::cad::alignment::{Alignment, align_all, alignment_error, choice_score};
-use crate::cad::database::{CadDatabase, DatabaseModel};
-use crate::cad::icp;
-use crate::cad::matching::{Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates};
-use crate::cad::physical_check::{Holder, PlacedSolid, PlacementCheck, check_placements};
+use crate::cad::db::database::{CadDatabase, DatabaseModel};
+use crate::cad::replace::alignment::{Alignment, align_all, alignment_error, choice_score};
+use crate::cad::replace::icp;
+use crate::cad::replace::matching::{
+    Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates,
+};
+use crate::cad::replace::physical_check::{Holder, PlacedSolid, PlacementCheck, check_placements};
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};

@@ -13,11 +13,11 @@
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::cad::alignment::{
+use crate::cad::db::database::{CadDatabase, DatabaseModel};
+use crate::cad::replace::alignment::{
     Alignment, PRIOR_AE_WEIGHT, alignment_error, choice_score, stride_sample,
 };
-use crate::cad::database::{CadDatabase, DatabaseModel};
-use crate::cad::matching::{Candidate, KEEP_CANDIDATES, ObservedObject, class_models};
+use crate::cad::replace::matching::{Candidate, KEEP_CANDIDATES, ObservedObject, class_models};
 use crate::classes::ClassTable;
 
 /// Starting yaws, evenly spread over the full turn.

@@ -15,10 +15,10 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 
 use crate::base::JointKind;
-use crate::cad::body_tree::{
+use crate::cad::import::body_tree::{
     Body, BodyJoint, BodyTree, MAX_BODIES, ModelFileError, check_xml_depth,
 };
-use crate::cad::mesh_files::read_mesh_file;
+use crate::cad::import::mesh_files::read_mesh_file;
 use crate::file_name::inside_folder;
 use crate::geometry::TriMesh;
 

@@ -1,0 +1,11 @@
+//! The replacement stage: every object's model chosen, oriented, aligned and checked
+//! (Han et al., Sect. 4; the ICP route and shape filters of Sivananda et al.).
+
+pub mod alignment;
+pub mod icp;
+pub mod matching;
+pub mod orientation;
+pub mod physical_check;
+pub mod replacement;
+pub mod separation;
+pub mod shape_filter;
