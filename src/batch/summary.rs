@@ -79,28 +79,6 @@ pub struct BatchSummary {
     pub dir: PathBuf,
 }
 
-impl BatchSummary {
-    /// The parts of two summaries that must agree when the same inputs were run in other
-    /// shards, on other machines or at other times (everything but the clock).
-    pub fn same_results(&self, other: &BatchSummary) -> bool {
-        (
-            self.rooms,
-            &self.metrics,
-            &self.worst_rooms,
-            &self.failed,
-            &self.missing,
-            &self.unscored,
-        ) == (
-            other.rooms,
-            &other.metrics,
-            &other.worst_rooms,
-            &other.failed,
-            &other.missing,
-            &other.unscored,
-        )
-    }
-}
-
 /// Whether a larger value of `metric` is better (accuracies, qualities, fractions) or a smaller
 /// one (distances, errors, edit costs, penetrations).
 pub fn higher_is_better(metric: &str) -> bool {
