@@ -65,6 +65,30 @@ pub struct ReconstructOptions {
     pub max_memory_gb: f64,
 }
 
+impl ReconstructOptions {
+    /// `iscene reconstruct INPUT --out OUT` with every flag at its default: all frames, 2 cm, the
+    /// oracle segmentation on every frame, the joint fusion, the built-in library aligned by
+    /// Levenberg-Marquardt, no progress bar, no `--force`, the default memory budget.
+    pub fn new(input: impl Into<PathBuf>, out: impl Into<PathBuf>) -> Self {
+        Self {
+            input: Some(input.into()),
+            out: out.into(),
+            frames: None,
+            voxel: 0.02,
+            segmentation: SegmentationChoice::Oracle,
+            segment_every: 1,
+            models: None,
+            fusion: InstanceFusion::Joint,
+            estimate_gravity: false,
+            cad: None,
+            align: AlignMethod::default(),
+            progress: false,
+            force: false,
+            max_memory_gb: crate::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
+        }
+    }
+}
+
 /// What a reconstruction did, for the summary the CLI prints.
 #[derive(Clone, Debug, Serialize)]
 pub struct ReconstructReport {

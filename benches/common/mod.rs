@@ -5,10 +5,9 @@ use std::path::Path;
 use iscene::geometry::TriMesh;
 use iscene::graph::build::GraphEntity;
 use iscene::io::ply::read_mesh_ply;
-use iscene::panoptic::InstanceFusion;
 use iscene::panoptic::PanopticEntity;
 use iscene::panoptic::panoptic_dir::read_panoptic;
-use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
+use iscene::pipeline::{ReconstructOptions, reconstruct};
 
 /// Renders `scenes/<scene>.json`, maps every third frame at 2 cm with the oracle segmentation
 /// into `dir/<scene>`, and returns the entities with their meshes.
@@ -16,20 +15,8 @@ pub fn mapped_entities(scene: &str, dir: &Path) -> (Vec<PanopticEntity>, Vec<Tri
     let out = dir.join(scene);
     let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{scene}.json"));
     reconstruct(&ReconstructOptions {
-        input: Some(spec),
-        out: out.clone(),
         frames: Some((0, None, 3)),
-        voxel: 0.02,
-        segmentation: SegmentationChoice::Oracle,
-        segment_every: 1,
-        models: None,
-        fusion: InstanceFusion::Joint,
-        estimate_gravity: false,
-        cad: None,
-        align: Default::default(),
-        progress: false,
-        force: false,
-        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
+        ..ReconstructOptions::new(spec, &out)
     })
     .expect("reconstruct");
     let (index, _) = read_panoptic(&out.join("panoptic")).expect("panoptic folder");

@@ -14,7 +14,7 @@ use serde_json::Value;
 use super::manifest::{BatchInput, InputSource, Manifest, Shard};
 use super::status::{InputStatus, State, peak_memory_mb, read_status, status_path, write_status};
 use crate::error::{InputError, IsceneError};
-use crate::pipeline::{AlignMethod, ReconstructOptions, reconstruct};
+use crate::pipeline::{ReconstructOptions, reconstruct};
 use crate::render::noise::NoiseChoice;
 use crate::scene::SceneSpec;
 use crate::scene::generate::{GenerateOptions, RoomStyle, generate, write_generated};
@@ -364,20 +364,11 @@ pub fn run_input(input: &BatchInput, folder: &Path) -> Result<bool, IsceneError>
     };
     let reconstruction = folder.join("reconstruction");
     reconstruct(&ReconstructOptions {
-        input: Some(sequence.clone()),
-        out: reconstruction.clone(),
         frames,
         voxel: input.voxel,
         segmentation: input.segmentation_choice(),
-        segment_every: 1,
-        models: None,
-        fusion: crate::panoptic::InstanceFusion::Joint,
-        estimate_gravity: false,
         cad: input.searched_cad(),
-        align: AlignMethod::default(),
-        progress: false,
-        force: false,
-        max_memory_gb: crate::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
+        ..ReconstructOptions::new(&sequence, &reconstruction)
     })?;
     if !input.evaluate || !sequence.join("labels.json").is_file() {
         return Ok(false);

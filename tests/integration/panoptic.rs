@@ -7,24 +7,13 @@ use std::path::Path;
 
 use iscene::eval::{EvalReport, evaluate_reconstruction};
 use iscene::panoptic::InstanceFusion;
-use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
+use iscene::pipeline::{ReconstructOptions, reconstruct};
 
 fn map(sequence: &Path, out: &Path, fusion: InstanceFusion, frames: (usize, usize)) -> EvalReport {
     reconstruct(&ReconstructOptions {
-        input: Some(sequence.to_path_buf()),
-        out: out.to_path_buf(),
         frames: Some((0, None, frames.1)).filter(|_| frames.1 > 1),
-        voxel: 0.02,
-        segmentation: SegmentationChoice::Oracle,
-        segment_every: 1,
-        models: None,
         fusion,
-        estimate_gravity: false,
-        cad: None,
-        align: Default::default(),
-        progress: false,
-        force: false,
-        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
+        ..ReconstructOptions::new(sequence, out)
     })
     .expect("reconstruct");
     evaluate_reconstruction(out, sequence).expect("eval")

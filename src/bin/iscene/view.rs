@@ -5,8 +5,6 @@ use std::path::PathBuf;
 
 use iscene::error::IsceneError;
 #[cfg(feature = "viewer")]
-use iscene::panoptic::InstanceFusion;
-#[cfg(feature = "viewer")]
 use iscene::pipeline::{ReconstructOptions, SegmentationChoice, reconstruct};
 
 use crate::args::ViewArgs;
@@ -99,24 +97,13 @@ fn reconstruct_for_replay(input: &std::path::Path, progress: bool) -> Result<Pat
     let labelled =
         input.extension().is_some_and(|e| e == "json") || input.join("labels.json").is_file();
     reconstruct(&ReconstructOptions {
-        input: Some(input.to_path_buf()),
-        out: out.clone(),
-        frames: None,
-        voxel: 0.02,
         segmentation: if labelled {
             SegmentationChoice::Oracle
         } else {
             SegmentationChoice::None
         },
-        segment_every: 1,
-        models: None,
-        fusion: InstanceFusion::Joint,
-        estimate_gravity: false,
-        cad: None,
-        align: Default::default(),
         progress,
-        force: false,
-        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
+        ..ReconstructOptions::new(input, &out)
     })?;
     eprintln!(
         "reconstructed {} into {}; replaying it",

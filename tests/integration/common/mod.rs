@@ -149,20 +149,11 @@ fn reconstruct_every_second_frame(
     voxel: f32,
 ) {
     iscene::pipeline::reconstruct(&iscene::pipeline::ReconstructOptions {
-        input: Some(seq.to_path_buf()),
-        out: out.to_path_buf(),
         frames: Some((0, None, 2)),
         voxel,
-        segmentation: iscene::pipeline::SegmentationChoice::Oracle,
-        segment_every: 1,
-        models: None,
-        fusion: iscene::panoptic::InstanceFusion::Joint,
-        estimate_gravity: false,
         cad,
         align,
-        progress: false,
-        force: false,
-        max_memory_gb: iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
+        ..iscene::pipeline::ReconstructOptions::new(seq, out)
     })
     .expect("reconstruct");
 }
