@@ -258,9 +258,8 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
         serde_json::json!({"defaults": {"frames": FRAMES}, "inputs": [{"seeds": "0:6"}]});
     std::fs::write(dir.path().join("m.json"), manifest.to_string()).expect("manifest");
     // Six rooms as a three-task array (one core each) plus the merge job.
-    let (code, stdout, err) = iscene_on(
-        &cluster,
-        &[
+    let submit = |extra: &[&str]| {
+        let mut args = vec![
             "batch",
             "m.json",
             "--out",
@@ -270,9 +269,11 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
             "3",
             "--cpus",
             "1",
-        ],
-        dir.path(),
-    );
+        ];
+        args.extend_from_slice(extra);
+        iscene_on(&cluster, &args, dir.path())
+    };
+    let (code, stdout, err) = submit(&[]);
     assert_eq!(code, 0, "{stdout}\n{err}");
     assert!(stdout.contains("tasks 0-2 of 3 shards"), "{stdout}");
     let out = dir.path().join("cluster_out");
@@ -312,22 +313,7 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
     kill_input(&out, "seed_4");
     let seed_0 = modified(&out.join("seed_0/eval.json"));
     let before = modified(&out.join("summary.json"));
-    let (code, stdout, err) = iscene_on(
-        &cluster,
-        &[
-            "batch",
-            "m.json",
-            "--out",
-            "cluster_out",
-            "--slurm",
-            "--shards",
-            "3",
-            "--cpus",
-            "1",
-            "--resume",
-        ],
-        dir.path(),
-    );
+    let (code, stdout, err) = submit(&["--resume"]);
     assert_eq!(code, 0, "{stdout}\n{err}");
     assert!(
         stdout.contains("tasks 1 of 3 shards, 1 inputs to run"),
