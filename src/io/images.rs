@@ -61,10 +61,17 @@ pub fn read_depth(path: &Path, camera: &Pinhole, depth_scale: f32) -> Result<Vec
             }
         })
         .collect();
-    let mut valid: Vec<f32> = depth.iter().copied().filter(|&d| d > 0.0).collect();
-    if valid.len() > depth.len() / 20 {
-        let mid = valid.len() / 2;
-        let (_, median, _) = valid.select_nth_unstable_by(mid, f32::total_cmp);
+    // The median of every 16th valid pixel tells a wrong scale or encoding as well as the median
+    // of all, at a sixteenth of the cost.
+    let mut sample: Vec<f32> = depth
+        .iter()
+        .copied()
+        .filter(|&d| d > 0.0)
+        .step_by(16)
+        .collect();
+    if sample.len() * 16 > depth.len() / 20 {
+        let mid = sample.len() / 2;
+        let (_, median, _) = sample.select_nth_unstable_by(mid, f32::total_cmp);
         if !PLAUSIBLE_MEDIAN_DEPTH.contains(median) {
             return Err(InputError::invalid(
                 path,
@@ -111,6 +118,15 @@ pub fn read_labels(path: &Path, camera: &Pinhole) -> Result<Vec<u16>, InputError
     };
     check_size(path, gray.width(), gray.height(), camera)?;
     Ok(gray.into_raw())
+}
+
+/// Checks an image's size from its header, without decoding it.
+pub fn check_header(path: &Path, camera: &Pinhole) -> Result<(), InputError> {
+    if !path.is_file() {
+        return Err(InputError::missing(path, "image file not found"));
+    }
+    let (width, height) = dimensions(path)?;
+    check_size(path, width, height, camera)
 }
 
 /// Width and height from an image file's header, without decoding it.

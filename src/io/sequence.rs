@@ -6,7 +6,7 @@ use glam::{Affine3A, Vec3};
 
 use crate::error::InputError;
 use crate::geometry::Pinhole;
-use crate::io::images::{read_color, read_depth, read_labels};
+use crate::io::images::{check_header, read_color, read_depth, read_labels};
 use crate::io::labels::Labels;
 use crate::io::{native, open3d_log, tum};
 
@@ -107,6 +107,19 @@ impl Sequence {
     /// Frame `i`'s depth image (metres, 0 = none), for passes that need no colour or labels.
     pub fn load_depth(&self, i: usize) -> Result<Vec<f32>, InputError> {
         let record = self.record(i)?;
+        read_depth(&record.depth, &self.camera, self.depth_scale)
+    }
+
+    /// Frame `i`'s depth, decoded and checked, and its colour and label images checked from their
+    /// headers: what ingest needs to fail on bad input before the mapping starts, without decoding
+    /// the colour twice. A colour or label image that is broken past its header fails when the
+    /// mapping decodes it, still before anything is written.
+    pub fn check_frame(&self, i: usize) -> Result<Vec<f32>, InputError> {
+        let record = self.record(i)?;
+        check_header(&record.color, &self.camera)?;
+        if let Some(labels) = &record.label {
+            check_header(labels, &self.camera)?;
+        }
         read_depth(&record.depth, &self.camera, self.depth_scale)
     }
 

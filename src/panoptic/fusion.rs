@@ -219,17 +219,30 @@ fn keep_largest_cluster_per_mask(
     geometry: &GeometricSegmentation,
     cell: f32,
 ) {
-    let mut cells: Vec<HashSet<IVec3, FixedState>> =
-        vec![HashSet::default(); fused.segments.len() + 1];
-    for (&s, p) in fused.segment_of_pixel.iter().zip(&geometry.points) {
-        if s != 0 && fused.segments[s as usize - 1].mask.is_some() {
-            cells[s as usize].insert((*p / cell).floor().as_ivec3());
-        }
-    }
     let mut by_mask: BTreeMap<u16, Vec<u32>> = BTreeMap::new();
     for (i, seg) in fused.segments.iter().enumerate() {
         if let Some(m) = seg.mask {
             by_mask.entry(m).or_default().push(i as u32 + 1);
+        }
+    }
+    // Cells only of segments that share their mask with another: the others have nothing to be
+    // clustered with. A run of pixels in one cell is inserted once.
+    let mut clustered = vec![false; fused.segments.len() + 1];
+    for members in by_mask.values().filter(|m| m.len() > 1) {
+        for &s in members {
+            clustered[s as usize] = true;
+        }
+    }
+    let mut cells: Vec<HashSet<IVec3, FixedState>> =
+        vec![HashSet::default(); fused.segments.len() + 1];
+    let mut last: Option<(u32, IVec3)> = None;
+    for (&s, p) in fused.segment_of_pixel.iter().zip(&geometry.points) {
+        if clustered[s as usize] {
+            let c = (*p / cell).floor().as_ivec3();
+            if last != Some((s, c)) {
+                cells[s as usize].insert(c);
+                last = Some((s, c));
+            }
         }
     }
     for members in by_mask.values().filter(|m| m.len() > 1) {

@@ -70,12 +70,15 @@ impl SegmentationNoise {
         let h = labels.len() / w.max(1);
         let mut image = labels.to_vec();
         let mut class_of: BTreeMap<u16, String> = BTreeMap::new();
-        let mut counts: BTreeMap<u16, usize> = BTreeMap::new();
+        // Per-pixel work goes through tables indexed by label, not tree lookups.
+        let mut pixels_of = vec![0usize; 1 << 16];
         for &l in &image {
-            if l != 0 {
-                *counts.entry(l).or_default() += 1;
-            }
+            pixels_of[l as usize] += 1;
         }
+        let counts: BTreeMap<u16, usize> = (1..=u16::MAX)
+            .filter(|&l| pixels_of[l as usize] > 0)
+            .map(|l| (l, pixels_of[l as usize]))
+            .collect();
         for &id in counts.keys() {
             class_of.insert(
                 id,
@@ -116,12 +119,17 @@ impl SegmentationNoise {
                 merged_into.insert(b, a);
             }
         }
-        for l in &mut image {
-            if missed.contains(l) {
-                *l = 0;
-            } else if let Some(&into) = merged_into.get(l) {
-                *l = into;
+        let mut relabel: Vec<u16> = (0..=u16::MAX).collect();
+        for &id in &missed {
+            relabel[id as usize] = 0;
+        }
+        for (&from, &into) in &merged_into {
+            if !missed.contains(&from) {
+                relabel[from as usize] = into;
             }
+        }
+        for l in &mut image {
+            *l = relabel[*l as usize];
         }
         // Splits along the main axis of the instance's pixels.
         let mut next_id = counts.keys().max().copied().unwrap_or(0).saturating_add(1);
@@ -183,23 +191,23 @@ impl SegmentationNoise {
             }
         }
         // Frame-local ids in random order, and class confusion.
-        let mut present: Vec<u16> = image
-            .iter()
-            .copied()
-            .filter(|&l| l != 0)
-            .collect::<BTreeSet<_>>()
-            .into_iter()
-            .collect();
+        let mut seen = vec![false; 1 << 16];
+        for &l in &image {
+            seen[l as usize] = true;
+        }
+        let mut present: Vec<u16> = (1..=u16::MAX).filter(|&l| seen[l as usize]).collect();
         present.shuffle(rng);
         let local: BTreeMap<u16, u16> = present
             .iter()
             .enumerate()
             .map(|(k, &id)| (id, k as u16 + 1))
             .collect();
+        let mut to_local = vec![0u16; 1 << 16];
+        for (&id, &k) in &local {
+            to_local[id as usize] = k;
+        }
         for l in &mut image {
-            if *l != 0 {
-                *l = local[l];
-            }
+            *l = to_local[*l as usize];
         }
         let table = ClassTable::builtin();
         let mut segments: Vec<PanopticSegment> = present

@@ -1,5 +1,5 @@
-//! Ingest stage: load every selected frame once, in parallel, so that bad input fails before any
-//! work is done, and record what the sequence holds.
+//! Ingest stage: read every selected frame's depth and check its colour and label headers, in
+//! parallel, so that bad input fails before any work is done, and record what the sequence holds.
 
 use bevy::prelude::*;
 use rayon::prelude::*;
@@ -39,11 +39,14 @@ pub fn ingest(sequence: &Sequence) -> Result<IngestReport, InputError> {
     let stats = (0..sequence.frames.len())
         .into_par_iter()
         .map(|i| {
-            let frame = sequence.load_frame(i)?;
-            let valid: Vec<f32> = frame.depth.iter().copied().filter(|&d| d > 0.0).collect();
-            let lo = valid.iter().copied().fold(f32::INFINITY, f32::min);
-            let hi = valid.iter().copied().fold(0.0f32, f32::max);
-            Ok((valid.len(), frame.depth.len(), lo, hi))
+            let depth = sequence.check_frame(i)?;
+            let (mut valid, mut lo, mut hi) = (0usize, f32::INFINITY, 0.0f32);
+            for &d in depth.iter().filter(|&&d| d > 0.0) {
+                valid += 1;
+                lo = lo.min(d);
+                hi = hi.max(d);
+            }
+            Ok((valid, depth.len(), lo, hi))
         })
         .collect::<Vec<Result<_, InputError>>>()
         // The first bad frame in order, not whichever thread failed first: errors are reproducible.

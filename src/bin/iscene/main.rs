@@ -17,6 +17,9 @@ mod view;
 
 use args::{Cli, Command};
 
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn run(cli: Cli) -> Result<(), IsceneError> {
     // Progress bars only where a person watches.
     let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
