@@ -30,7 +30,9 @@ pub fn map_sequence(
         let frame = sequence.load_frame(i)?;
         let geometry = segment_depth(&frame.depth, &frame.camera, &params.geometric);
         let masks = match service {
-            Some(s) if i % params.segment_every.max(1) == 0 => Some(s.segment(&frame, &geometry)?),
+            Some(s) if i.is_multiple_of(params.segment_every.max(1)) => {
+                Some(s.segment(&frame, &geometry)?)
+            }
             Some(s) => s.segment_without_networks(&frame, &geometry),
             None => None,
         };

@@ -182,7 +182,7 @@ fn pixel_normals(
         if v < s || v + s >= h || w <= 2 * s {
             return;
         }
-        for u in s..w - s {
+        for (u, normal) in out.iter_mut().enumerate().take(w - s).skip(s) {
             let i = v * w + u;
             let d = depth[i];
             if d <= 0.0 {
@@ -198,7 +198,7 @@ fn pixel_normals(
             let du = smooth_points[i + s] - smooth_points[i - s];
             let dv = smooth_points[i + s * w] - smooth_points[i - s * w];
             let n = dv.cross(du).normalize_or_zero();
-            out[u] = if n.dot(points[i]) > 0.0 { -n } else { n };
+            *normal = if n.dot(points[i]) > 0.0 { -n } else { n };
         }
     });
     normals
