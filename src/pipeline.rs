@@ -14,20 +14,23 @@ use crate::export::augmented::augmented_points;
 use crate::export::{write_augmented, write_occupancy, write_tree_exports};
 use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
-use crate::io::atomic::StagedDir;
+use crate::io::atomic::{StagedDir, write_file_atomically};
 use crate::io::output_folder::{MARKER, OutputCommand, OutputTarget};
 use crate::io::sequence::SequenceFormat;
 use crate::io::write_sequence::write_text;
 use crate::map::memory_budget::{check_map_fits, check_memory_budget, check_voxel_size};
+use crate::panoptic::live::{LiveReport, LiveSettings, map_live, wait_for_sequence};
 use crate::panoptic::panoptic_dir::{PanopticIndex, write_panoptic};
-use crate::panoptic::{InstanceFusion, MapperParams};
+use crate::panoptic::{InstanceFusion, MapperParams, PanopticMapper};
 use crate::scene::SceneSpec;
 use crate::scene::{RenderOptions, render_sequence};
 use crate::systems::cad_replacement::{CadAlignMethod, CadLibrary, CadReport};
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::kinematic_tree::SceneKinematicTree;
-use crate::systems::panoptic_mapping::{MappingConfig, PanopticMap, PanopticSurface};
+use crate::systems::panoptic_mapping::{
+    LivePreview, MappingConfig, PanopticMap, PanopticSurface, Segmenter, segmentation_service,
+};
 use crate::systems::physics_validation::PhysicsReport;
 use crate::systems::stages::StageMarks;
 use crate::systems::{Reconstruct, ReconstructionStage};
@@ -63,6 +66,8 @@ pub struct ReconstructOptions {
     /// The map's memory budget, GB (`--max-memory`): a voxel size expected to outgrow it is
     /// refused before mapping.
     pub max_memory_gb: f64,
+    /// Map frames as they arrive (`--live`), refreshing a preview of the world meanwhile.
+    pub live: Option<LiveSettings>,
 }
 
 impl ReconstructOptions {
@@ -85,6 +90,7 @@ impl ReconstructOptions {
             progress: false,
             force: false,
             max_memory_gb: crate::map::memory_budget::DEFAULT_MAX_MEMORY_GB,
+            live: None,
         }
     }
 }
@@ -112,6 +118,8 @@ pub struct ReconstructReport {
     /// Stages of the pipeline that have no implementation yet and did not run.
     pub stages_not_built: Vec<String>,
     pub outputs: Vec<String>,
+    /// What a live session measured (`--live`).
+    pub live: Option<LiveReport>,
 }
 
 /// What the panoptic map holds.
@@ -221,6 +229,122 @@ fn render_input(
     Ok(summary.dir)
 }
 
+/// The reconstruction world with its stages' settings; the caller adds the input sequence (and,
+/// for a live session, the map).
+fn reconstruction_app(
+    options: &ReconstructOptions,
+    mapping: &MappingConfig,
+    cad_library: &Option<std::sync::Arc<CadDatabase>>,
+) -> App {
+    let mut app = App::new();
+    app.add_plugins(crate::ReconstructionPlugins);
+    app.insert_resource(mapping.clone());
+    app.insert_resource(GravityConfig {
+        estimate: options.estimate_gravity,
+    });
+    if let Some(db) = cad_library {
+        app.insert_resource(CadLibrary(db.clone()));
+    }
+    app.insert_resource(CadAlignMethod(options.align));
+    app
+}
+
+type LiveMap = (
+    PanopticMapper,
+    Option<Box<dyn crate::segmentation::SegmentationService>>,
+);
+
+/// Maps the frames as they arrive (`--live`). At every refresh the stages after integration run
+/// on a copy of the map so far (extraction without carving, contact graph, CAD, kinematic tree,
+/// physics) and `live/contact_graph.json` and `live/status.json` are rewritten whole in the
+/// output being staged.
+fn map_live_with_previews(
+    sequence_dir: &Path,
+    first: Sequence,
+    options: &ReconstructOptions,
+    mapping: &MappingConfig,
+    live: &LiveSettings,
+    cad_library: &Option<std::sync::Arc<CadDatabase>>,
+    staged: &Path,
+) -> Result<(LiveMap, Sequence, IngestReport, LiveReport), IsceneError> {
+    let service = segmentation_service(mapping, &first)?;
+    let preview_dir = staged.join("live");
+    std::fs::create_dir_all(&preview_dir)
+        .map_err(|e| IsceneError::io(format!("creating {}", preview_dir.display()), e))?;
+    if options.progress {
+        eprintln!(
+            "live: the world so far is refreshed in {}",
+            preview_dir.display()
+        );
+    }
+    let mut refresh = |map: &PanopticMapper, seen: &Sequence, report: &LiveReport| {
+        let mut app = reconstruction_app(options, mapping, cad_library);
+        app.insert_resource(LivePreview);
+        app.insert_resource(InputSequence(seen.clone()));
+        app.insert_resource(PanopticMap(map.clone()));
+        app.insert_resource(IngestReport::default());
+        app.world_mut().run_schedule(Reconstruct);
+        if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
+            return Err(err);
+        }
+        if let Some(scene) = app.world().get_resource::<SceneContactGraph>() {
+            write_file_atomically(
+                &preview_dir.join("contact_graph.json"),
+                scene.graph.to_json().as_bytes(),
+            )?;
+        }
+        let status = serde_json::json!({
+            "frames_integrated": seen.frames.len(),
+            "newest_frame": seen.frames.last().map(|f| f.index),
+            "live": report,
+        });
+        write_file_atomically(
+            &preview_dir.join("status.json"),
+            serde_json::to_string_pretty(&status)
+                .unwrap_or_default()
+                .as_bytes(),
+        )
+    };
+    let (map, seen, report) = map_live(
+        sequence_dir,
+        first,
+        service.as_deref(),
+        &mapping.params,
+        live,
+        &mut refresh,
+    )?;
+    let ingest = IngestReport {
+        frames: seen.frames.len(),
+        width: seen.camera.width,
+        height: seen.camera.height,
+        valid_depth_fraction: report.valid_depth_pixels as f64 / report.depth_pixels.max(1) as f64,
+        min_depth_m: report.min_depth_m,
+        max_depth_m: report.max_depth_m,
+        trajectory_length_m: seen
+            .frames
+            .windows(2)
+            .map(|w| {
+                glam::Vec3::from(w[1].world_from_camera.translation)
+                    .distance(w[0].world_from_camera.translation.into())
+            })
+            .sum(),
+        has_gravity: seen.gravity.is_some(),
+        has_ground_truth_labels: seen.labels.is_some(),
+    };
+    write_file_atomically(
+        &preview_dir.join("status.json"),
+        serde_json::to_string_pretty(&serde_json::json!({
+            "frames_integrated": seen.frames.len(),
+            "newest_frame": seen.frames.last().map(|f| f.index),
+            "finished": true,
+            "live": &report,
+        }))
+        .unwrap_or_default()
+        .as_bytes(),
+    )?;
+    Ok(((map, service), seen, ingest, report))
+}
+
 pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, IsceneError> {
     check_voxel_size(options.voxel)?;
     check_memory_budget(options.max_memory_gb)?;
@@ -265,8 +389,11 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         }
         Some(p) => (p.clone(), false),
     };
-    let mut sequence = Sequence::open(&sequence_dir)?;
-    if let Some((start, end, step)) = options.frames {
+    let mut sequence = match &options.live {
+        Some(live) => wait_for_sequence(&sequence_dir, live)?,
+        None => Sequence::open(&sequence_dir)?,
+    };
+    if let Some((start, end, step)) = options.frames.filter(|_| options.live.is_none()) {
         sequence.select(start, end, step);
         if sequence.frames.is_empty() {
             return Err(InputError::invalid(
@@ -286,10 +413,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         SequenceFormat::Open3dLog => "open3d-log",
     };
 
-    let mut app = App::new();
-    app.add_plugins(crate::ReconstructionPlugins);
-    app.insert_resource(InputSequence(sequence));
-    app.insert_resource(MappingConfig {
+    let mapping = MappingConfig {
         params: MapperParams {
             segment_every: options.segment_every.max(1),
             ..MapperParams::new(options.voxel, options.fusion)
@@ -297,14 +421,34 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         segmentation: options.segmentation,
         models: options.models.clone(),
         progress: options.progress,
-    });
-    app.insert_resource(GravityConfig {
-        estimate: options.estimate_gravity,
-    });
-    if let Some(db) = &cad_library {
-        app.insert_resource(CadLibrary(db.clone()));
+    };
+    // Staged before the work, so that a live session's previews land in the output's own folder.
+    let staged = StagedDir::new(&target)?;
+    let mut app = reconstruction_app(options, &mapping, &cad_library);
+    let mut live_report = None;
+    match &options.live {
+        Some(live) => {
+            let start = Instant::now();
+            let (map, seen, ingest, report) = map_live_with_previews(
+                &sequence_dir,
+                sequence,
+                options,
+                &mapping,
+                live,
+                &cad_library,
+                staged.path(),
+            )?;
+            timings.push(("live mapping".into(), start.elapsed().as_secs_f64()));
+            app.insert_resource(PanopticMap(map.0));
+            app.insert_resource(Segmenter(map.1));
+            app.insert_resource(ingest);
+            app.insert_resource(InputSequence(seen));
+            live_report = Some(report);
+        }
+        None => {
+            app.insert_resource(InputSequence(sequence));
+        }
     }
-    app.insert_resource(CadAlignMethod(options.align));
     app.world_mut().run_schedule(Reconstruct);
     if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
         return Err(err);
@@ -323,7 +467,6 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     );
 
     let write_start = Instant::now();
-    let staged = StagedDir::new(&target)?;
     let mut outputs = vec!["report.json".to_string()];
     let mut panoptic = None;
     if let (Some(map), Some(surface)) = (
@@ -417,6 +560,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             .map(|s| s.name().to_string())
             .collect(),
         outputs,
+        live: live_report,
     };
     report
         .timings

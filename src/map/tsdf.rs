@@ -76,6 +76,7 @@ fn weight_steps(weight: f32) -> u16 {
     (weight * WEIGHT_STEPS + 0.5).clamp(1.0, f32::from(u16::MAX)) as u16
 }
 
+#[derive(Clone)]
 pub struct Block {
     pub key: IVec3,
     pub voxels: Box<[Voxel; BLOCK_VOXELS]>,
@@ -131,6 +132,7 @@ fn floor_ivec3(p: Vec3) -> IVec3 {
     )
 }
 
+#[derive(Clone)]
 pub struct TsdfMap {
     pub voxel_size: f32,
     pub truncation: f32,

@@ -136,6 +136,7 @@ pub fn segment_frame(
 }
 
 /// The state of the panoptic map.
+#[derive(Clone)]
 pub struct PanopticMapper {
     pub params: MapperParams,
     pub tsdf: TsdfMap,

@@ -6,6 +6,7 @@ pub mod carve;
 pub mod entities;
 pub mod fusion;
 pub mod instances;
+pub mod live;
 pub mod mapper;
 pub mod panoptic_dir;
 pub mod run;

@@ -20,31 +20,13 @@ pub fn map_sequence(
     progress: &indicatif::ProgressBar,
 ) -> Result<PanopticMapper, IsceneError> {
     let classes = ClassIds::builtin();
-    let class_id = |name: &str| classes.id(name);
     let mut mapper = PanopticMapper::new(params.clone());
-    let exact_classes = service.map_or(&[][..], |s| s.exact_classes());
     let n = sequence.frames.len();
     // Enough frames in flight to keep every core busy with the per-frame work.
     let batch = 2 * rayon::current_num_threads().max(1);
-    let prepare = |i: usize| -> Result<(Frame, SegmentedFrame), IsceneError> {
-        let frame = sequence.load_frame(i)?;
-        let geometry = segment_depth(&frame.depth, &frame.camera, &params.geometric);
-        let masks = match service {
-            Some(s) if i.is_multiple_of(params.segment_every.max(1)) => {
-                Some(s.segment(&frame, &geometry)?)
-            }
-            Some(s) => s.segment_without_networks(&frame, &geometry),
-            None => None,
-        };
-        let segmented = segment_frame(
-            &mapper_frame(&frame),
-            &geometry,
-            masks.as_ref(),
-            &class_id,
-            exact_classes,
-            params,
-        );
-        Ok((frame, segmented))
+    let prepare = |i: usize| {
+        let networks = service.is_some() && i.is_multiple_of(params.segment_every.max(1));
+        prepare_frame(sequence, i, service, params, &classes, networks)
     };
     // Frames are decoded and segmented (independently, in parallel) on one thread while this one
     // associates and integrates them in order: the two overlap, and both draw on the same rayon
@@ -77,7 +59,37 @@ pub fn map_sequence(
     Ok(mapper)
 }
 
-fn mapper_frame(frame: &Frame) -> MapperFrame<'_> {
+/// Reads frame `i` and segments it: geometric segments, the service's masks (its networks only
+/// where `networks`, the cheap part otherwise) and their fusion. Frames are independent here.
+pub fn prepare_frame(
+    sequence: &Sequence,
+    i: usize,
+    service: Option<&dyn SegmentationService>,
+    params: &MapperParams,
+    classes: &ClassIds,
+    networks: bool,
+) -> Result<(Frame, SegmentedFrame), IsceneError> {
+    let class_id = |name: &str| classes.id(name);
+    let exact_classes = service.map_or(&[][..], |s| s.exact_classes());
+    let frame = sequence.load_frame(i)?;
+    let geometry = segment_depth(&frame.depth, &frame.camera, &params.geometric);
+    let masks = match service {
+        Some(s) if networks => Some(s.segment(&frame, &geometry)?),
+        Some(s) => s.segment_without_networks(&frame, &geometry),
+        None => None,
+    };
+    let segmented = segment_frame(
+        &mapper_frame(&frame),
+        &geometry,
+        masks.as_ref(),
+        &class_id,
+        exact_classes,
+        params,
+    );
+    Ok((frame, segmented))
+}
+
+pub(crate) fn mapper_frame(frame: &Frame) -> MapperFrame<'_> {
     MapperFrame {
         depth: &frame.depth,
         color: &frame.color,

@@ -98,7 +98,10 @@ impl Plugin for IngestPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<StageError>().add_systems(
             crate::systems::Reconstruct,
-            ingest_system.in_set(crate::systems::ReconstructionStage::Ingest),
+            // A live session reports what it integrated itself.
+            ingest_system
+                .run_if(not(resource_exists::<IngestReport>))
+                .in_set(crate::systems::ReconstructionStage::Ingest),
         );
     }
 }

@@ -59,6 +59,36 @@ pub struct PanopticSurface {
     pub precise_depth: Option<f32>,
 }
 
+/// The segmentation service `config` asks for, set up for `sequence`; `None` maps geometry only.
+pub fn segmentation_service(
+    config: &MappingConfig,
+    sequence: &crate::io::Sequence,
+) -> Result<Option<Box<dyn SegmentationService>>, InputError> {
+    match config.segmentation {
+        SegmentationChoice::Oracle => OracleSegmentation::for_sequence(sequence)
+            .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>)),
+        SegmentationChoice::None => Ok(None),
+        SegmentationChoice::Onnx => {
+            let dir = config
+                .models
+                .clone()
+                .unwrap_or_else(|| OnnxModels::DEFAULT_DIR.into());
+            OnnxSegmentation::for_sequence(
+                sequence,
+                &OnnxModels::in_dir(&dir),
+                OnnxParams::default(),
+            )
+            .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>))
+        }
+    }
+}
+
+/// Marks the short-lived world a live session refreshes once a second from the map so far: the
+/// Extract stage skips what reads every frame again (carving, outlines), which the final pass
+/// does.
+#[derive(Resource)]
+pub struct LivePreview;
+
 fn choose_segmenter(
     mut commands: Commands,
     config: Res<MappingConfig>,
@@ -68,25 +98,7 @@ fn choose_segmenter(
     if error.0.is_some() {
         return;
     }
-    let service: Result<Option<Box<dyn SegmentationService>>, InputError> =
-        match config.segmentation {
-            SegmentationChoice::Oracle => OracleSegmentation::for_sequence(&sequence.0)
-                .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>)),
-            SegmentationChoice::None => Ok(None),
-            SegmentationChoice::Onnx => {
-                let dir = config
-                    .models
-                    .clone()
-                    .unwrap_or_else(|| OnnxModels::DEFAULT_DIR.into());
-                OnnxSegmentation::for_sequence(
-                    &sequence.0,
-                    &OnnxModels::in_dir(&dir),
-                    OnnxParams::default(),
-                )
-                .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>))
-            }
-        };
-    match service {
+    match segmentation_service(&config, &sequence.0) {
         Ok(s) => commands.insert_resource(Segmenter(s)),
         Err(e) => error.0 = Some(e.into()),
     }
@@ -115,6 +127,7 @@ fn spawn_entities(
     map: Option<Res<PanopticMap>>,
     segmenter: Option<Res<Segmenter>>,
     sequence: Res<InputSequence>,
+    preview: Option<Res<LivePreview>>,
     mut error: ResMut<StageError>,
 ) {
     let Some(map) = map else {
@@ -132,6 +145,15 @@ fn spawn_entities(
                 e.mesh = part;
             }
         }
+    }
+    if preview.is_some() {
+        spawn_scene_entities(&mut commands, &scene.entities, None);
+        commands.insert_resource(PanopticSurface {
+            entities: scene.entities,
+            voxels: scene.surface_voxels,
+            precise_depth: None,
+        });
+        return;
     }
     let sighted = SightedParams::for_voxel(map.0.tsdf.voxel_size);
     let precise = match precise_depth(&sequence.0, &sighted) {
@@ -157,7 +179,25 @@ fn spawn_entities(
             return;
         }
     };
-    for (e, outline) in scene.entities.iter().zip(outlines) {
+    spawn_scene_entities(&mut commands, &scene.entities, Some(outlines));
+    commands.insert_resource(PanopticSurface {
+        entities: scene.entities,
+        voxels: scene.surface_voxels,
+        precise_depth: precise,
+    });
+}
+
+fn spawn_scene_entities(
+    commands: &mut Commands,
+    entities: &[PanopticEntity],
+    outlines: Option<Vec<Vec<Vec<Vec3>>>>,
+) {
+    let mut outlines = outlines.map(Vec::into_iter);
+    for e in entities {
+        let outline = outlines
+            .as_mut()
+            .and_then(Iterator::next)
+            .unwrap_or_default();
         commands.spawn((
             SceneEntity(e.id.clone()),
             Panoptic {
@@ -169,11 +209,6 @@ fn spawn_entities(
             SightedOutline(outline),
         ));
     }
-    commands.insert_resource(PanopticSurface {
-        entities: scene.entities,
-        voxels: scene.surface_voxels,
-        precise_depth: precise,
-    });
 }
 
 /// Adds the Segment, Integrate and Extract systems.
@@ -185,8 +220,13 @@ impl Plugin for PanopticMappingPlugin {
         app.init_resource::<MappingConfig>().add_systems(
             crate::systems::Reconstruct,
             (
-                choose_segmenter.in_set(Stage::Segment),
-                integrate_frames.in_set(Stage::Integrate),
+                // A map made outside the schedule (a live session) is not made again.
+                choose_segmenter
+                    .run_if(not(resource_exists::<PanopticMap>))
+                    .in_set(Stage::Segment),
+                integrate_frames
+                    .run_if(not(resource_exists::<PanopticMap>))
+                    .in_set(Stage::Integrate),
                 spawn_entities.in_set(Stage::Extract),
             ),
         );

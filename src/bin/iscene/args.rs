@@ -273,6 +273,25 @@ pub(crate) struct ReconstructArgs {
     /// surface a sample of the frames sees) is refused before mapping.
     #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
     pub(crate) max_memory: f64,
+    /// Map frames as they arrive: with --rate, the recording replayed at that many frames per
+    /// second; without, the folder followed as another program writes it (each frame's depth
+    /// image put in place last), ending after --idle seconds with no new frame. The world so far
+    /// is refreshed once a second in OUT's staging folder, live/contact_graph.json.
+    #[arg(long)]
+    pub(crate) live: bool,
+    /// With --live: replay the recording at this many frames per second.
+    #[arg(long, requires = "live", value_parser = positive_rate)]
+    pub(crate) rate: Option<f64>,
+    /// With --live and no --rate: seconds without a new frame that end the session.
+    #[arg(long, requires = "live", default_value_t = 3.0, value_parser = positive_rate)]
+    pub(crate) idle: f64,
+}
+
+fn positive_rate(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("{text} is not a positive number")),
+    }
 }
 
 #[derive(Subcommand)]

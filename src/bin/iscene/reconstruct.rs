@@ -5,7 +5,9 @@ use std::path::PathBuf;
 
 use iscene::error::IsceneError;
 use iscene::panoptic::InstanceFusion;
+use iscene::panoptic::live::{Arrivals, LiveSettings};
 use iscene::pipeline::{ReconstructOptions, reconstruct as run};
+use std::time::Duration;
 
 use clap::{Args, FromArgMatches};
 
@@ -46,6 +48,17 @@ pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<()
         progress: interactive,
         force: args.force,
         max_memory_gb: args.max_memory,
+        live: args.live.then(|| LiveSettings {
+            arrivals: match args.rate {
+                Some(hz) => Arrivals::Replay { hz },
+                None => Arrivals::Follow {
+                    idle: Duration::from_secs_f64(args.idle),
+                },
+            },
+            refresh_every: Duration::from_secs(1),
+            max_backlog: 30,
+            selection: args.frames,
+        }),
     };
     let r = run(&options)?;
     println!(
@@ -102,6 +115,20 @@ pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<()
     }
     for (stage, seconds) in &r.timings {
         println!("  {stage:<20} {seconds:>8.3} s");
+    }
+    if let Some(live) = &r.live {
+        println!(
+            "live       {}: {} of {} frames integrated, labels dropped on {}; lag mean {:.3} s, max {:.3} s; {} refreshes ({:.3} s each), the world at most {:.2} s behind the newest frame",
+            live.mode,
+            live.frames_integrated,
+            live.frames_arrived,
+            live.labels_dropped,
+            live.integration_lag_mean_s,
+            live.integration_lag_max_s,
+            live.refreshes,
+            live.refresh_seconds_mean,
+            live.refresh_lag_max_s
+        );
     }
     println!("not built yet: {}", r.stages_not_built.join(", "));
     println!("wrote {}: {}", out.display(), r.outputs.join(", "));
