@@ -83,53 +83,43 @@ struct Prepared {
     labels_dropped: bool,
 }
 
-/// Opens the sequence folder as it is now, with the selection applied; `Ok(None)` while a
-/// followed folder holds no frame yet.
-fn open_now(
-    dir: &std::path::Path,
-    settings: &LiveSettings,
-    wait_for_first: bool,
-) -> Result<Option<Sequence>, IsceneError> {
-    match Sequence::open(dir) {
-        Ok(mut sequence) => {
-            if let Some((start, end, step)) = settings.selection {
-                sequence.select(start, end, step);
-            }
-            Ok(Some(sequence))
-        }
-        Err(InputError::Invalid { problem, .. })
-            if wait_for_first && problem.starts_with("no frame-") =>
-        {
-            Ok(None)
-        }
-        Err(e) => Err(e.into()),
+/// Opens the sequence folder as it is now, with the selection applied.
+fn open_now(dir: &std::path::Path, settings: &LiveSettings) -> Result<Sequence, InputError> {
+    let mut sequence = Sequence::open(dir)?;
+    if let Some((start, end, step)) = settings.selection {
+        sequence.select(start, end, step);
     }
+    Ok(sequence)
 }
 
-/// The sequence at `dir` as it is now; a followed folder that lists no frame yet is waited for
-/// until its idle time runs out.
+/// The sequence at `dir` as it is now. A followed folder that is not yet a sequence with a frame
+/// is waited for until its idle time runs out; the error then says what the folder lacked.
 pub fn wait_for_sequence(
     dir: &std::path::Path,
     settings: &LiveSettings,
 ) -> Result<Sequence, IsceneError> {
     let start = Instant::now();
     loop {
-        let follow = match settings.arrivals {
-            Arrivals::Follow { idle } => Some(idle),
-            Arrivals::Replay { .. } => None,
+        let failure = match open_now(dir, settings) {
+            Ok(sequence) if !sequence.frames.is_empty() => return Ok(sequence),
+            Ok(_) => "the --frames selection holds no frame yet".to_string(),
+            Err(e) => e.to_string(),
         };
-        if let Some(sequence) = open_now(dir, settings, follow.is_some())? {
-            return Ok(sequence);
-        }
-        let idle = follow.expect("open_now waits only when following");
-        if start.elapsed() > idle {
-            return Err(InputError::invalid(
-                dir,
-                format!("no frame arrived within {:.1} s", idle.as_secs_f64()),
-            )
-            .into());
-        }
-        std::thread::sleep(Duration::from_millis(50));
+        let idle = match settings.arrivals {
+            Arrivals::Follow { idle } if start.elapsed() <= idle => idle,
+            Arrivals::Follow { idle } => {
+                return Err(InputError::invalid(
+                    dir,
+                    format!(
+                        "no frame arrived within {:.1} s ({failure})",
+                        idle.as_secs_f64()
+                    ),
+                )
+                .into());
+            }
+            Arrivals::Replay { .. } => return Err(InputError::invalid(dir, failure).into()),
+        };
+        std::thread::sleep(Duration::from_millis(50).min(idle));
     }
 }
 
@@ -193,11 +183,11 @@ pub fn map_live(
                             return k;
                         }
                         std::thread::sleep(Duration::from_millis(50));
-                        match open_now(dir, settings, false) {
-                            Ok(Some(s)) if s.frames.len() >= sequence.frames.len() => sequence = s,
+                        match open_now(dir, settings) {
+                            Ok(s) if s.frames.len() >= sequence.frames.len() => sequence = s,
                             Ok(_) => {}
                             Err(e) => {
-                                let _ = sender.send(Err(e));
+                                let _ = sender.send(Err(e.into()));
                                 return k;
                             }
                         }

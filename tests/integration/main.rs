@@ -18,6 +18,7 @@ mod gravity;
 mod held_out;
 mod hostile_input;
 mod layers;
+mod live;
 mod model_import;
 mod onnx;
 mod panoptic;
