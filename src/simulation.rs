@@ -7,12 +7,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bevy::prelude::*;
+use glam::Affine3A;
 use serde::Serialize;
 
 use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
 use crate::export::write_tree_exports;
 use crate::graph::ContactGraph;
+use crate::graph::GraphEdge;
 use crate::io::atomic::StagedDir;
 use crate::io::output_folder::{OutputCommand, OutputTarget};
 use crate::io::write_sequence::write_text;
@@ -23,7 +25,7 @@ use crate::sim::planner::{ground, plan};
 use crate::sim::robot::BasePose;
 use crate::sim::scene_view::SceneView;
 use crate::sim::symbolic::{Fact, SymbolicScene, parse_goal, symbolic_scene};
-use crate::sim::task::Task;
+use crate::sim::task::{AddedObject, Task};
 use crate::sim::{actions::Action, pddl};
 use crate::systems::kinematic_tree::{read_kinematic_tree, spawn_node_links};
 use crate::systems::physics_validation::rest_physics;
@@ -115,8 +117,10 @@ struct PreparedTask {
 fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneError> {
     let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
     let task = Task::load(task_path)?;
-    check_steps_name_movable_nodes(&task, &graph).map_err(|p| InputError::invalid(task_path, p))?;
     let db = CadDatabase::for_scene(dir)?;
+    let graph =
+        add_unseen_objects(graph, &task.add, &db).map_err(|p| InputError::invalid(task_path, p))?;
+    check_steps_name_movable_nodes(&task, &graph).map_err(|p| InputError::invalid(task_path, p))?;
     let mut app = simulation_app(&graph, &task, &db).map_err(IsceneError::Internal)?;
     let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
@@ -153,6 +157,123 @@ fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneEr
         db,
     };
     Ok((prepared, app))
+}
+
+/// `graph` with the task's added objects, each put where the simulator's own placing puts a held
+/// object: the first free spot inside the container (`"in"`, its lowest level with room, centred,
+/// then towards the front) or on the surface (`"on"`), supported by it. One at a time, so each
+/// sees the ones before it.
+fn add_unseen_objects(
+    mut graph: ContactGraph,
+    adds: &[AddedObject],
+    db: &CadDatabase,
+) -> Result<ContactGraph, String> {
+    for (i, added) in adds.iter().enumerate() {
+        let at = |problem: String| format!("add[{i}] ({}): {problem}", added.id);
+        let (host, inside) = added.host().map_err(at)?;
+        if graph.node(&added.id).is_some() {
+            return Err(at("the scene already has a node of this id".into()));
+        }
+        let class = crate::classes::ClassTable::builtin()
+            .get(&added.class)
+            .ok_or_else(|| at(format!("unknown class {:?}", added.class)))?;
+        if !class.movable {
+            return Err(at(format!(
+                "{} objects do not move; add a movable one",
+                added.class
+            )));
+        }
+        let model = db.get(&added.model).ok_or_else(|| {
+            at(format!(
+                "no model {:?} in the scene's models or the library",
+                added.model
+            ))
+        })?;
+        let Some(parent) = graph.node(host) else {
+            return Err(at(format!("the scene has no node {host:?}")));
+        };
+        // Provisionally at the top centre of the host's box; the placing moves it.
+        let parent_box = crate::geometry::GravityBox::from(&parent.bbox);
+        let top = parent_box.center + Vec3::Z * parent_box.size.z / 2.0;
+        let world_from_model =
+            Affine3A::from_rotation_translation(Quat::from_rotation_z(parent_box.yaw), top);
+        graph.nodes.push(node_of_model(
+            &added.id,
+            &added.class,
+            class.kind,
+            &model.model,
+            world_from_model,
+        ));
+        graph.edges.push(GraphEdge::Support {
+            parent: host.to_string(),
+            child: added.id.clone(),
+        });
+        let mut app = App::new();
+        app.add_plugins(SimulationPlugin);
+        spawn_contact_graph(app.world_mut(), &graph).map_err(at)?;
+        spawn_node_links(app.world_mut(), &graph, Some(db));
+        let tree = read_kinematic_tree(app.world_mut()).map_err(at)?;
+        let view = SceneView::new(&tree);
+        let link = view
+            .node_link(&added.id)
+            .ok_or_else(|| at("its model built no link".into()))?;
+        let spot = if inside {
+            if !view.is_container(host) {
+                return Err(at(format!("{host} is not a container")));
+            }
+            view.spot_in(link, host, &[])
+                .ok_or_else(|| at(format!("{} does not fit in {host}", added.model)))?
+        } else {
+            if view.is_layout(host) && !matches!(host_class(&graph, host), Some("floor")) {
+                return Err(at(format!("{host} is not a surface to put things on")));
+            }
+            let centre = top.truncate();
+            view.spot_on(link, host, centre, &[])
+                .ok_or_else(|| at(format!("no free spot on {host} for {}", added.model)))?
+        };
+        // The link's frame need not be the model's: move the model as the link moves.
+        let link_from_model = view.poses[link].inverse() * world_from_model;
+        let placed = spot * link_from_model;
+        let node = graph.nodes.last_mut().expect("just added");
+        *node = node_of_model(&added.id, &added.class, class.kind, &model.model, placed);
+    }
+    Ok(graph)
+}
+
+fn host_class<'a>(graph: &'a ContactGraph, id: &str) -> Option<&'a str> {
+    graph.node(id).map(|n| n.class.as_str())
+}
+
+/// A node for `model` standing at `world_from_model` (the model's origin is the bottom centre of
+/// its box).
+fn node_of_model(
+    id: &str,
+    class: &str,
+    kind: crate::classes::EntityKind,
+    model: &crate::cad::model::CadModel,
+    world_from_model: Affine3A,
+) -> crate::graph::GraphNode {
+    let (_, rotation, _) = world_from_model.to_scale_rotation_translation();
+    let centre = world_from_model.transform_point3(Vec3::Z * model.size.z / 2.0);
+    crate::graph::GraphNode {
+        id: id.to_string(),
+        class: class.to_string(),
+        kind,
+        bbox: crate::graph::BoxJson {
+            center: centre.to_array(),
+            yaw: rotation.to_euler(EulerRot::ZYX).0,
+            size: model.size.to_array(),
+        },
+        planes: Vec::new(),
+        cad: Some(crate::graph::CadPlacement {
+            model: model.id.clone(),
+            world_from_model: Mat4::from(world_from_model).to_cols_array(),
+            scale: 1.0,
+            alignment_error: 0.0,
+        }),
+        joints: Default::default(),
+        parts: Vec::new(),
+    }
 }
 
 /// A step that names a node the scene lacks, or would pick up or push the room's layout, is a

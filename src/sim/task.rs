@@ -32,6 +32,39 @@ pub struct Task {
     pub steps: Vec<Action>,
     #[serde(default)]
     pub goals: Vec<String>,
+    /// Objects the camera could not see (a box inside a closed fridge), put into the scene before
+    /// the task starts.
+    #[serde(default)]
+    pub add: Vec<AddedObject>,
+}
+
+/// An object a task adds: a model of the scene's CAD models (its folder's, or the built-in
+/// library's) put in a container or on a surface, at the first free spot the simulator's own
+/// placing finds there.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AddedObject {
+    pub id: String,
+    pub class: String,
+    pub model: String,
+    #[serde(default, rename = "in")]
+    pub inside: Option<String>,
+    #[serde(default)]
+    pub on: Option<String>,
+}
+
+impl AddedObject {
+    /// The node it goes into or onto, and whether into.
+    pub fn host(&self) -> Result<(&str, bool), String> {
+        match (&self.inside, &self.on) {
+            (Some(c), None) => Ok((c, true)),
+            (None, Some(s)) => Ok((s, false)),
+            _ => Err(format!(
+                "add {:?}: give exactly one of \"in\" and \"on\"",
+                self.id
+            )),
+        }
+    }
 }
 
 impl Task {
@@ -91,6 +124,19 @@ impl Task {
                 self.goals.len()
             ));
         }
+        if self.add.len() > MAX_ADDED {
+            return Err(format!(
+                "add: {} objects, more than {MAX_ADDED}",
+                self.add.len()
+            ));
+        }
+        for (i, added) in self.add.iter().enumerate() {
+            for id in [&added.id, &added.model] {
+                crate::file_name::check_file_name(id).map_err(|e| format!("add[{i}]: {e}"))?;
+            }
+            let (host, _) = added.host().map_err(|e| format!("add[{i}]: {e}"))?;
+            crate::file_name::check_file_name(host).map_err(|e| format!("add[{i}]: {e}"))?;
+        }
         for (i, step) in self.steps.iter().enumerate() {
             let key = format!("steps[{i}]");
             for id in step.node_ids() {
@@ -140,3 +186,5 @@ pub const MAX_JOINT_VALUE: f32 = 10.0;
 pub const MAX_STEPS: usize = 1000;
 /// Goals of a planned task.
 pub const MAX_GOALS: usize = 32;
+/// The most objects a task may add.
+pub const MAX_ADDED: usize = 64;

@@ -1,7 +1,8 @@
 //! The live simulation on the rendered kitchen's truth (issue 7): the paper's fridge-to-microwave
 //! demonstration end to end, a refused action that changes nothing, and goals the planner solves
 //! whose plan lengths pyperplan confirms on the exported PDDL. The truth is used because a closed
-//! fridge's content is never seen by the camera, so no reconstruction knows the box is there.
+//! fridge's content is never seen by the camera, so no reconstruction knows the box is there;
+//! on a reconstruction the task adds it (`"add"`).
 
 use std::path::Path;
 
@@ -236,6 +237,81 @@ fn a_malformed_task_is_bad_input() {
         assert!(
             stderr.contains("bad.json") && stderr.contains(expected),
             "{stderr}"
+        );
+        assert!(!out.exists(), "no output for bad input");
+    }
+}
+
+/// On a reconstruction of the kitchen, which never saw the box inside the closed fridge, the
+/// task adds it (`"add"`) and the demonstration runs: the box stands at rest inside the fridge
+/// before the first step and ends under the microwave.
+#[test]
+fn a_task_adds_the_box_no_camera_saw_and_the_demonstration_runs_on_the_reconstruction() {
+    let (_, rec) = common::shared_noisy_map("kitchen");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("sim");
+    let task = common::root().join("scenes/tasks/kitchen_fridge_to_microwave_unseen_box.json");
+    let (code, trace) = simulate(&rec, &task, &out);
+    assert_eq!(code, 0, "{trace:#}");
+    assert_eq!(trace["steps"].as_array().expect("steps").len(), 9);
+    let before = &trace["physics_before"];
+    assert!(
+        before["checked"]
+            .as_array()
+            .expect("checked")
+            .iter()
+            .any(|id| id == "box_1"),
+        "{before:#}"
+    );
+    assert!(
+        !before["not_stable"]
+            .as_array()
+            .expect("not_stable")
+            .iter()
+            .any(|id| id == "box_1"),
+        "{before:#}"
+    );
+    let graph = ContactGraph::load(&out.join("contact_graph.json")).expect("graph");
+    assert_eq!(graph.parent_of("box_1"), Some("microwave_1"));
+}
+
+/// Added objects that cannot be: refused before anything runs, naming the entry and the reason.
+#[test]
+fn an_added_object_that_cannot_be_added_is_bad_input() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let task = dir.path().join("bad.json");
+    let steps = r#""steps": [{"action": "navigate", "to": "fridge_1"}]"#;
+    for (add, expected) in [
+        (
+            r#"{"id": "box_1", "class": "box", "model": "box_01", "in": "fridge_1"}"#,
+            "already has",
+        ),
+        (
+            r#"{"id": "box_9", "class": "box", "model": "no_such_model", "in": "fridge_1"}"#,
+            "no model",
+        ),
+        (
+            r#"{"id": "box_9", "class": "box", "model": "box_01", "in": "table_1"}"#,
+            "not a container",
+        ),
+        (
+            r#"{"id": "box_9", "class": "box", "model": "box_01"}"#,
+            "exactly one",
+        ),
+        (
+            r#"{"id": "box_9", "class": "box", "model": "box_01", "on": "unicorn_1"}"#,
+            "unicorn_1",
+        ),
+    ] {
+        let text = format!(r#"{{"add": [{add}], {steps}}}"#);
+        std::fs::write(&task, &text).expect("task");
+        let out = dir.path().join("sim");
+        let (code, _, stderr) = run_simulate(&gt, &task, &out);
+        assert_eq!(code, 2, "{text}: {stderr}");
+        assert!(
+            stderr.contains("bad.json") && stderr.contains(expected),
+            "{text}: {stderr}"
         );
         assert!(!out.exists(), "no output for bad input");
     }
