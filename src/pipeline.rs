@@ -24,7 +24,7 @@ use crate::panoptic::panoptic_dir::{PanopticIndex, write_panoptic};
 use crate::panoptic::{InstanceFusion, MapperParams, PanopticMapper};
 use crate::scene::SceneSpec;
 use crate::scene::{RenderOptions, render_sequence};
-use crate::systems::cad_replacement::{CadAlignMethod, CadLibrary, CadReport};
+use crate::systems::cad_replacement::{CadAlignMethod, CadAlignmentCache, CadLibrary, CadReport};
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::kinematic_tree::SceneKinematicTree;
@@ -277,9 +277,12 @@ fn map_live_with_previews(
             preview_dir.display()
         );
     }
+    // Objects whose boxes have not moved keep the last refresh's CAD alignments.
+    let mut cad_cache = CadAlignmentCache::default();
     let mut refresh = |map: &PanopticMapper, seen: &Sequence, report: &LiveReport| {
         let mut app = reconstruction_app(options, mapping, cad_library);
         app.insert_resource(LivePreview);
+        app.insert_resource(std::mem::take(&mut cad_cache));
         app.insert_resource(InputSequence(seen.clone()));
         app.insert_resource(PanopticMap(map.clone()));
         app.insert_resource(IngestReport::default());
@@ -287,6 +290,10 @@ fn map_live_with_previews(
         if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
             return Err(err);
         }
+        cad_cache = app
+            .world_mut()
+            .remove_resource::<CadAlignmentCache>()
+            .unwrap_or_default();
         if let Some(scene) = app.world().get_resource::<SceneContactGraph>() {
             write_file_atomically(
                 &preview_dir.join("contact_graph.json"),

@@ -13,7 +13,8 @@ use crate::cad::db::database::CadDatabase;
 use crate::cad::replace::alignment::Alignment;
 use crate::cad::replace::matching::Candidate;
 use crate::cad::replace::replacement::{
-    AlignMethod, ReplacementRecord, align_scene, check_and_place, observed_objects, rank_scene,
+    AlignMethod, ReplacementRecord, align_scene_reusing, check_and_place, observed_objects,
+    rank_scene,
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
 use crate::components::{ObservedSurface, SceneEntity};
@@ -51,6 +52,34 @@ pub struct CadCandidates(pub Vec<(String, Vec<Candidate>)>);
 pub struct CadAlignments(pub Vec<(String, Vec<Alignment>)>);
 
 /// What replacement did, for report.json.
+/// The alignments of the last refresh of a live session, by object: an object whose class and box
+/// have not changed (within 2 cm and 3 degrees) keeps them instead of being aligned again. Only a
+/// live session's refreshes carry it; the final pass aligns everything.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct CadAlignmentCache(
+    pub HashMap<String, (String, crate::geometry::GravityBox, Vec<Alignment>)>,
+);
+
+impl CadAlignmentCache {
+    const SAME_M: f32 = 0.02;
+    const SAME_YAW: f32 = 0.05;
+
+    fn reuse(&self, o: &crate::cad::replace::matching::ObservedObject) -> Option<Vec<Alignment>> {
+        let (class, bbox, alignments) = self.0.get(o.id)?;
+        let same = class == o.class
+            && bbox.center.distance(o.bbox.center) <= Self::SAME_M
+            && (bbox.size - o.bbox.size).abs().max_element() <= Self::SAME_M
+            && half_turn_difference(bbox.yaw, o.bbox.yaw) <= Self::SAME_YAW;
+        same.then(|| alignments.clone())
+    }
+}
+
+/// `|a - b|` with yaws a half turn apart the same (a box turned by pi is the same box).
+fn half_turn_difference(a: f32, b: f32) -> f32 {
+    let d = (a - b).rem_euclid(std::f32::consts::PI);
+    d.min(std::f32::consts::PI - d)
+}
+
 #[derive(Resource, Clone, Debug, Serialize)]
 pub struct CadReport {
     pub align_method: AlignMethod,
@@ -143,7 +172,18 @@ fn cad_align_stage(world: &mut World) {
         })
         .collect();
     let method = world.get_resource_or_init::<CadAlignMethod>().0;
-    let aligned = align_scene(&objects, &db, &ranked, method);
+    let cache = world.get_resource::<CadAlignmentCache>().cloned();
+    let aligned = align_scene_reusing(&objects, &db, &ranked, method, |o| {
+        cache.as_ref().and_then(|c| c.reuse(o))
+    });
+    if let Some(mut cache) = cache {
+        cache.0 = objects
+            .iter()
+            .zip(&aligned)
+            .map(|(o, a)| (o.id.to_string(), (o.class.to_string(), o.bbox, a.clone())))
+            .collect();
+        world.insert_resource(cache);
+    }
     let alignments = objects
         .iter()
         .map(|o| o.id.to_string())

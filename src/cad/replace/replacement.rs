@@ -161,12 +161,25 @@ pub fn align_scene(
     candidates: &[Vec<Candidate>],
     method: AlignMethod,
 ) -> Vec<Vec<Alignment>> {
+    align_scene_reusing(objects, db, candidates, method, |_| None)
+}
+
+/// [`align_scene`], taking an object's alignments from `reuse` where it has them.
+pub fn align_scene_reusing(
+    objects: &[ObservedObject],
+    db: &CadDatabase,
+    candidates: &[Vec<Candidate>],
+    method: AlignMethod,
+    reuse: impl Fn(&ObservedObject) -> Option<Vec<Alignment>> + Sync,
+) -> Vec<Vec<Alignment>> {
     objects
         .par_iter()
         .zip(candidates)
-        .map(|(o, c)| match method {
-            AlignMethod::Lm => align_all(o, db, c),
-            AlignMethod::Icp => icp::align_all(o, db, c),
+        .map(|(o, c)| {
+            reuse(o).unwrap_or_else(|| match method {
+                AlignMethod::Lm => align_all(o, db, c),
+                AlignMethod::Icp => icp::align_all(o, db, c),
+            })
         })
         .collect()
 }
