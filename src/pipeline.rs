@@ -271,12 +271,11 @@ fn map_live_with_previews(
     let preview_dir = staged.join("live");
     std::fs::create_dir_all(&preview_dir)
         .map_err(|e| IsceneError::io(format!("creating {}", preview_dir.display()), e))?;
-    if options.progress {
-        eprintln!(
-            "live: the world so far is refreshed in {}",
-            preview_dir.display()
-        );
-    }
+    // Said whether or not a person watches: a program following the session needs the place.
+    eprintln!(
+        "live: the world so far is refreshed every second in {}",
+        preview_dir.display()
+    );
     // Objects whose boxes have not moved keep the last refresh's CAD alignments.
     let mut cad_cache = CadAlignmentCache::default();
     let mut refresh = |map: &PanopticMapper, seen: &Sequence, report: &LiveReport| {
@@ -299,6 +298,15 @@ fn map_live_with_previews(
                 &preview_dir.join("contact_graph.json"),
                 scene.graph.to_json().as_bytes(),
             )?;
+        }
+        if options.progress {
+            eprintln!(
+                "live: {} frames integrated (newest {}), a frame {:.2} s after its arrival at worst, labels dropped on {}",
+                seen.frames.len(),
+                seen.frames.last().map_or(0, |f| f.index),
+                report.integration_lag_max_s,
+                report.labels_dropped
+            );
         }
         let status = serde_json::json!({
             "frames_integrated": seen.frames.len(),
