@@ -15,6 +15,7 @@ mod graph_overlays;
 mod interaction;
 mod layers;
 mod link_meshes;
+mod live_scene;
 mod map_layer;
 mod motion;
 mod occupancy;
@@ -77,7 +78,13 @@ pub struct ViewOptions {
     pub task: Option<PathBuf>,
     /// Screenshots of a replay, evenly spaced from its first frame to its last.
     pub shots: u32,
+    /// Follow a running `reconstruct --live --out DIR` session: the world is rebuilt each time
+    /// the session refreshes it.
+    pub live: bool,
 }
+
+/// How long `view --live` waits for the session's first graph.
+const LIVE_WAIT: std::time::Duration = std::time::Duration::from_secs(120);
 
 /// The clear colour: a light grey-blue that no model uses.
 const BACKGROUND: Color = Color::srgb(0.93, 0.94, 0.96);
@@ -119,7 +126,11 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
     let (actions, mut app) = match &options.task {
         Some(task) => task_world(&options.dir, task)?,
         None => {
-            let graph = ContactGraph::load(&options.dir.join("contact_graph.json"))?;
+            let graph = if options.live {
+                live_scene::first_graph(&options.dir, LIVE_WAIT)?.1
+            } else {
+                ContactGraph::load(&options.dir.join("contact_graph.json"))?
+            };
             let db = CadDatabase::for_scene(&options.dir)?;
             let app =
                 simulation_app(&graph, &Task::default(), &db).map_err(IsceneError::Internal)?;
@@ -135,6 +146,17 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
     })
     .insert_resource(TaskPlayer::new(actions))
     .insert_resource(map);
+    if options.live {
+        app.insert_resource(live_scene::LiveSource {
+            out: options.dir.clone(),
+            // The first poll compares with what the world was built from.
+            shown: live_scene::current_graph(&options.dir)
+                .map(|p| (p.clone(), live_scene::modified(&p))),
+            models: CadDatabase::for_scene(&options.dir)?,
+            since_poll: std::time::Duration::ZERO,
+        })
+        .add_plugins(live_scene::LiveScenePlugin);
+    }
     Ok(app)
 }
 

@@ -128,6 +128,7 @@ fn offscreen_viewer(gt: PathBuf, size: (u32, u32), task: Option<PathBuf>) -> App
         replay: false,
         shots: 1,
         task,
+        live: false,
     };
     let mut app = viewer_app(&options, true).expect("viewer app");
     render_offscreen(&mut app, size);
@@ -699,6 +700,94 @@ fn the_graph_layer_labels_each_node_over_its_box() {
     };
     assert!((x - at.x).abs() < 60.0, "label x {x}, box top {at}");
     assert!(y < at.y && at.y - y < 40.0, "label y {y}, box top {at}");
+}
+
+/// `view OUT --live` follows a live session: it starts from the preview in OUT's staging folder,
+/// rebuilds the world when the session rewrites it (nodes, their links and labels: no stale
+/// label stays), and shows the finished output once the staging folder has become OUT.
+#[test]
+fn a_live_view_rebuilds_the_world_as_the_session_refreshes_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let full = iscene::graph::ContactGraph::load(&gt.join("contact_graph.json")).expect("graph");
+    // An early refresh: the room and the furniture, none of the small objects yet.
+    let mut early = full.clone();
+    let small = ["cup_1", "cup_2", "bowl_1", "bottle_1", "box_1"];
+    early.nodes.retain(|n| !small.contains(&n.id.as_str()));
+    early.edges.retain(|e| match e {
+        iscene::graph::GraphEdge::Support { parent, child } => {
+            !small.contains(&parent.as_str()) && !small.contains(&child.as_str())
+        }
+        iscene::graph::GraphEdge::Proximal { a, b } => {
+            !small.contains(&a.as_str()) && !small.contains(&b.as_str())
+        }
+    });
+    assert!(early.nodes.len() < full.nodes.len());
+    let out = dir.path().join("out");
+    let preview = dir.path().join(".out.partial-4242").join("live");
+    std::fs::create_dir_all(&preview).expect("staging");
+    std::fs::write(preview.join("contact_graph.json"), early.to_json()).expect("preview");
+    let size = (320, 240);
+    let options = ViewOptions {
+        dir: out.clone(),
+        screenshot: None,
+        layers: Vec::new(),
+        frames: 1,
+        size,
+        open: Vec::new(),
+        replay: false,
+        shots: 1,
+        task: None,
+        live: true,
+    };
+    let mut app = viewer_app(&options, true).expect("viewer app");
+    render_offscreen(&mut app, size);
+    app.finish();
+    app.cleanup();
+    let counts = |app: &mut App| {
+        let world = app.world_mut();
+        let nodes = world
+            .query::<&iscene::components::SceneEntity>()
+            .iter(world)
+            .count();
+        let labels: Vec<String> = world
+            .query::<&Text>()
+            .iter(world)
+            .map(|t| t.0.clone())
+            .collect();
+        (nodes, labels)
+    };
+    // Polls are half a second apart.
+    let settle = |app: &mut App| {
+        for _ in 0..3 {
+            std::thread::sleep(std::time::Duration::from_millis(300));
+            app.update();
+        }
+    };
+    settle(&mut app);
+    let (nodes, labels) = counts(&mut app);
+    assert_eq!(nodes, early.nodes.len());
+    assert!(!labels.iter().any(|l| l == "cup_1"), "{labels:?}");
+
+    // The session refreshes: the small objects appear.
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    std::fs::write(preview.join("contact_graph.json"), full.to_json()).expect("refresh");
+    settle(&mut app);
+    let (nodes, labels) = counts(&mut app);
+    assert_eq!(nodes, full.nodes.len());
+    assert_eq!(
+        labels.iter().filter(|l| *l == "fridge_1").count(),
+        1,
+        "{labels:?}"
+    );
+    assert!(labels.iter().any(|l| l == "cup_1"), "{labels:?}");
+
+    // The session ends: its output takes OUT's name, and the view follows it there.
+    std::fs::remove_dir_all(dir.path().join(".out.partial-4242")).expect("finish");
+    std::fs::create_dir_all(&out).expect("out");
+    std::fs::write(out.join("contact_graph.json"), early.to_json()).expect("final");
+    settle(&mut app);
+    assert_eq!(counts(&mut app).0, early.nodes.len());
 }
 
 /// Mean absolute difference of two pictures, per channel, in 8-bit steps.

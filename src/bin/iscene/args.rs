@@ -174,6 +174,10 @@ pub(crate) struct ViewArgs {
     /// (FILE.gif: one animated GIF; otherwise numbered PNGs FILE_00.png ...).
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=200))]
     pub(crate) shots: u32,
+    /// Follow a running `iscene reconstruct ... --live --out DIR`: the world is rebuilt each
+    /// time the session refreshes it (every second), then shows the finished output.
+    #[arg(long, conflicts_with_all = ["replay", "task"])]
+    pub(crate) live: bool,
 }
 
 #[derive(clap::Args)]

@@ -30,6 +30,7 @@ pub(crate) fn view(args: ViewArgs, interactive: bool) -> Result<(), IsceneError>
             replay,
             shots,
             task,
+            live,
         } = args;
         let dir = if replay && !dir.join("report.json").is_file() {
             reconstruct_for_replay(&dir, interactive)?
@@ -47,6 +48,7 @@ pub(crate) fn view(args: ViewArgs, interactive: bool) -> Result<(), IsceneError>
                 replay,
                 shots,
                 task,
+                live,
             },
             &layer,
         )
