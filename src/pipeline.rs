@@ -308,17 +308,7 @@ fn map_live_with_previews(
                 report.labels_dropped
             );
         }
-        let status = serde_json::json!({
-            "frames_integrated": seen.frames.len(),
-            "newest_frame": seen.frames.last().map(|f| f.index),
-            "live": report,
-        });
-        write_file_atomically(
-            &preview_dir.join("status.json"),
-            serde_json::to_string_pretty(&status)
-                .unwrap_or_default()
-                .as_bytes(),
-        )
+        write_live_status(&preview_dir, seen, report, false)
     };
     let (map, seen, report) = map_live(
         sequence_dir,
@@ -328,36 +318,30 @@ fn map_live_with_previews(
         live,
         &mut refresh,
     )?;
-    let ingest = IngestReport {
-        frames: seen.frames.len(),
-        width: seen.camera.width,
-        height: seen.camera.height,
-        valid_depth_fraction: report.valid_depth_pixels as f64 / report.depth_pixels.max(1) as f64,
-        min_depth_m: report.min_depth_m,
-        max_depth_m: report.max_depth_m,
-        trajectory_length_m: seen
-            .frames
-            .windows(2)
-            .map(|w| {
-                glam::Vec3::from(w[1].world_from_camera.translation)
-                    .distance(w[0].world_from_camera.translation.into())
-            })
-            .sum(),
-        has_gravity: seen.gravity.is_some(),
-        has_ground_truth_labels: seen.labels.is_some(),
-    };
-    write_file_atomically(
-        &preview_dir.join("status.json"),
-        serde_json::to_string_pretty(&serde_json::json!({
-            "frames_integrated": seen.frames.len(),
-            "newest_frame": seen.frames.last().map(|f| f.index),
-            "finished": true,
-            "live": &report,
-        }))
-        .unwrap_or_default()
-        .as_bytes(),
-    )?;
+    let ingest = IngestReport::new(&seen, &report.depth);
+    write_live_status(&preview_dir, &seen, &report, true)?;
     Ok(((map, service), seen, ingest, report))
+}
+
+/// `live/status.json`: the frames integrated so far, the newest, and the session's figures.
+fn write_live_status(
+    dir: &Path,
+    seen: &Sequence,
+    report: &LiveReport,
+    finished: bool,
+) -> Result<(), IsceneError> {
+    let status = serde_json::json!({
+        "frames_integrated": seen.frames.len(),
+        "newest_frame": seen.frames.last().map(|f| f.index),
+        "finished": finished,
+        "live": report,
+    });
+    write_file_atomically(
+        &dir.join("status.json"),
+        serde_json::to_string_pretty(&status)
+            .unwrap_or_default()
+            .as_bytes(),
+    )
 }
 
 pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, IsceneError> {

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Vec3};
+use serde::Serialize;
 
 use crate::error::InputError;
 use crate::geometry::Pinhole;
@@ -57,7 +58,69 @@ pub struct Frame {
     pub labels: Option<Vec<u16>>,
 }
 
+/// What a set of depth images measured: pixels with a depth, all pixels, and the depth range.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DepthStats {
+    pub valid_pixels: usize,
+    pub pixels: usize,
+    pub min_m: f32,
+    pub max_m: f32,
+}
+
+impl Default for DepthStats {
+    fn default() -> Self {
+        Self {
+            valid_pixels: 0,
+            pixels: 0,
+            min_m: f32::INFINITY,
+            max_m: 0.0,
+        }
+    }
+}
+
+impl DepthStats {
+    /// One depth image's (metres, 0 = none).
+    pub fn of(depth: &[f32]) -> Self {
+        let mut stats = Self {
+            pixels: depth.len(),
+            ..Self::default()
+        };
+        for &d in depth.iter().filter(|&&d| d > 0.0) {
+            stats.valid_pixels += 1;
+            stats.min_m = stats.min_m.min(d);
+            stats.max_m = stats.max_m.max(d);
+        }
+        stats
+    }
+
+    pub fn add(&mut self, other: &DepthStats) {
+        self.valid_pixels += other.valid_pixels;
+        self.pixels += other.pixels;
+        self.min_m = self.min_m.min(other.min_m);
+        self.max_m = self.max_m.max(other.max_m);
+    }
+
+    pub fn valid_fraction(&self) -> f64 {
+        if self.pixels > 0 {
+            self.valid_pixels as f64 / self.pixels as f64
+        } else {
+            0.0
+        }
+    }
+}
+
 impl Sequence {
+    /// Path length of the camera trajectory, metres.
+    pub fn trajectory_length_m(&self) -> f32 {
+        self.frames
+            .windows(2)
+            .map(|w| {
+                Vec3::from(w[1].world_from_camera.translation)
+                    .distance(w[0].world_from_camera.translation.into())
+            })
+            .sum()
+    }
+
     /// Opens a sequence folder, recognising its layout from the files in it.
     pub fn open(root: &Path) -> Result<Sequence, InputError> {
         if !root.is_dir() {

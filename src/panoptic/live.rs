@@ -16,6 +16,7 @@ use serde::Serialize;
 
 use crate::error::{InputError, IsceneError};
 use crate::io::Sequence;
+use crate::io::sequence::DepthStats;
 use crate::panoptic::entities::ClassIds;
 use crate::panoptic::mapper::{MapperParams, PanopticMapper};
 use crate::panoptic::run::{mapper_frame, prepare_frame};
@@ -64,10 +65,7 @@ pub struct LiveReport {
     /// next, seconds.
     pub refresh_interval_max_s: f64,
     /// Depth statistics of the integrated frames, as ingest reports them for a batch run.
-    pub valid_depth_pixels: usize,
-    pub depth_pixels: usize,
-    pub min_depth_m: f32,
-    pub max_depth_m: f32,
+    pub depth: DepthStats,
     pub seconds: f64,
 }
 
@@ -80,6 +78,7 @@ struct Prepared {
     record: crate::io::sequence::FrameRecord,
     frame: crate::io::sequence::Frame,
     segmented: crate::panoptic::mapper::SegmentedFrame,
+    depth: DepthStats,
     labels_dropped: bool,
 }
 
@@ -143,7 +142,6 @@ pub fn map_live(
                 format!("follow, ending after {:.1} s idle", idle.as_secs_f64())
             }
         },
-        min_depth_m: f32::INFINITY,
         ..LiveReport::default()
     };
     let mut seen = Sequence {
@@ -230,6 +228,7 @@ pub fn map_live(
                         .map(|(frame, segmented)| Prepared {
                             arrived,
                             record: sequence.frames[i].clone(),
+                            depth: DepthStats::of(&frame.depth),
                             frame,
                             segmented,
                             labels_dropped,
@@ -245,10 +244,10 @@ pub fn map_live(
                 }
             }
         });
-        let mut last_refresh = Instant::now();
+        // Refreshes are timed from the first frame's arrival.
+        let mut last_refresh: Option<Instant> = None;
         let mut lag_sum = 0.0;
         let mut refresh_seconds = 0.0;
-        let mut newest_arrival = None;
         for item in receiver {
             let p = item?;
             mapper.integrate(&mapper_frame(&p.frame), &p.segmented);
@@ -258,19 +257,11 @@ pub fn map_live(
             report.integration_lag_max_s = report.integration_lag_max_s.max(lag);
             report.frames_integrated += 1;
             report.labels_dropped += usize::from(p.labels_dropped);
-            for &d in p.frame.depth.iter().filter(|&&d| d > 0.0) {
-                report.valid_depth_pixels += 1;
-                report.min_depth_m = report.min_depth_m.min(d);
-                report.max_depth_m = report.max_depth_m.max(d);
-            }
-            report.depth_pixels += p.frame.depth.len();
+            report.depth.add(&p.depth);
             report.integration_lag_mean_s = lag_sum / report.frames_integrated as f64;
             seen.frames.push(p.record);
-            if newest_arrival.is_none() {
-                last_refresh = p.arrived;
-            }
-            newest_arrival = Some(p.arrived);
-            if last_refresh.elapsed() >= settings.refresh_every {
+            let since = *last_refresh.get_or_insert(p.arrived);
+            if since.elapsed() >= settings.refresh_every {
                 let began = Instant::now();
                 refresh(&mapper, &seen, &report)?;
                 let done = Instant::now();
@@ -282,8 +273,8 @@ pub fn map_live(
                     .max((done - p.arrived).as_secs_f64());
                 report.refresh_interval_max_s = report
                     .refresh_interval_max_s
-                    .max((done - last_refresh).as_secs_f64());
-                last_refresh = done;
+                    .max((done - since).as_secs_f64());
+                last_refresh = Some(done);
             }
         }
         Ok(producer.join().expect("the frame reader does not panic"))

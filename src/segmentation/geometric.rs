@@ -318,7 +318,8 @@ mod tests {
     use crate::scene::render_sequence::render_frame;
     use crate::scene::{SceneSpec, SceneWorld};
 
-    /// The scalar per-pixel loops `segment_depth` replaced, kept as the reference it must equal.
+    /// The scalar per-pixel loops `segment_depth` replaced (smoothing, points, normals, creases),
+    /// kept as the reference it must equal.
     fn reference_segment_depth(
         depth: &[f32],
         camera: &Pinhole,
@@ -423,44 +424,9 @@ mod tests {
                 })
             })
             .collect();
-        let mut parent: Vec<u32> = (0..(w * h) as u32).collect();
-        for v in 0..h {
-            for u in 0..w {
-                let i = v * w + u;
-                if edge[i] {
-                    continue;
-                }
-                if u + 1 < w && !edge[i + 1] && !jump(depth[i], depth[i + 1]) {
-                    union(&mut parent, i as u32, (i + 1) as u32);
-                }
-                if v + 1 < h && !edge[i + w] && !jump(depth[i], depth[i + w]) {
-                    union(&mut parent, i as u32, (i + w) as u32);
-                }
-            }
-        }
-        let roots: Vec<u32> = (0..(w * h) as u32).map(|i| find(&mut parent, i)).collect();
-        let mut size = vec![0u32; w * h];
-        for (i, &r) in roots.iter().enumerate() {
-            if !edge[i] {
-                size[r as usize] += 1;
-            }
-        }
-        let mut id_of_root = vec![0u32; w * h];
-        let mut count = 0;
-        let segment_of_pixel = roots
-            .iter()
-            .enumerate()
-            .map(|(i, &r)| {
-                if edge[i] || size[r as usize] < params.min_pixels {
-                    return 0;
-                }
-                if id_of_root[r as usize] == 0 {
-                    count += 1;
-                    id_of_root[r as usize] = count;
-                }
-                id_of_root[r as usize]
-            })
-            .collect();
+        // The components were not rewritten: the reference shares them.
+        let (segment_of_pixel, count) =
+            connected_segments(depth, &edge, w, h, &DepthJump::new(params), params);
         GeometricSegmentation {
             segment_of_pixel,
             count,

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::error::InputError;
 use crate::io::Sequence;
-use glam::Vec3;
+use crate::io::sequence::DepthStats;
 
 /// The input sequence of this reconstruction.
 #[derive(Resource)]
@@ -34,50 +34,37 @@ pub struct IngestReport {
 #[derive(Resource, Default)]
 pub struct StageError(pub Option<crate::error::IsceneError>);
 
+impl IngestReport {
+    /// The report of `sequence`'s frames, whose depth measured `depth`.
+    pub fn new(sequence: &Sequence, depth: &DepthStats) -> Self {
+        Self {
+            frames: sequence.frames.len(),
+            width: sequence.camera.width,
+            height: sequence.camera.height,
+            valid_depth_fraction: depth.valid_fraction(),
+            min_depth_m: depth.min_m,
+            max_depth_m: depth.max_m,
+            trajectory_length_m: sequence.trajectory_length_m(),
+            has_gravity: sequence.gravity.is_some(),
+            has_ground_truth_labels: sequence.labels.is_some(),
+        }
+    }
+}
+
 /// Reads and checks all frames; pure function behind the system.
 pub fn ingest(sequence: &Sequence) -> Result<IngestReport, InputError> {
-    let stats = (0..sequence.frames.len())
+    let per_frame = (0..sequence.frames.len())
         .into_par_iter()
-        .map(|i| {
-            let depth = sequence.check_frame(i)?;
-            let (mut valid, mut lo, mut hi) = (0usize, f32::INFINITY, 0.0f32);
-            for &d in depth.iter().filter(|&&d| d > 0.0) {
-                valid += 1;
-                lo = lo.min(d);
-                hi = hi.max(d);
-            }
-            Ok((valid, depth.len(), lo, hi))
-        })
+        .map(|i| sequence.check_frame(i).map(|depth| DepthStats::of(&depth)))
         .collect::<Vec<Result<_, InputError>>>()
         // The first bad frame in order, not whichever thread failed first: errors are reproducible.
         .into_iter()
         .collect::<Result<Vec<_>, InputError>>()?;
-    let (valid, total) = stats
-        .iter()
-        .fold((0usize, 0usize), |(v, t), s| (v + s.0, t + s.1));
-    let trajectory_length_m = sequence
-        .frames
-        .windows(2)
-        .map(|w| {
-            Vec3::from(w[1].world_from_camera.translation)
-                .distance(w[0].world_from_camera.translation.into())
-        })
-        .sum();
-    Ok(IngestReport {
-        frames: sequence.frames.len(),
-        width: sequence.camera.width,
-        height: sequence.camera.height,
-        valid_depth_fraction: if total > 0 {
-            valid as f64 / total as f64
-        } else {
-            0.0
-        },
-        min_depth_m: stats.iter().map(|s| s.2).fold(f32::INFINITY, f32::min),
-        max_depth_m: stats.iter().map(|s| s.3).fold(0.0, f32::max),
-        trajectory_length_m,
-        has_gravity: sequence.gravity.is_some(),
-        has_ground_truth_labels: sequence.labels.is_some(),
-    })
+    let mut depth = DepthStats::default();
+    for stats in &per_frame {
+        depth.add(stats);
+    }
+    Ok(IngestReport::new(sequence, &depth))
 }
 
 pub fn ingest_system(

@@ -118,8 +118,16 @@ fn a_screenshot_of_the_kitchen_shows_the_kitchen_and_changes_with_doors_and_laye
 /// The viewer's app on `gt` rendering off screen into a `size` image, ready to update, with
 /// `task` loaded when given.
 fn offscreen_viewer(gt: PathBuf, size: (u32, u32), task: Option<PathBuf>) -> App {
-    let options = ViewOptions {
-        dir: gt,
+    offscreen_app(&ViewOptions {
+        task,
+        ..view_options(gt, size)
+    })
+}
+
+/// The viewer's options for `dir` off screen in a `size` image, everything else at its default.
+fn view_options(dir: PathBuf, size: (u32, u32)) -> ViewOptions {
+    ViewOptions {
+        dir,
         screenshot: None,
         layers: Vec::new(),
         frames: 1,
@@ -127,10 +135,15 @@ fn offscreen_viewer(gt: PathBuf, size: (u32, u32), task: Option<PathBuf>) -> App
         open: Vec::new(),
         replay: false,
         shots: 1,
-        task,
+        task: None,
         live: false,
-    };
-    let mut app = viewer_app(&options, true).expect("viewer app");
+    }
+}
+
+/// The viewer's app for `options`, rendering off screen, ready to update.
+fn offscreen_app(options: &ViewOptions) -> App {
+    let size = options.size;
+    let mut app = viewer_app(options, true).expect("viewer app");
     render_offscreen(&mut app, size);
     app.finish();
     app.cleanup();
@@ -727,23 +740,10 @@ fn a_live_view_rebuilds_the_world_as_the_session_refreshes_it() {
     let preview = dir.path().join(".out.partial-4242").join("live");
     std::fs::create_dir_all(&preview).expect("staging");
     std::fs::write(preview.join("contact_graph.json"), early.to_json()).expect("preview");
-    let size = (320, 240);
-    let options = ViewOptions {
-        dir: out.clone(),
-        screenshot: None,
-        layers: Vec::new(),
-        frames: 1,
-        size,
-        open: Vec::new(),
-        replay: false,
-        shots: 1,
-        task: None,
+    let mut app = offscreen_app(&ViewOptions {
         live: true,
-    };
-    let mut app = viewer_app(&options, true).expect("viewer app");
-    render_offscreen(&mut app, size);
-    app.finish();
-    app.cleanup();
+        ..view_options(out.clone(), (320, 240))
+    });
     let counts = |app: &mut App| {
         let world = app.world_mut();
         let nodes = world
