@@ -24,7 +24,9 @@ use crate::panoptic::panoptic_dir::{PanopticIndex, write_panoptic};
 use crate::panoptic::{InstanceFusion, MapperParams, PanopticMapper};
 use crate::scene::SceneSpec;
 use crate::scene::{RenderOptions, render_sequence};
-use crate::systems::cad_replacement::{CadAlignMethod, CadAlignmentCache, CadLibrary, CadReport};
+use crate::systems::cad_replacement::{
+    CadAlignMethod, CadAlignmentCache, CadLibrary, CadReport, SceneModels,
+};
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
 use crate::systems::ingest::{IngestReport, InputSequence, StageError};
 use crate::systems::kinematic_tree::SceneKinematicTree;
@@ -505,8 +507,8 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             &scene.graph.to_json(),
         )?;
         outputs.push("contact_graph.json".into());
-        if let Some(db) = &cad_library {
-            outputs.extend(write_scene_models(staged.path(), &scene.graph, db)?);
+        if let Some(models) = app.world().get_resource::<SceneModels>() {
+            outputs.extend(write_scene_models(staged.path(), &scene.graph, &models.0)?);
         }
     }
     let tree = app
@@ -528,7 +530,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             .map(|(p, _)| aligned_from_world.transform_point3(*p))
             .collect();
         outputs.extend(write_occupancy(staged.path(), &map_points, tree)?);
-        if let Some(library) = app.world().get_resource::<CadLibrary>() {
+        if let Some(library) = app.world().get_resource::<SceneModels>() {
             let points = augmented_points(
                 &surface.voxels,
                 &aligned_from_world,

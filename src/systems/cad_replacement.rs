@@ -27,6 +27,11 @@ use crate::systems::scene_graph::attach_contact_graph;
 #[derive(Resource, Clone)]
 pub struct CadLibrary(pub Arc<CadDatabase>);
 
+/// The models the placements of the scene's contact graph refer to: the database replacement
+/// chose from, and the library models the physical check built to an object's size.
+#[derive(Resource, Clone)]
+pub struct SceneModels(pub Arc<CadDatabase>);
+
 /// How CadMatch and CadAlign choose and align candidates (Levenberg-Marquardt unless set).
 #[derive(Resource, Clone, Copy, Debug, Default)]
 pub struct CadAlignMethod(pub AlignMethod);
@@ -209,10 +214,12 @@ fn physical_check_stage(world: &mut World) {
         .iter()
         .filter(|n| n.kind != crate::classes::EntityKind::Layout)
         .count();
-    let (replaced, unplaced): (Vec<_>, Vec<_>) =
-        check_and_place(&mut graph, &db, &ids, &options, &points)
-            .into_iter()
-            .partition(|r| r.check.conflicts == 0);
+    let placements = check_and_place(&mut graph, &db, &ids, &options, &points);
+    let (replaced, unplaced): (Vec<_>, Vec<_>) = placements
+        .records
+        .into_iter()
+        .partition(|r| r.check.conflicts == 0);
+    world.insert_resource(SceneModels(Arc::new(db.with_models(placements.built))));
     let by_id: HashMap<String, Entity> = world
         .query::<(Entity, &SceneEntity)>()
         .iter(world)

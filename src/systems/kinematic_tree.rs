@@ -17,7 +17,7 @@ use crate::graph::ContactGraph;
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::tree::{KinematicTree, TreeLink};
-use crate::systems::cad_replacement::CadLibrary;
+use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneContactGraph;
 use crate::systems::ingest::StageError;
 use crate::systems::scene_graph::{SceneRoot, transform_of};
@@ -54,7 +54,7 @@ fn kinematic_tree_stage(world: &mut World) {
     else {
         return;
     };
-    let db = world.get_resource::<CadLibrary>().map(|l| l.0.clone());
+    let db = world.get_resource::<SceneModels>().map(|l| l.0.clone());
     spawn_node_links(world, &graph, db.as_deref());
     match read_kinematic_tree(world) {
         Ok(tree) => {

@@ -120,6 +120,9 @@ fn follow_live_graph(world: &mut World) {
         }
     }
     if spawn_contact_graph(world, &graph).is_ok() {
+        // A preview's models built to an object's size are written with the output only.
+        let mut source = world.resource_mut::<LiveSource>();
+        source.models = source.models.with_sized_models_of(&graph);
         world.resource_scope(|world, source: Mut<LiveSource>| {
             spawn_node_links(world, &graph, Some(&source.models));
         });

@@ -13,6 +13,7 @@ use std::path::Path;
 use crate::common;
 
 use iscene::cad::ParametricLibrary;
+use iscene::cad::library::library_model_id;
 use iscene::classes::EntityKind;
 use iscene::eval::evaluate_reconstruction;
 use iscene::graph::ContactGraph;
@@ -110,7 +111,7 @@ fn issue_bar(name: &str, seq: &Path, out: &Path) -> Vec<String> {
     let mut placed = BTreeMap::new();
     for node in &graph.nodes {
         let Some(c) = &node.cad else { continue };
-        let entry = ParametricLibrary::get(&c.model).expect("a database model");
+        let entry = ParametricLibrary::get(library_model_id(&c.model)).expect("a library model");
         assert_eq!(
             entry.class, node.class,
             "{name}: {} got {}",

@@ -16,25 +16,26 @@ use std::path::{Path, PathBuf};
 
 use crate::common;
 
-use iscene::cad::ParametricLibrary;
+use iscene::cad::db::database::CadDatabase;
 use iscene::classes::ClassTable;
 use iscene::graph::ContactGraph;
 
 /// Links the URDF must have: the root, one per contact-graph node, one per further part of each
-/// node's CAD model.
-fn expected_links(graph: &ContactGraph) -> usize {
-    let models: Vec<_> = ParametricLibrary::entries()
-        .iter()
-        .map(|e| e.model())
-        .collect();
+/// node's CAD model (from the output folder's models: the library, and those built to size).
+fn expected_links(graph: &ContactGraph, out: &Path) -> usize {
+    let models = CadDatabase::for_scene(out).expect("the scene's models");
     1 + graph
         .nodes
         .iter()
         .map(|n| {
-            n.cad
-                .as_ref()
-                .and_then(|c| models.iter().find(|m| m.id == c.model))
-                .map_or(1, |m| m.parts.len())
+            n.cad.as_ref().map_or(1, |c| {
+                models
+                    .get(&c.model)
+                    .unwrap_or_else(|| panic!("{}: model {} not in the output", n.id, c.model))
+                    .model
+                    .parts
+                    .len()
+            })
         })
         .sum::<usize>()
 }
@@ -64,7 +65,7 @@ fn exported_scenes_load_in_check_urdf_mujoco_pybullet_and_the_gltf_validator() {
         )
         .expect("report JSON");
         let urdf = out.join("scene.urdf");
-        let links = expected_links(&graph);
+        let links = expected_links(&graph, &out);
 
         // check_urdf: exit 0, silent stderr, every link in the printed tree.
         let (code, stdout, stderr) = common::run_tool(&check_urdf, &[&urdf]);

@@ -202,8 +202,10 @@ pub fn write_index(
     Ok(count)
 }
 
-/// Copies the models `graph` uses from `db` into `<scene_dir>/cad`, so that the scene folder
-/// alone gives its links their meshes (`CadDatabase::for_scene`); returns the files written.
+/// Writes the models `graph` uses from `db` that `CadDatabase::for_scene` cannot build from the
+/// parametric library (models of a `--cad` database, library models built to an object's size)
+/// into `<scene_dir>/cad`, so that the scene folder alone gives its links their meshes; returns
+/// the files written (none when every model is the library's as it is).
 pub fn write_scene_models(
     scene_dir: &Path,
     graph: &ContactGraph,
@@ -214,16 +216,15 @@ pub fn write_scene_models(
         let Some(model) = node.cad.as_ref().and_then(|c| db.get(&c.model)) else {
             continue;
         };
-        if used.iter().all(|m| m.id != model.model.id) {
+        if !model.is_library_nominal() && used.iter().all(|m| m.id != model.model.id) {
             used.push(model.model.clone());
         }
     }
+    if used.is_empty() {
+        return Ok(Vec::new());
+    }
     used.sort_by(|a, b| a.id.cmp(&b.id));
-    write_models(
-        &scene_dir.join(SCENE_MODELS),
-        &used,
-        "iscene reconstruct --cad",
-    )?;
+    write_models(&scene_dir.join(SCENE_MODELS), &used, "iscene reconstruct")?;
     let mut files: Vec<String> = used
         .iter()
         .flat_map(|m| {

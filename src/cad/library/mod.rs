@@ -69,6 +69,20 @@ pub fn library_model_id(id: &str) -> &str {
     }
 }
 
+/// The model a sized id names, built by its library entry: `table_01.1100x570x500` is `table_01`
+/// built to 1.1 x 0.57 x 0.5 m. `None` for any other id.
+pub fn build_sized_model(id: &str) -> Option<CadModel> {
+    let base = library_model_id(id);
+    let entry = ParametricLibrary::get(base)?;
+    let mm: Vec<f32> = id
+        .get(base.len() + 1..)?
+        .split('x')
+        .map(|n| n.parse::<u32>().ok().map(|v| v as f32 / 1000.0))
+        .collect::<Option<_>>()?;
+    let size = Vec3::new(*mm.first()?, *mm.get(1)?, *mm.get(2)?);
+    (size.min_element() > 0.0).then(|| entry.model_sized(size))
+}
+
 const fn entry(
     id: &'static str,
     class: &'static str,
@@ -266,6 +280,10 @@ mod tests {
         assert_eq!(low.id, "table_01.1100x570x500");
         assert!(crate::file_name::check_file_name(&low.id).is_ok());
         assert_eq!(library_model_id(&low.id), "table_01");
+        assert_eq!(build_sized_model(&low.id), Some(low.clone()));
+        for other in ["table_01", "table_99.1x2x3", "table_01.0x570x500", "lib.v2"] {
+            assert!(build_sized_model(other).is_none(), "{other}");
+        }
         for plain in ["table_01", "lib.v2", "a.1x2", "a.1x2xz", "a.x1x2"] {
             assert_eq!(library_model_id(plain), plain);
         }

@@ -9,3 +9,4 @@ pub mod physical_check;
 pub mod replacement;
 pub mod separation;
 pub mod shape_filter;
+pub mod sizing;

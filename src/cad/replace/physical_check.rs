@@ -5,6 +5,8 @@
 //! bounded) picks the final models; neighbours still overlapping side by side are pulled apart
 //! (`separation`); then every model is snapped onto its supporting surface.
 
+use std::borrow::Cow;
+
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -14,6 +16,7 @@ pub use crate::cad::placed_solid::{
     PlacedSolid, deepest_contact, layout_penetration, penetration_depth, support_area,
 };
 use crate::cad::replace::separation::{parted, retreat_from_walls, separate_neighbours};
+use crate::cad::replace::sizing::built_to_fit;
 use crate::geometry::Plane;
 
 /// Deeper interpenetration than this (metres) is a conflict (the bar).
@@ -54,7 +57,8 @@ pub struct PlacementCheck {
     pub layout_penetration_m: f32,
     /// Share of its bottom on the parent model's surface, when another object holds it.
     pub support_area: Option<f32>,
-    /// Conflicts left: penetrations over 1 cm (layout or object), failed support tests.
+    /// Conflicts left: penetrations over 1 cm (layout, or another model when this one yields
+    /// to it), any into an obstacle, failed support tests, tipping over.
     pub conflicts: usize,
     /// How far it was pulled apart from its neighbours and out of walls (metres): moved, for a
     /// movable object, or taken off its width or depth, for a fixed one. Over a few centimetres
@@ -72,6 +76,9 @@ pub struct CheckedPlacements {
     pub checks: Vec<Option<PlacementCheck>>,
     /// Objects moved off their best alignment by the search.
     pub swaps: usize,
+    /// Per object: the chosen model as built to its fitted size, when it is a library model
+    /// (`sizing`); the pose in `chosen` places this model, not the database's.
+    pub built: Vec<Option<DatabaseModel>>,
 }
 
 /// Search steps at most (each moves one object to another candidate).
@@ -90,7 +97,30 @@ pub fn check_placements(
     layout: &[Plane],
     obstacles: &[PlacedSolid],
 ) -> CheckedPlacements {
-    let alignments = &fit_heights_to_children(alignments, holders);
+    // Library models are built to the size they were fitted at rather than stretched to it
+    // (`sizing`), then fitted in height to what they hold.
+    let sized: Vec<Vec<(Cow<DatabaseModel>, Affine3A)>> = alignments
+        .par_iter()
+        .map(|options| {
+            options
+                .iter()
+                .map(|&(model, pose)| match built_to_fit(model, &pose) {
+                    Some((built, pose)) => (Cow::Owned(built), pose),
+                    None => (Cow::Borrowed(model), pose),
+                })
+                .collect()
+        })
+        .collect();
+    let fitted = fit_heights_to_children(sized, holders);
+    let alignments: &Vec<Vec<(&DatabaseModel, Affine3A)>> = &fitted
+        .iter()
+        .map(|options| {
+            options
+                .iter()
+                .map(|(model, pose)| (model.as_ref(), *pose))
+                .collect()
+        })
+        .collect();
     let solids: Vec<Vec<PlacedSolid>> = alignments
         .par_iter()
         .map(|options| {
@@ -226,35 +256,39 @@ pub fn check_placements(
     let checks = (0..n)
         .map(|i| {
             let me = finals[i].as_ref()?;
-            let others = (0..n)
+            let depths: Vec<(usize, f32)> = (0..n)
                 .filter(|&j| j != i)
-                .filter_map(|j| finals[j].as_ref());
-            let max_penetration_m = others
-                .chain(obstacles)
-                .map(|o| penetration_depth(me, o))
-                .fold(0.0f32, f32::max);
+                .filter_map(|j| Some((j, penetration_depth(me, finals[j].as_ref()?))))
+                .collect();
             let obstacle_penetration_m = obstacles
                 .iter()
                 .map(|o| penetration_depth(me, o))
                 .fold(0.0f32, f32::max);
+            let max_penetration_m = depths
+                .iter()
+                .map(|(_, d)| *d)
+                .fold(obstacle_penetration_m, f32::max);
+            // A deep overlap of two models is charged to the one that yields (`keeps_place`):
+            // leaving a table as its box for a chair pushed into it starts the chair, and
+            // everything on the table, inside that box.
+            let overlapped = depths
+                .iter()
+                .any(|&(j, d)| d > MAX_PENETRATION_M && !keeps_place(i, j, holders, movable));
             let layout_penetration_m = layout_penetration(me, layout);
             let held_area = match holders[i] {
                 Holder::Object(p) => finals[p].as_ref().map(|parent| support_area(me, parent)),
                 Holder::Obstacle(k) => obstacles.get(k).map(|parent| support_area(me, parent)),
                 _ => None,
             };
-            let children_unsupported = (0..n)
-                .filter(|&c| holders[c] == Holder::Object(i))
-                .filter_map(|c| finals[c].as_ref())
-                .filter(|c| support_area(c, me) < MIN_SUPPORT_AREA)
-                .count();
+            // A child that does not stand on this model is the child's conflict, not this
+            // one's: the search above has already preferred candidates that hold their children,
+            // and leaving the holder as its box would start everything else it holds inside it.
             let tips_over = holders[i] != Holder::Other && !me.stands();
-            let conflicts = usize::from(max_penetration_m > MAX_PENETRATION_M)
+            let conflicts = usize::from(overlapped)
                 + usize::from(obstacle_penetration_m > MAX_OBSTACLE_PENETRATION_M)
                 + usize::from(layout_penetration_m > MAX_PENETRATION_M)
                 + usize::from(held_area.is_some_and(|a| a < MIN_SUPPORT_AREA))
-                + usize::from(tips_over)
-                + children_unsupported;
+                + usize::from(tips_over);
             Some(PlacementCheck {
                 chosen: choice[i]?,
                 tips_over,
@@ -270,6 +304,12 @@ pub fn check_placements(
         chosen: (0..n).map(|i| Some((choice[i]?, poses[i]?))).collect(),
         checks,
         swaps,
+        built: (0..n)
+            .map(|i| match &fitted[i][choice[i]?].0 {
+                Cow::Owned(built) => Some(built.clone()),
+                Cow::Borrowed(_) => None,
+            })
+            .collect(),
     }
 }
 
@@ -278,22 +318,25 @@ pub fn check_placements(
 const HEIGHT_FIT_BAND_M: f32 = 0.2;
 const HEIGHT_FIT_SCALES: std::ops::RangeInclusive<f32> = 0.7..=1.3;
 
-/// `alignments` with every holder's candidates stretched or squashed in height, about their
+/// `options` with every holder's candidates stretched or squashed in height, about their
 /// bottom, so that the surface under what they hold meets its bottom: what stands on a table
 /// was seen where its top is, while the table's model was scaled to its segment, which the
 /// chairs pushed under it bled into (7-Scenes redkitchen: a table segment 0.84 m tall under
 /// cups standing at 0.715 m). The median over the held objects' best candidates decides; a
-/// scale outside `HEIGHT_FIT_SCALES` is left alone.
+/// scale outside `HEIGHT_FIT_SCALES` is left alone. A library model is built again at the
+/// fitted height, where the library lays out its inner surfaces anew (a bookcase's boards keep
+/// their spacing), so the fitted height is kept only when it seats the held objects better
+/// than the height the model was aligned at.
 fn fit_heights_to_children<'a>(
-    alignments: &[Vec<(&'a DatabaseModel, Affine3A)>],
+    options: Vec<Vec<(Cow<'a, DatabaseModel>, Affine3A)>>,
     holders: &[Holder],
-) -> Vec<Vec<(&'a DatabaseModel, Affine3A)>> {
-    let held: Vec<Option<PlacedSolid>> = alignments
+) -> Vec<Vec<(Cow<'a, DatabaseModel>, Affine3A)>> {
+    let held: Vec<Option<PlacedSolid>> = options
         .iter()
         .map(|options| options.first().map(|(m, pose)| PlacedSolid::new(m, pose)))
         .collect();
-    alignments
-        .iter()
+    options
+        .into_par_iter()
         .enumerate()
         .map(|(i, options)| {
             let children: Vec<&PlacedSolid> = (0..holders.len())
@@ -301,42 +344,101 @@ fn fit_heights_to_children<'a>(
                 .filter_map(|c| held[c].as_ref())
                 .collect();
             if children.is_empty() {
-                return options.clone();
+                return options;
             }
             options
-                .iter()
-                .map(|&(model, pose)| {
-                    let solid = PlacedSolid::new(model, &pose);
+                .into_iter()
+                .map(|(model, pose)| {
+                    let solid = PlacedSolid::new(&model, &pose);
+                    let Some(scale) = height_fit_scale(&solid, &children) else {
+                        return (model, pose);
+                    };
                     let base = solid.bottom_z();
-                    let mut scales: Vec<f32> = children
-                        .iter()
-                        .filter_map(|c| {
-                            let centre = 0.25 * c.footprint.iter().sum::<Vec3>();
-                            let z = c.bottom_z();
-                            let top = solid.surface_height_within(
-                                centre.truncate(),
-                                z,
-                                HEIGHT_FIT_BAND_M,
-                            )?;
-                            (top - base > 0.05).then(|| (z - base) / (top - base))
-                        })
-                        .collect();
-                    if scales.is_empty() {
-                        return (model, pose);
-                    }
-                    scales.sort_by(f32::total_cmp);
-                    let scale = scales[scales.len() / 2];
-                    if !HEIGHT_FIT_SCALES.contains(&scale) {
-                        return (model, pose);
-                    }
                     let about_base = Affine3A::from_translation(Vec3::Z * base)
                         * Affine3A::from_scale(Vec3::new(1.0, 1.0, scale))
                         * Affine3A::from_translation(-Vec3::Z * base);
-                    (model, about_base * pose)
+                    let stretched = about_base * pose;
+                    match built_to_fit(&model, &stretched) {
+                        Some((rebuilt, rebuilt_pose)) => {
+                            let seated = PlacedSolid::new(&rebuilt, &rebuilt_pose);
+                            if seat_error(&seated, &children) < seat_error(&solid, &children) {
+                                (Cow::Owned(rebuilt), rebuilt_pose)
+                            } else {
+                                (model, pose)
+                            }
+                        }
+                        None => (model, stretched),
+                    }
                 })
                 .collect()
         })
         .collect()
+}
+
+/// The height scale about its bottom that brings `solid`'s surfaces under `children` to their
+/// bottoms (the median over the children), when it lies within `HEIGHT_FIT_SCALES`.
+fn height_fit_scale(solid: &PlacedSolid, children: &[&PlacedSolid]) -> Option<f32> {
+    let base = solid.bottom_z();
+    let mut scales: Vec<f32> = children
+        .iter()
+        .filter_map(|c| {
+            let centre = 0.25 * c.footprint.iter().sum::<Vec3>();
+            let z = c.bottom_z();
+            let top = solid.surface_height_within(centre.truncate(), z, HEIGHT_FIT_BAND_M)?;
+            (top - base > 0.05).then(|| (z - base) / (top - base))
+        })
+        .collect();
+    if scales.is_empty() {
+        return None;
+    }
+    scales.sort_by(f32::total_cmp);
+    let scale = scales[scales.len() / 2];
+    HEIGHT_FIT_SCALES.contains(&scale).then_some(scale)
+}
+
+/// The median height (metres) between the children's bottoms and `solid`'s surfaces under them;
+/// a child with no surface within `HEIGHT_FIT_BAND_M` counts as that far.
+fn seat_error(solid: &PlacedSolid, children: &[&PlacedSolid]) -> f32 {
+    let mut gaps: Vec<f32> = children
+        .iter()
+        .map(|c| {
+            let centre = 0.25 * c.footprint.iter().sum::<Vec3>();
+            let z = c.bottom_z();
+            solid
+                .surface_height_within(centre.truncate(), z, HEIGHT_FIT_BAND_M)
+                .map_or(HEIGHT_FIT_BAND_M, |top| (top - z).abs())
+        })
+        .collect();
+    gaps.sort_by(f32::total_cmp);
+    gaps.get(gaps.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Whether object `i` keeps its placement where its model and `j`'s overlap: it holds `j`, or
+/// `j` does not hold it and it is fixed while `j` is movable, or, both alike, more objects rest
+/// on it (directly or not). At a tie neither does, and both are left in conflict.
+fn keeps_place(i: usize, j: usize, holders: &[Holder], movable: &[bool]) -> bool {
+    if holders[j] == Holder::Object(i) {
+        return true;
+    }
+    if holders[i] == Holder::Object(j) {
+        return false;
+    }
+    let resting_on = |o: usize| {
+        (0..holders.len())
+            .filter(|&c| {
+                let mut at = c;
+                for _ in 0..holders.len() {
+                    match holders[at] {
+                        Holder::Object(p) if p == o => return true,
+                        Holder::Object(p) => at = p,
+                        _ => return false,
+                    }
+                }
+                false
+            })
+            .count()
+    };
+    (!movable[i], resting_on(i)) > (!movable[j], resting_on(j))
 }
 
 /// Object indices with every holder before what it holds (objects in a support cycle, which
@@ -444,6 +546,47 @@ mod tests {
         let check = checked.checks[1].as_ref().expect("cup check");
         assert_eq!(check.conflicts, 0, "{check:?}");
         assert!(check.support_area.expect("held by the table") > 0.99);
+    }
+
+    #[test]
+    fn a_holder_keeps_its_model_when_a_chair_is_pushed_into_it_or_a_child_misses_its_top() {
+        let db = CadDatabase::parametric();
+        let model = |id: &str| model_of(&db, id);
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let table = model("table_01");
+        let top = table.model.size.z;
+        let at = |m: &'static str, p: Vec3| vec![(model(m), Affine3A::from_translation(p))];
+        let alignments = vec![
+            vec![(table, Affine3A::IDENTITY)],
+            // A cup on the top.
+            at("cup_01", Vec3::new(0.3, 0.1, top)),
+            // A book "on" the table that is seen beside it, over nothing.
+            at("book_01", Vec3::new(1.5, 0.0, top)),
+            // A chair standing 35 cm into the table's middle: no pulling apart undoes that.
+            at("chair_01", Vec3::new(0.0, 0.05, 0.0)),
+        ];
+        let holders = [
+            Holder::Floor(floor),
+            Holder::Object(0),
+            Holder::Object(0),
+            Holder::Floor(floor),
+        ];
+        let movable = [false, true, true, true];
+        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[]);
+        let check = |i: usize| checked.checks[i].as_ref().expect("checked");
+        assert!(check(0).max_penetration_m > 0.1, "{:?}", check(0));
+        assert_eq!(check(0).conflicts, 0, "the table stays: {:?}", check(0));
+        assert_eq!(check(1).conflicts, 0, "{:?}", check(1));
+        assert!(
+            check(2).conflicts > 0,
+            "the book over nothing: {:?}",
+            check(2)
+        );
+        assert!(
+            check(3).conflicts > 0,
+            "the chair in the table: {:?}",
+            check(3)
+        );
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use glam::{Mat4, Vec3};
+use glam::{Affine3A, Mat4, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -15,6 +15,7 @@ use crate::cad::replace::matching::{
     Candidate, Facing, KEEP_CANDIDATES, ObservedObject, rank_candidates,
 };
 use crate::cad::replace::physical_check::{Holder, PlacedSolid, PlacementCheck, check_placements};
+use crate::cad::replace::sizing::pose_scale;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
@@ -189,6 +190,13 @@ pub fn align_scene_reusing(
 const SWAP_SLACK_RATIO: f32 = 0.5;
 const SWAP_SLACK_M: f32 = 0.01;
 
+/// What the physical check placed: every checked object's record, and the library models it
+/// built to an object's size that a placement uses (the database does not hold them).
+pub struct Placements {
+    pub records: Vec<ReplacementRecord>,
+    pub built: Vec<DatabaseModel>,
+}
+
 /// One object's replacement, as report.json lists it.
 #[derive(Clone, Debug, Serialize)]
 pub struct ReplacementRecord {
@@ -196,7 +204,8 @@ pub struct ReplacementRecord {
     pub model: String,
     pub alignment_error_m: f32,
     pub matching_error: f32,
-    /// Per model axis.
+    /// Per model axis, relative to the database's model: the stretch of an imported model, or
+    /// the size a library model was built to over its nominal size.
     pub scale: [f32; 3],
     /// The physical check's verdict on the final placement.
     #[serde(flatten)]
@@ -206,9 +215,10 @@ pub struct ReplacementRecord {
 /// The global physical check (PhysicalCheck): chooses among the aligned candidates of the
 /// objects `ids` (`alignments`, best first) so that models neither interpenetrate nor overhang
 /// their supports, snaps them onto what holds them (as `graph`'s support edges say), and writes
-/// each placement into its node's `cad` (the scale there is the geometric mean; the per-axis
-/// scale is in `world_from_model`) with its alignment error measured again on `points` (the
-/// check moves models by millimetres to centimetres). An object whose final placement still
+/// each placement into its node's `cad` (the scale there is the geometric mean of what is left
+/// in `world_from_model`: a library model is built to its fitted size instead, and the models
+/// so built that placements use are returned beside the records) with its alignment error
+/// measured again on `points` (the check moves models by millimetres to centimetres). An object whose final placement still
 /// conflicts gets no `cad` and keeps its segment mesh, which every simulator holds still: a
 /// model left 10 cm inside a counter, or on nothing, would fly off at the first step (a chair
 /// in the knee space between two counters, a book on a chair-shaped segment of label
@@ -219,7 +229,7 @@ pub fn check_and_place(
     ids: &[String],
     alignments: &[Vec<Alignment>],
     points: &HashMap<String, Vec<Vec3>>,
-) -> Vec<ReplacementRecord> {
+) -> Placements {
     let layout_plane = |id: &str| {
         graph
             .node(id)
@@ -269,27 +279,42 @@ pub fn check_and_place(
     // table lying on its side conflicts with nothing, and explains nothing. But when none of
     // those stands by itself (a mug seen from above, fitted best lying on its side), the best
     // that does is tried as well: a worse fit beats one that rolls over.
-    let options: Vec<Vec<(&DatabaseModel, glam::Affine3A)>> = alignments
+    let picked: Vec<Vec<usize>> = alignments
         .iter()
         .map(|list| {
             let best = list.first().map_or(0.0, choice_score);
-            let placed = |a: &Alignment| (&db.models()[a.candidate.model], a.world_from_model);
-            let stands = |a: &&Alignment| {
-                let (model, pose) = placed(a);
-                PlacedSolid::new(model, &pose).stands()
+            let stands = |k: &usize| {
+                let a = &list[*k];
+                PlacedSolid::new(&db.models()[a.candidate.model], &a.world_from_model).stands()
             };
-            let mut options: Vec<&Alignment> = list
+            let close = list
                 .iter()
                 .take_while(|a| {
                     choice_score(a) <= best + (SWAP_SLACK_RATIO * best).max(SWAP_SLACK_M)
                 })
-                .collect();
-            if !options.iter().any(stands)
-                && let Some(standing) = list.iter().skip(options.len()).find(stands)
+                .count();
+            let mut picked: Vec<usize> = (0..close).collect();
+            if !picked.iter().any(stands)
+                && let Some(standing) = (close..list.len()).find(stands)
             {
-                options.push(standing);
+                picked.push(standing);
             }
-            options.into_iter().map(placed).collect()
+            picked
+        })
+        .collect();
+    let options: Vec<Vec<(&DatabaseModel, Affine3A)>> = picked
+        .iter()
+        .zip(alignments)
+        .map(|(picked, list)| {
+            picked
+                .iter()
+                .map(|&k| {
+                    (
+                        &db.models()[list[k].candidate.model],
+                        list[k].world_from_model,
+                    )
+                })
+                .collect()
         })
         .collect();
     let table = ClassTable::builtin();
@@ -304,6 +329,7 @@ pub fn check_and_place(
         .collect();
     let checked = check_placements(&options, &holders, &movable, &layout, &obstacles);
     let mut records = Vec::new();
+    let mut built = Vec::new();
     for (i, id) in ids.iter().enumerate() {
         let (Some((k, pose)), Some(check)) = (checked.chosen[i], checked.checks[i].clone()) else {
             continue;
@@ -311,11 +337,12 @@ pub fn check_and_place(
         let Some(node) = graph.nodes.iter_mut().find(|n| n.id == *id) else {
             continue;
         };
-        let a = &alignments[i][k];
-        let entry = &db.models()[a.candidate.model];
+        let a = &alignments[i][picked[i][k]];
+        let sized = checked.built[i].as_ref();
+        let entry = sized.unwrap_or(options[i][k].0);
         let model = &entry.model;
-        let m = pose.matrix3;
-        let scale = Vec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+        // Relative to the database's model, whether stretched or built to this size.
+        let scale = pose_scale(&pose) * model.size / options[i][k].0.model.size;
         let error = points
             .get(id)
             .and_then(|p| alignment_error(p, entry, &pose))
@@ -324,9 +351,10 @@ pub fn check_and_place(
             node.cad = Some(CadPlacement {
                 model: model.id.clone(),
                 world_from_model: Mat4::from(pose).to_cols_array(),
-                scale: scale.element_product().cbrt(),
+                scale: pose_scale(&pose).element_product().cbrt(),
                 alignment_error: error,
             });
+            built.extend(sized.cloned());
         }
         records.push(ReplacementRecord {
             id: id.clone(),
@@ -337,7 +365,7 @@ pub fn check_and_place(
             check,
         });
     }
-    records
+    Placements { records, built }
 }
 
 #[cfg(test)]
@@ -388,7 +416,7 @@ mod tests {
             vec![standing_at(&db, "chair_01", &graph, "table_1")],
             vec![standing_at(&db, "chair_01", &graph, "chair_2")],
         ];
-        let records = check_and_place(&mut graph, &db, &ids, &alignments, &HashMap::new());
+        let records = check_and_place(&mut graph, &db, &ids, &alignments, &HashMap::new()).records;
         let record = |id: &str| records.iter().find(|r| r.id == id).expect("record");
         assert!(record("chair_1").check.conflicts > 0);
         assert!(record("chair_1").check.max_penetration_m > 0.1);
