@@ -218,11 +218,12 @@ pub struct ReplacementRecord {
 /// each placement into its node's `cad` (the scale there is the geometric mean of what is left
 /// in `world_from_model`: a library model is built to its fitted size instead, and the models
 /// so built that placements use are returned beside the records) with its alignment error
-/// measured again on `points` (the check moves models by millimetres to centimetres). An object whose final placement still
-/// conflicts gets no `cad` and keeps its segment mesh, which every simulator holds still: a
-/// model left 10 cm inside a counter, or on nothing, would fly off at the first step (a chair
-/// in the knee space between two counters, a book on a chair-shaped segment of label
-/// bleeding, in 7-Scenes redkitchen). Its record is returned all the same, with the conflicts.
+/// measured again on `points` (the check moves models by millimetres to centimetres). An
+/// object whose final placement still conflicts gets no `cad` and keeps its segment mesh,
+/// which every simulator holds still: a model left 10 cm inside a counter, or on nothing,
+/// would fly off at the first step (a chair in the knee space between two counters, a book on
+/// a chair-shaped segment of label bleeding, in 7-Scenes redkitchen). Its record is returned
+/// all the same, with the conflicts.
 pub fn check_and_place(
     graph: &mut ContactGraph,
     db: &CadDatabase,
