@@ -82,8 +82,8 @@ mod tests {
         for (x, y) in a.iter().zip(&b) {
             assert!(x.distance(*y) < 2e-3, "{a:?} against {b:?}");
         }
-        // Boards keep their spacing (about 0.35 m): the stretched bookcase squeezes its five
-        // boards into 0.9 m, the built one has two.
+        // Boards keep their spacing (about 0.35 m): the stretched bookcase squeezes its four
+        // inner boards into 0.9 m, the built one has one.
         let boards = |m: &DatabaseModel| {
             m.pieces
                 .iter()
