@@ -2,6 +2,7 @@
 //! (Han et al., Sect. 4; the ICP route and shape filters of Sivananda et al.).
 
 pub mod alignment;
+pub mod height_fit;
 pub mod icp;
 pub mod matching;
 pub mod orientation;
