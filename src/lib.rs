@@ -50,6 +50,7 @@ impl PluginGroup for ReconstructionPlugins {
             .add(systems::CadReplacementPlugin)
             .add(systems::KinematicTreePlugin)
             .add(systems::PhysicsValidationPlugin)
+            .add(systems::ExportPlugin)
     }
 }
 

@@ -8,10 +8,7 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::cad::db::database::CadDatabase;
-use crate::cad::db::export::write_scene_models;
 use crate::error::{InputError, IsceneError};
-use crate::export::augmented::augmented_points;
-use crate::export::{write_augmented, write_occupancy, write_tree_exports};
 use crate::graph::gravity::GravityReport;
 use crate::io::Sequence;
 use crate::io::atomic::{StagedDir, write_file_atomically};
@@ -20,22 +17,19 @@ use crate::io::sequence::SequenceFormat;
 use crate::io::write_sequence::write_text;
 use crate::map::memory_budget::{check_map_fits, check_memory_budget, check_voxel_size};
 use crate::panoptic::live::{LiveReport, LiveSettings, map_live, wait_for_sequence};
-use crate::panoptic::panoptic_dir::{PanopticIndex, write_panoptic};
 use crate::panoptic::{InstanceFusion, MapperParams, PanopticMapper};
 use crate::scene::SceneSpec;
 use crate::scene::{RenderOptions, render_sequence};
-use crate::systems::cad_replacement::{
-    CadAlignMethod, CadAlignmentCache, CadLibrary, CadReport, SceneModels,
-};
+use crate::systems::Reconstruct;
+use crate::systems::cad_replacement::{CadAlignMethod, CadAlignmentCache, CadLibrary, CadReport};
 use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
-use crate::systems::ingest::{IngestReport, InputSequence, StageError};
-use crate::systems::kinematic_tree::SceneKinematicTree;
+use crate::systems::export::{ExportTarget, ExportedFiles};
+use crate::systems::ingest::{IngestReport, InputSequence};
 use crate::systems::panoptic_mapping::{
     LivePreview, MappingConfig, PanopticMap, PanopticSurface, Segmenter, segmentation_service,
 };
 use crate::systems::physics_validation::PhysicsReport;
-use crate::systems::stages::StageMarks;
-use crate::systems::{Reconstruct, ReconstructionStage};
+use crate::systems::stages::{StageError, StageMarks};
 
 pub use crate::cad::replace::replacement::AlignMethod;
 pub use crate::segmentation::SegmentationChoice;
@@ -115,10 +109,8 @@ pub struct ReconstructReport {
     pub cad: Option<CadReport>,
     /// The rest test's verdict per object and the sweep of every door and drawer.
     pub physics: Option<PhysicsReport>,
-    /// Stages that ran, with wall-clock seconds; rendering and writing are listed too.
+    /// Stages that ran, with wall-clock seconds; rendering (or live mapping) comes first.
     pub timings: Vec<(String, f64)>,
-    /// Stages of the pipeline that have no implementation yet and did not run.
-    pub stages_not_built: Vec<String>,
     pub outputs: Vec<String>,
     /// What a live session measured (`--live`).
     pub live: Option<LiveReport>,
@@ -137,27 +129,6 @@ pub struct PanopticReport {
     pub surface_voxels: usize,
     /// Entity id, class and surface voxels.
     pub entities: Vec<(String, String, usize)>,
-}
-
-/// Stages with systems in this build.
-const BUILT_STAGES: [ReconstructionStage; 10] = [
-    ReconstructionStage::Ingest,
-    ReconstructionStage::Segment,
-    ReconstructionStage::Integrate,
-    ReconstructionStage::Extract,
-    ReconstructionStage::ContactGraph,
-    ReconstructionStage::CadMatch,
-    ReconstructionStage::CadAlign,
-    ReconstructionStage::PhysicalCheck,
-    ReconstructionStage::KinematicTree,
-    ReconstructionStage::PhysicsValidation,
-];
-
-fn fusion_name(fusion: InstanceFusion) -> &'static str {
-    match fusion {
-        InstanceFusion::Joint => "joint",
-        InstanceFusion::Voxblox => "voxblox++",
-    }
 }
 
 fn spec_fingerprint(text: &str) -> String {
@@ -370,50 +341,8 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         .map(|dir| CadDatabase::from_folder(dir).map(std::sync::Arc::new))
         .transpose()?;
     let mut timings = Vec::new();
-    let (sequence_dir, rendered) = match &options.input {
-        None => (
-            render_input(
-                crate::BUILTIN_KITCHEN,
-                Path::new("scenes/kitchen.json (built in)"),
-                &options.out,
-                options.progress,
-                &mut timings,
-            )?,
-            true,
-        ),
-        Some(p) if p.extension().is_some_and(|e| e == "json") => {
-            let text = std::fs::read_to_string(p).map_err(|e| InputError::io(p, &e))?;
-            (
-                render_input(&text, p, &options.out, options.progress, &mut timings)?,
-                true,
-            )
-        }
-        Some(p) => (p.clone(), false),
-    };
-    let mut sequence = match &options.live {
-        Some(live) => wait_for_sequence(&sequence_dir, live)?,
-        None => Sequence::open(&sequence_dir)?,
-    };
-    if let Some((start, end, step)) = options.frames.filter(|_| options.live.is_none()) {
-        sequence.select(start, end, step);
-        if sequence.frames.is_empty() {
-            return Err(InputError::invalid(
-                &sequence_dir,
-                format!("--frames {start}:{end:?}:{step} selects no frame"),
-            )
-            .into());
-        }
-    }
-    check_map_fits(&sequence, options.voxel, options.max_memory_gb)?;
-    if options.segmentation == SegmentationChoice::Oracle && sequence.labels.is_none() {
-        return Err(InputError::missing(sequence_dir.join("labels.json"), "--segmentation oracle needs ground-truth labels; use --segmentation none (or onnx) for real data").into());
-    }
-    let format = match sequence.format {
-        SequenceFormat::Native => "native",
-        SequenceFormat::Tum => "tum",
-        SequenceFormat::Open3dLog => "open3d-log",
-    };
-
+    let (sequence_dir, rendered) = resolve_input(options, &mut timings)?;
+    let sequence = open_sequence(&sequence_dir, options)?;
     let mapping = MappingConfig {
         params: MapperParams {
             segment_every: options.segment_every.max(1),
@@ -426,6 +355,8 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     // Staged before the work, so that a live session's previews land in the output's own folder.
     let staged = StagedDir::new(&target)?;
     let mut app = reconstruction_app(options, &mapping, &cad_library);
+    app.insert_resource(ExportTarget(staged.path().to_path_buf()));
+    let format = sequence.format;
     let mut live_report = None;
     match &options.live {
         Some(live) => {
@@ -454,38 +385,86 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
         return Err(err);
     }
-    let ingest = app
-        .world()
-        .get_resource::<IngestReport>()
-        .cloned()
-        .unwrap_or_default();
-    let stage_seconds = app.world().resource::<StageMarks>().seconds();
-    timings.extend(
-        stage_seconds
-            .into_iter()
-            .filter(|(s, _)| BUILT_STAGES.contains(s))
-            .map(|(s, t)| (s.name().to_string(), t)),
-    );
+    let mut report = collect_report(app.world(), options, sequence_dir, format, rendered);
+    report.timings.splice(0..0, timings);
+    report.live = live_report;
+    write_text(
+        &staged.path().join("report.json"),
+        &serde_json::to_string_pretty(&report).unwrap_or_default(),
+    )?;
+    staged.commit()?;
+    Ok(report)
+}
 
-    let write_start = Instant::now();
-    let mut outputs = vec!["report.json".to_string()];
-    let mut panoptic = None;
-    if let (Some(map), Some(surface)) = (
-        app.world().get_resource::<PanopticMap>(),
-        app.world().get_resource::<PanopticSurface>(),
+/// The sequence folder to map, and whether it was rendered here: a specification (or none, the
+/// built-in kitchen) is rendered next to the output first.
+fn resolve_input(
+    options: &ReconstructOptions,
+    timings: &mut Vec<(String, f64)>,
+) -> Result<(PathBuf, bool), IsceneError> {
+    Ok(match &options.input {
+        None => (
+            render_input(
+                crate::BUILTIN_KITCHEN,
+                Path::new("scenes/kitchen.json (built in)"),
+                &options.out,
+                options.progress,
+                timings,
+            )?,
+            true,
+        ),
+        Some(p) if p.extension().is_some_and(|e| e == "json") => {
+            let text = std::fs::read_to_string(p).map_err(|e| InputError::io(p, &e))?;
+            (
+                render_input(&text, p, &options.out, options.progress, timings)?,
+                true,
+            )
+        }
+        Some(p) => (p.clone(), false),
+    })
+}
+
+/// The input sequence with `--frames` applied (a live session waits for its first frame and
+/// takes every frame), checked against the memory budget and the segmentation's needs.
+fn open_sequence(
+    sequence_dir: &Path,
+    options: &ReconstructOptions,
+) -> Result<Sequence, IsceneError> {
+    let mut sequence = match &options.live {
+        Some(live) => wait_for_sequence(sequence_dir, live)?,
+        None => Sequence::open(sequence_dir)?,
+    };
+    if let Some((start, end, step)) = options.frames.filter(|_| options.live.is_none()) {
+        sequence.select(start, end, step);
+        if sequence.frames.is_empty() {
+            return Err(InputError::invalid(
+                sequence_dir,
+                format!("--frames {start}:{end:?}:{step} selects no frame"),
+            )
+            .into());
+        }
+    }
+    check_map_fits(&sequence, options.voxel, options.max_memory_gb)?;
+    if options.segmentation == SegmentationChoice::Oracle && sequence.labels.is_none() {
+        return Err(InputError::missing(sequence_dir.join("labels.json"), "--segmentation oracle needs ground-truth labels; use --segmentation none (or onnx) for real data").into());
+    }
+    Ok(sequence)
+}
+
+/// report.json's figures, read from the world the stages and the export left.
+fn collect_report(
+    world: &World,
+    options: &ReconstructOptions,
+    input: PathBuf,
+    format: SequenceFormat,
+    rendered: bool,
+) -> ReconstructReport {
+    let panoptic = match (
+        world.get_resource::<PanopticMap>(),
+        world.get_resource::<PanopticSurface>(),
     ) {
-        let index = PanopticIndex {
-            voxel_size: options.voxel,
-            fusion: fusion_name(options.fusion).into(),
-            entities: surface.entities.clone(),
-        };
-        outputs.extend(write_panoptic(
-            &staged.path().join("panoptic"),
-            &index,
-            &surface.voxels,
-        )?);
-        panoptic = Some(PanopticReport {
-            fusion: index.fusion.clone(),
+        (Some(map), Some(surface)) => Some(PanopticReport {
+            fusion: options.fusion.name().into(),
             voxel_size_m: options.voxel,
             blocks: map.0.tsdf.blocks.len(),
             map_memory_mb: map.0.tsdf.memory_bytes() as f64 / 1e6,
@@ -498,78 +477,39 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
                 .iter()
                 .map(|e| (e.id.clone(), e.class.clone(), e.surface_voxels))
                 .collect(),
-        });
-    }
-    let contact_graph = app.world().get_resource::<SceneContactGraph>();
-    if let Some(scene) = contact_graph {
-        write_text(
-            &staged.path().join("contact_graph.json"),
-            &scene.graph.to_json(),
-        )?;
-        outputs.push("contact_graph.json".into());
-        if let Some(models) = app.world().get_resource::<SceneModels>() {
-            outputs.extend(write_scene_models(staged.path(), &scene.graph, &models.0)?);
+        }),
+        _ => None,
+    };
+    let contact_graph = world.get_resource::<SceneContactGraph>();
+    let mut outputs = vec!["report.json".to_string()];
+    outputs.extend(world.resource::<ExportedFiles>().0.iter().cloned());
+    ReconstructReport {
+        input,
+        format: match format {
+            SequenceFormat::Native => "native",
+            SequenceFormat::Tum => "tum",
+            SequenceFormat::Open3dLog => "open3d-log",
         }
-    }
-    let tree = app
-        .world()
-        .get_resource::<SceneKinematicTree>()
-        .map(|t| &t.0);
-    if let Some(tree) = tree {
-        outputs.extend(write_tree_exports(staged.path(), tree, "scene")?);
-    }
-    if let (Some(surface), Some(scene)) =
-        (app.world().get_resource::<PanopticSurface>(), contact_graph)
-    {
-        let aligned_from_world = glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(
-            &scene.gravity.aligned_from_world,
-        ));
-        let map_points: Vec<glam::Vec3> = surface
-            .voxels
-            .iter()
-            .map(|(p, _)| aligned_from_world.transform_point3(*p))
-            .collect();
-        outputs.extend(write_occupancy(staged.path(), &map_points, tree)?);
-        if let Some(library) = app.world().get_resource::<SceneModels>() {
-            let points = augmented_points(
-                &surface.voxels,
-                &aligned_from_world,
-                &surface.entities,
-                &scene.graph,
-                &library.0,
-                options.voxel,
-            );
-            outputs.push(write_augmented(staged.path(), &points, &surface.entities)?);
-        }
-    }
-    let mut report = ReconstructReport {
-        input: sequence_dir,
-        format: format.into(),
+        .into(),
         rendered,
         frame_selection: options.frames,
-        ingest,
+        ingest: world
+            .get_resource::<IngestReport>()
+            .cloned()
+            .unwrap_or_default(),
         entities: panoptic.as_ref().map_or(0, |p| p.entities.len()),
         relations: contact_graph.map_or(0, |c| c.graph.edges.len()),
         gravity: contact_graph.map(|c| c.gravity.clone()),
         panoptic,
-        cad: app.world().get_resource::<CadReport>().cloned(),
-        physics: app.world().get_resource::<PhysicsReport>().cloned(),
-        timings,
-        stages_not_built: ReconstructionStage::ALL
-            .iter()
-            .filter(|s| !BUILT_STAGES.contains(s))
-            .map(|s| s.name().to_string())
+        cad: world.get_resource::<CadReport>().cloned(),
+        physics: world.get_resource::<PhysicsReport>().cloned(),
+        timings: world
+            .resource::<StageMarks>()
+            .seconds()
+            .into_iter()
+            .map(|(s, t)| (s.name().to_string(), t))
             .collect(),
         outputs,
-        live: live_report,
-    };
-    report
-        .timings
-        .push(("write".into(), write_start.elapsed().as_secs_f64()));
-    write_text(
-        &staged.path().join("report.json"),
-        &serde_json::to_string_pretty(&report).unwrap_or_default(),
-    )?;
-    staged.commit()?;
-    Ok(report)
+        live: None,
+    }
 }

@@ -37,6 +37,16 @@ pub enum InstanceFusion {
     Voxblox,
 }
 
+impl InstanceFusion {
+    /// The name report.json and the panoptic index record.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Joint => "joint",
+            Self::Voxblox => "voxblox++",
+        }
+    }
+}
+
 /// What a label resolves to at the end.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LabelIdentity {

@@ -18,10 +18,11 @@ use crate::cad::replace::replacement::{
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
 use crate::components::{ObservedSurface, SceneEntity};
+use crate::error::IsceneError;
 use crate::graph::ContactGraph;
 use crate::systems::contact_graph::SceneContactGraph;
-use crate::systems::ingest::StageError;
 use crate::systems::scene_graph::attach_contact_graph;
+use crate::systems::stages::record_failure;
 
 /// The database replacement chooses from (the parametric library unless one is given).
 #[derive(Resource, Clone)]
@@ -114,11 +115,8 @@ fn observed_points(world: &mut World) -> HashMap<String, Vec<Vec3>> {
         .collect()
 }
 
-/// The contact graph and every entity's observed surface, when the stages before succeeded.
+/// The contact graph and every entity's observed surface, once the contact graph is built.
 fn observed_scene(world: &mut World) -> Option<(ContactGraph, HashMap<String, Vec<Vec3>>)> {
-    if world.resource::<StageError>().0.is_some() {
-        return None;
-    }
     let graph = world.get_resource::<SceneContactGraph>()?.graph.clone();
     Some((graph, observed_points(world)))
 }
@@ -197,15 +195,15 @@ fn cad_align_stage(world: &mut World) {
     world.insert_resource(CadAlignments(alignments));
 }
 
-fn physical_check_stage(world: &mut World) {
+fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
     let Some((mut graph, points)) = observed_scene(world) else {
-        return;
+        return Ok(());
     };
     let (Some(alignments), Some(db)) = (
         world.get_resource::<CadAlignments>(),
         world.get_resource::<CadLibrary>(),
     ) else {
-        return;
+        return Ok(());
     };
     let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = alignments.0.iter().cloned().unzip();
     let db = db.0.clone();
@@ -225,12 +223,8 @@ fn physical_check_stage(world: &mut World) {
         .iter(world)
         .map(|(e, id)| (id.0.clone(), e))
         .collect();
-    if let Err(problem) = attach_contact_graph(world, &graph, &by_id) {
-        world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(format!(
-            "CAD replacement: {problem}"
-        )));
-        return;
-    }
+    attach_contact_graph(world, &graph, &by_id)
+        .map_err(|problem| IsceneError::Internal(format!("CAD replacement: {problem}")))?;
     let mean_alignment_error_m = (!replaced.is_empty())
         .then(|| replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32);
     let align_method = world.get_resource_or_init::<CadAlignMethod>().0;
@@ -250,6 +244,7 @@ fn physical_check_stage(world: &mut World) {
         mean_alignment_error_m,
     });
     world.resource_mut::<SceneContactGraph>().graph = graph;
+    Ok(())
 }
 
 /// Adds the CadMatch, CadAlign and PhysicalCheck stages.
@@ -263,7 +258,9 @@ impl Plugin for CadReplacementPlugin {
             (
                 cad_match_stage.in_set(Stage::CadMatch),
                 cad_align_stage.in_set(Stage::CadAlign),
-                physical_check_stage.in_set(Stage::PhysicalCheck),
+                physical_check_stage
+                    .pipe(record_failure)
+                    .in_set(Stage::PhysicalCheck),
             ),
         );
     }

@@ -7,6 +7,7 @@ use bevy::prelude::*;
 use glam::Affine3A;
 
 use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh, SightedOutline};
+use crate::error::IsceneError;
 use crate::graph::ContactGraph;
 use crate::graph::build::{
     COUNTER_CLASS, ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces,
@@ -14,9 +15,10 @@ use crate::graph::build::{
 use crate::graph::counters::{CounterParams, find_counter_tops};
 use crate::graph::gravity::{GravityReport, camera_up_hint, resolve_gravity};
 use crate::map::extract_mesh;
-use crate::systems::ingest::{InputSequence, StageError};
+use crate::systems::ingest::InputSequence;
 use crate::systems::panoptic_mapping::{PanopticMap, PanopticSurface};
 use crate::systems::scene_graph::attach_contact_graph;
+use crate::systems::stages::record_failure;
 
 /// How the stage finds gravity.
 #[derive(Resource, Clone, Copy, Debug, Default)]
@@ -33,10 +35,7 @@ pub struct SceneContactGraph {
     pub gravity: GravityReport,
 }
 
-fn contact_graph_stage(world: &mut World) {
-    if world.resource::<StageError>().0.is_some() {
-        return;
-    }
+fn contact_graph_stage(world: &mut World) -> Result<(), IsceneError> {
     let mut query = world.query::<(Entity, &SceneEntity, &Panoptic, &SegmentMesh)>();
     let mut entities: Vec<(Entity, String, Panoptic, crate::geometry::TriMesh)> = query
         .iter(world)
@@ -52,7 +51,7 @@ fn contact_graph_stage(world: &mut World) {
         })
         .collect();
     let Some(map) = world.get_resource::<PanopticMap>() else {
-        return;
+        return Ok(());
     };
     let sequence = &world.resource::<InputSequence>().0;
     let estimate = world
@@ -127,13 +126,10 @@ fn contact_graph_stage(world: &mut World) {
             .entity_mut(by_id[&node.id])
             .insert(ObservedSurface(surface));
     }
-    if let Err(problem) = attach_contact_graph(world, &graph, &by_id) {
-        world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(format!(
-            "contact graph: {problem}"
-        )));
-        return;
-    }
+    attach_contact_graph(world, &graph, &by_id)
+        .map_err(|problem| IsceneError::Internal(format!("contact graph: {problem}")))?;
     world.insert_resource(SceneContactGraph { graph, gravity });
+    Ok(())
 }
 
 /// Finds the counter tops among the map's surface no entity claims (graph/counters.rs) and
@@ -201,7 +197,9 @@ impl Plugin for ContactGraphPlugin {
         use crate::systems::ReconstructionStage as Stage;
         app.add_systems(
             crate::systems::Reconstruct,
-            contact_graph_stage.in_set(Stage::ContactGraph),
+            contact_graph_stage
+                .pipe(record_failure)
+                .in_set(Stage::ContactGraph),
         );
     }
 }

@@ -5,9 +5,10 @@ use bevy::prelude::*;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::error::InputError;
+use crate::error::{InputError, IsceneError};
 use crate::io::Sequence;
 use crate::io::sequence::DepthStats;
+use crate::systems::stages::record_failure;
 
 /// The input sequence of this reconstruction.
 #[derive(Resource)]
@@ -28,11 +29,6 @@ pub struct IngestReport {
     pub has_gravity: bool,
     pub has_ground_truth_labels: bool,
 }
-
-/// The first error of a stage, for the caller to report (bad input: exit code 2); later stages
-/// do nothing once it is set.
-#[derive(Resource, Default)]
-pub struct StageError(pub Option<crate::error::IsceneError>);
 
 impl IngestReport {
     /// The report of `sequence`'s frames, whose depth measured `depth`.
@@ -70,12 +66,9 @@ pub fn ingest(sequence: &Sequence) -> Result<IngestReport, InputError> {
 pub fn ingest_system(
     mut commands: Commands,
     sequence: Res<InputSequence>,
-    mut error: ResMut<StageError>,
-) {
-    match ingest(&sequence.0) {
-        Ok(report) => commands.insert_resource(report),
-        Err(e) => error.0 = Some(e.into()),
-    }
+) -> Result<(), IsceneError> {
+    commands.insert_resource(ingest(&sequence.0)?);
+    Ok(())
 }
 
 /// Adds the ingest system to its stage.
@@ -83,10 +76,11 @@ pub struct IngestPlugin;
 
 impl Plugin for IngestPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<StageError>().add_systems(
+        app.add_systems(
             crate::systems::Reconstruct,
             // A live session reports what it integrated itself.
             ingest_system
+                .pipe(record_failure)
                 .run_if(not(resource_exists::<IngestReport>))
                 .in_set(crate::systems::ReconstructionStage::Ingest),
         );

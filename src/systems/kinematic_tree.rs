@@ -13,14 +13,15 @@ use rayon::prelude::*;
 
 use crate::cad::db::database::CadDatabase;
 use crate::components::{CadModel, Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
+use crate::error::IsceneError;
 use crate::graph::ContactGraph;
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::tree::{KinematicTree, TreeLink};
 use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneContactGraph;
-use crate::systems::ingest::StageError;
 use crate::systems::scene_graph::{SceneRoot, transform_of};
+use crate::systems::stages::record_failure;
 
 /// The kinematic tree as the ECS held it at the end of the KinematicTree stage.
 #[derive(Resource, Clone, Debug)]
@@ -44,28 +45,19 @@ pub fn world_from_entity(world: &World, entity: Entity) -> Affine3A {
     pose
 }
 
-fn kinematic_tree_stage(world: &mut World) {
-    if world.resource::<StageError>().0.is_some() {
-        return;
-    }
+fn kinematic_tree_stage(world: &mut World) -> Result<(), IsceneError> {
     let Some(graph) = world
         .get_resource::<SceneContactGraph>()
         .map(|s| s.graph.clone())
     else {
-        return;
+        return Ok(());
     };
     let db = world.get_resource::<SceneModels>().map(|l| l.0.clone());
     spawn_node_links(world, &graph, db.as_deref());
-    match read_kinematic_tree(world) {
-        Ok(tree) => {
-            world.insert_resource(SceneKinematicTree(tree));
-        }
-        Err(problem) => {
-            world.resource_mut::<StageError>().0 = Some(crate::error::IsceneError::Internal(
-                format!("kinematic tree: {problem}"),
-            ));
-        }
-    }
+    let tree = read_kinematic_tree(world)
+        .map_err(|problem| IsceneError::Internal(format!("kinematic tree: {problem}")))?;
+    world.insert_resource(SceneKinematicTree(tree));
+    Ok(())
 }
 
 /// Gives every scene entity the links of its contact-graph node in `graph` (its own link's body
@@ -200,7 +192,9 @@ impl Plugin for KinematicTreePlugin {
     fn build(&self, app: &mut App) {
         app.add_systems(
             crate::systems::Reconstruct,
-            kinematic_tree_stage.in_set(crate::systems::ReconstructionStage::KinematicTree),
+            kinematic_tree_stage
+                .pipe(record_failure)
+                .in_set(crate::systems::ReconstructionStage::KinematicTree),
         );
     }
 }

@@ -3,6 +3,7 @@
 
 pub mod cad_replacement;
 pub mod contact_graph;
+pub mod export;
 pub mod ingest;
 pub mod kinematic_tree;
 pub mod motion_physics;
@@ -14,6 +15,7 @@ pub mod stages;
 
 pub use cad_replacement::CadReplacementPlugin;
 pub use contact_graph::ContactGraphPlugin;
+pub use export::ExportPlugin;
 pub use ingest::IngestPlugin;
 pub use kinematic_tree::KinematicTreePlugin;
 pub use panoptic_mapping::PanopticMappingPlugin;

@@ -6,7 +6,7 @@
 use bevy::prelude::*;
 
 use crate::components::{Panoptic, SceneEntity, SegmentMesh, SightedOutline};
-use crate::error::InputError;
+use crate::error::{InputError, IsceneError};
 use crate::map::free_space::FreeSpaceParams;
 use crate::panoptic::sighted::{SightedParams, precise_depth, sighted_outlines};
 use crate::panoptic::{
@@ -16,7 +16,8 @@ use crate::panoptic::{
 use crate::segmentation::onnx::{OnnxModels, OnnxParams, OnnxSegmentation};
 use crate::segmentation::oracle::OracleSegmentation;
 use crate::segmentation::{SegmentationChoice, SegmentationService};
-use crate::systems::ingest::{InputSequence, StageError};
+use crate::systems::ingest::InputSequence;
+use crate::systems::stages::record_failure;
 
 /// How this reconstruction maps.
 #[derive(Resource, Clone, Debug)]
@@ -93,46 +94,31 @@ fn choose_segmenter(
     mut commands: Commands,
     config: Res<MappingConfig>,
     sequence: Res<InputSequence>,
-    mut error: ResMut<StageError>,
-) {
-    if error.0.is_some() {
-        return;
-    }
-    match segmentation_service(&config, &sequence.0) {
-        Ok(s) => commands.insert_resource(Segmenter(s)),
-        Err(e) => error.0 = Some(e.into()),
-    }
+) -> Result<(), IsceneError> {
+    commands.insert_resource(Segmenter(segmentation_service(&config, &sequence.0)?));
+    Ok(())
 }
 
 fn integrate_frames(
     mut commands: Commands,
     config: Res<MappingConfig>,
     sequence: Res<InputSequence>,
-    segmenter: Option<Res<Segmenter>>,
-    mut error: ResMut<StageError>,
-) {
-    let Some(segmenter) = segmenter.filter(|_| error.0.is_none()) else {
-        return;
-    };
+    segmenter: Res<Segmenter>,
+) -> Result<(), IsceneError> {
     let bar = crate::progress::bar(sequence.0.frames.len() as u64, "mapping", config.progress);
-    match map_sequence(&sequence.0, segmenter.0.as_deref(), &config.params, &bar) {
-        Ok(mapper) => commands.insert_resource(PanopticMap(mapper)),
-        Err(e) => error.0 = Some(e),
-    }
+    let mapped = map_sequence(&sequence.0, segmenter.0.as_deref(), &config.params, &bar);
     bar.finish_and_clear();
+    commands.insert_resource(PanopticMap(mapped?));
+    Ok(())
 }
 
 fn spawn_entities(
     mut commands: Commands,
-    map: Option<Res<PanopticMap>>,
+    map: Res<PanopticMap>,
     segmenter: Option<Res<Segmenter>>,
     sequence: Res<InputSequence>,
     preview: Option<Res<LivePreview>>,
-    mut error: ResMut<StageError>,
-) {
-    let Some(map) = map else {
-        return;
-    };
+) -> Result<(), IsceneError> {
     let mut scene = extract_entities(
         &map.0.tsdf,
         &map.0.instances,
@@ -153,38 +139,24 @@ fn spawn_entities(
             voxels: scene.surface_voxels,
             precise_depth: None,
         });
-        return;
+        return Ok(());
     }
     let sighted = SightedParams::for_voxel(map.0.tsdf.voxel_size);
-    let precise = match precise_depth(&sequence.0, &sighted) {
-        Ok(precise) => precise,
-        Err(e) => {
-            error.0 = Some(e.into());
-            return;
-        }
-    };
+    let precise = precise_depth(&sequence.0, &sighted)?;
     // Depth far more precise than a Kinect's is carved by its own noise, not the Kinect curve's.
     let params = FreeSpaceParams {
         noise_scale: precise.unwrap_or(1.0),
         ..FreeSpaceParams::for_voxel(map.0.tsdf.voxel_size)
     };
-    if let Err(e) = carve_objects(&mut scene.entities, &sequence.0, &map.0, &params) {
-        error.0 = Some(e.into());
-        return;
-    }
-    let outlines = match sighted_outlines(&scene.entities, &sequence.0, &map.0, precise, &sighted) {
-        Ok(outlines) => outlines,
-        Err(e) => {
-            error.0 = Some(e.into());
-            return;
-        }
-    };
+    carve_objects(&mut scene.entities, &sequence.0, &map.0, &params)?;
+    let outlines = sighted_outlines(&scene.entities, &sequence.0, &map.0, precise, &sighted)?;
     spawn_scene_entities(&mut commands, &scene.entities, Some(outlines));
     commands.insert_resource(PanopticSurface {
         entities: scene.entities,
         voxels: scene.surface_voxels,
         precise_depth: precise,
     });
+    Ok(())
 }
 
 fn spawn_scene_entities(
@@ -222,12 +194,14 @@ impl Plugin for PanopticMappingPlugin {
             (
                 // A map made outside the schedule (a live session) is not made again.
                 choose_segmenter
+                    .pipe(record_failure)
                     .run_if(not(resource_exists::<PanopticMap>))
                     .in_set(Stage::Segment),
                 integrate_frames
+                    .pipe(record_failure)
                     .run_if(not(resource_exists::<PanopticMap>))
                     .in_set(Stage::Integrate),
-                spawn_entities.in_set(Stage::Extract),
+                spawn_entities.pipe(record_failure).in_set(Stage::Extract),
             ),
         );
     }

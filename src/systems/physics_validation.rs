@@ -19,7 +19,6 @@ use crate::kinematics::rest_test::{
     Verdict, judge, rest_bodies, start_penetrations,
 };
 use crate::kinematics::tree::KinematicTree;
-use crate::systems::ingest::StageError;
 use crate::systems::kinematic_tree::SceneKinematicTree;
 
 /// What physics validation found, for report.json.
@@ -310,9 +309,6 @@ fn simulate(
 }
 
 fn physics_validation_stage(world: &mut World) {
-    if world.resource::<StageError>().0.is_some() {
-        return;
-    }
     let Some(tree) = world.get_resource::<SceneKinematicTree>() else {
         return;
     };

@@ -6,6 +6,8 @@ use std::time::Instant;
 
 use bevy::prelude::*;
 
+use crate::error::IsceneError;
+
 /// The schedule a reconstruction runs once, stage after stage.
 #[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Reconstruct;
@@ -96,7 +98,12 @@ impl Plugin for StagesPlugin {
             )
                 .chain(),
         );
+        // One failure stops the stages after it: every set runs only while none is recorded.
+        for stage in Self::STAGES {
+            schedule.configure_sets(stage.run_if(no_stage_failed));
+        }
         app.add_schedule(schedule);
+        app.init_resource::<StageError>();
         // A clock mark before the first stage, between every two stages, and after the last:
         // exclusive systems ordered around the sets, so they never race a stage's systems.
         app.init_resource::<StageMarks>();
@@ -123,6 +130,24 @@ impl Plugin for StagesPlugin {
 
 impl StagesPlugin {
     const STAGES: [ReconstructionStage; 11] = ReconstructionStage::ALL;
+}
+
+/// The first failure of a stage, for the caller to report (bad input: exit code 2). The stages
+/// after it do not run.
+#[derive(Resource, Default)]
+pub struct StageError(pub Option<IsceneError>);
+
+/// The run condition of every stage set.
+pub fn no_stage_failed(error: Res<StageError>) -> bool {
+    error.0.is_none()
+}
+
+/// Piped after every stage system that can fail (`system.pipe(record_failure)`): its error
+/// becomes the `StageError`.
+pub fn record_failure(In(result): In<Result<(), IsceneError>>, mut error: ResMut<StageError>) {
+    if let Err(e) = result {
+        error.0.get_or_insert(e);
+    }
 }
 
 /// Clock readings between stages, taken by the `StagesPlugin`'s mark systems.
@@ -164,6 +189,30 @@ mod tests {
             ),
         );
         app.world_mut().run_schedule(Reconstruct);
+    }
+
+    #[test]
+    fn a_failed_stage_stops_the_stages_after_it() {
+        let mut app = App::new();
+        app.add_plugins(StagesPlugin).init_resource::<Counter>();
+        let fail = || -> Result<(), IsceneError> { Err(IsceneError::Internal("broken".into())) };
+        app.add_systems(
+            Reconstruct,
+            (
+                (|mut c: ResMut<Counter>| c.0 += 1).in_set(ReconstructionStage::Ingest),
+                fail.pipe(record_failure)
+                    .in_set(ReconstructionStage::Extract),
+                (|mut c: ResMut<Counter>| c.0 += 10).in_set(ReconstructionStage::ContactGraph),
+                (|mut c: ResMut<Counter>| c.0 += 100).in_set(ReconstructionStage::Export),
+            ),
+        );
+        app.world_mut().run_schedule(Reconstruct);
+        assert_eq!(app.world().resource::<Counter>().0, 1, "only ingest ran");
+        let error = app.world_mut().resource_mut::<StageError>().0.take();
+        assert!(
+            matches!(error, Some(IsceneError::Internal(ref m)) if m == "broken"),
+            "the failure is kept for the caller"
+        );
     }
 
     #[test]

@@ -130,7 +130,6 @@ pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<()
             live.refresh_lag_max_s
         );
     }
-    println!("not built yet: {}", r.stages_not_built.join(", "));
     println!("wrote {}: {}", out.display(), r.outputs.join(", "));
     Ok(())
 }
