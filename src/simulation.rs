@@ -91,7 +91,9 @@ pub fn simulation_app(graph: &ContactGraph, task: &Task, db: &CadDatabase) -> Re
 
 /// The most open spot of the floor, facing +x.
 fn default_start(tree: &KinematicTree) -> Option<BasePose> {
-    let grid = nav_grid(&SceneView::new(tree)).ok()?;
+    let grid = nav_grid(&SceneView::new(tree))
+        .inspect_err(|e| tracing::warn!("no navigation grid for the robot's start: {e}"))
+        .ok()?;
     Some(BasePose {
         position: grid.most_open()?,
         yaw: 0.0,

@@ -122,6 +122,77 @@ pub enum Change {
     },
 }
 
+/// Why an action cannot be done: the precondition that fails. The message is the trace's
+/// `failed_precondition`; a planner can match on the kind (an object the scene lacks, a closed
+/// container, something out of reach) to try another way.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ActionError {
+    #[error("the scene has no robot")]
+    NoRobot,
+    #[error("{0} is not in the scene")]
+    NotInScene(String),
+    #[error("{0} is not a surface of the scene")]
+    NotASurface(String),
+    #[error("no free spot on {0}")]
+    NoFreeSpot(String),
+    #[error("{0} is not a container")]
+    NotAContainer(String),
+    #[error("{0} is closed")]
+    Closed(String),
+    #[error("{object} does not fit in {container}")]
+    DoesNotFit { object: String, container: String },
+    #[error("no place near {0} to work its doors from")]
+    NoPlaceToWorkDoors(String),
+    #[error("{part} would hit {hit} at {at:.2}")]
+    WouldHit { part: String, hit: String, at: f32 },
+    #[error("{part} hits {hit} at {at:.2} before it is open")]
+    HitsBeforeOpen { part: String, hit: String, at: f32 },
+    #[error("no path for the base to {0}")]
+    NoPath(String),
+    #[error("no way to get within reach of the free spot on {0}")]
+    NoWayToSpot(String),
+    #[error("the scene has no floor to drive on")]
+    NoFloor,
+    #[error("the floor is empty")]
+    EmptyFloor,
+    #[error("{0} has no door or drawer")]
+    NotArticulated(String),
+    #[error("{object} has no part {part}")]
+    NoSuchPart { object: String, part: String },
+    #[error("{object} is {distance_m:.2} m from the robot, beyond its reach of {reach_m:.2} m")]
+    BeyondReach {
+        object: String,
+        distance_m: f32,
+        reach_m: f32,
+    },
+    #[error("{0} is above the robot's reach")]
+    AboveReach(String),
+    #[error("the robot holds {held}, not {object}")]
+    HoldsAnother { held: String, object: String },
+    #[error("the robot does not hold {0}")]
+    NotHolding(String),
+    #[error("the robot already holds {0}")]
+    AlreadyHolding(String),
+    #[error("{0} is not movable")]
+    NotMovable(String),
+    #[error("{top} stands on {object}")]
+    StandsOn { top: String, object: String },
+    #[error("{object} is inside {container}, which is closed")]
+    InsideClosed { object: String, container: String },
+    #[error("{0} has no geometry")]
+    NoGeometry(String),
+    #[error("the robot holds {0}")]
+    Holds(String),
+    #[error("{0} stands on nothing")]
+    StandsOnNothing(String),
+    #[error("a push needs a direction and a positive distance")]
+    BadPush,
+    #[error("{object} would run into something after {after_m:.2} m")]
+    WouldRunInto { object: String, after_m: f32 },
+    #[error("{object} would slide off {support}")]
+    WouldSlideOff { object: String, support: String },
+}
+
 /// The robot as the tree holds it: its base pose and what hangs from its gripper.
 #[derive(Clone, Debug)]
 pub struct RobotInTree {
@@ -154,10 +225,10 @@ pub fn attempt(
     tree: &KinematicTree,
     robot: &RobotSpec,
     action: &Action,
-) -> Result<Vec<Change>, String> {
+) -> Result<Vec<Change>, ActionError> {
     let view = SceneView::new(tree);
     let Some(state) = robot_in_tree(tree) else {
-        return Err("the scene has no robot".into());
+        return Err(ActionError::NoRobot);
     };
     match action {
         Action::Navigate { to } => navigate(&view, robot, &state, to),
@@ -177,14 +248,14 @@ pub fn attempt(
         Action::PlaceOn { object, surface } => {
             let link = held(&view, &state, object)?;
             if !view.nodes().contains(&surface.as_str()) || view.is_layout(surface) {
-                return Err(format!("{surface} is not a surface of the scene"));
+                return Err(ActionError::NotASurface(surface.clone()));
             }
             let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
             let base = view.link(ROBOT_LINK).unwrap_or(0);
             // The free spot nearest the robot (not under its own base), then a drive to it.
             let spot = view
                 .spot_on(link, surface, state.base.position, &[gripper, base])
-                .ok_or_else(|| format!("no free spot on {surface}"))?;
+                .ok_or_else(|| ActionError::NoFreeSpot(surface.clone()))?;
             let (changes, _) =
                 approach_point(&view, robot, &state, spot.translation.truncate(), surface)?;
             let mut changes = changes;
@@ -194,16 +265,19 @@ pub fn attempt(
         Action::PlaceIn { object, container } => {
             let link = held(&view, &state, object)?;
             if !view.is_container(container) {
-                return Err(format!("{container} is not a container"));
+                return Err(ActionError::NotAContainer(container.clone()));
             }
             if !view.is_open(container) {
-                return Err(format!("{container} is closed"));
+                return Err(ActionError::Closed(container.clone()));
             }
             let (mut changes, _) = approach(&view, robot, &state, container)?;
             let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
-            let spot = view
-                .spot_in(link, container, &[gripper])
-                .ok_or_else(|| format!("{object} does not fit in {container}"))?;
+            let spot = view.spot_in(link, container, &[gripper]).ok_or_else(|| {
+                ActionError::DoesNotFit {
+                    object: object.clone(),
+                    container: container.clone(),
+                }
+            })?;
             changes.extend(attach(&view, link, container, spot)?);
             Ok(changes)
         }
@@ -232,7 +306,7 @@ fn move_joint(
     object: &str,
     part: Option<&str>,
     open: Option<Option<f32>>,
-) -> Result<Vec<Change>, String> {
+) -> Result<Vec<Change>, ActionError> {
     let view = SceneView::new(tree);
     let joint = joint_of(&view, object, part)?;
     let own = view.node_link(object).unwrap_or(0);
@@ -241,7 +315,7 @@ fn move_joint(
     let mut moved = tree.clone();
     if !goal.is_met(state.base.position) {
         let (change, after) = drive(&view, robot, state, &goal, APPROACH_M)?
-            .ok_or_else(|| format!("no place near {object} to work its doors from"))?;
+            .ok_or_else(|| ActionError::NoPlaceToWorkDoors(object.to_string()))?;
         if let Some(base) = view.link(ROBOT_LINK) {
             moved.links[base].parent_from_link = after.base.world_from_base();
         }
@@ -256,8 +330,11 @@ fn move_joint(
                 Some(Some(v)) => tree.links[joint].joint.clamp(v),
                 _ => closed_value(tree, joint),
             };
-            sweep(&view, joint, target)
-                .map_err(|(hit, at)| format!("{name} would hit {hit} at {at:.2}"))?;
+            sweep(&view, joint, target).map_err(|(hit, at)| ActionError::WouldHit {
+                part: name.clone(),
+                hit,
+                at,
+            })?;
             target
         }
         Some(None) => {
@@ -268,7 +345,11 @@ fn move_joint(
                     // As far as it goes, if that is open enough to reach in.
                     let last = at - SWEEP_STEP * (target - from).signum();
                     if last / target < MIN_OPEN_FRACTION {
-                        return Err(format!("{name} hits {hit} at {at:.2} before it is open"));
+                        return Err(ActionError::HitsBeforeOpen {
+                            part: name,
+                            hit,
+                            at,
+                        });
                     }
                     last
                 }
@@ -288,13 +369,13 @@ fn navigate(
     robot: &RobotSpec,
     state: &RobotInTree,
     to: &str,
-) -> Result<Vec<Change>, String> {
+) -> Result<Vec<Change>, ActionError> {
     let Some(own) = view.node_link(to) else {
-        return Err(format!("{to} is not in the scene"));
+        return Err(ActionError::NotInScene(to.to_string()));
     };
     let goal = nav_goal(view, robot, to, own);
     let (change, _) = drive(view, robot, state, &goal, f32::INFINITY)?
-        .ok_or_else(|| format!("no path for the base to {to}"))?;
+        .ok_or_else(|| ActionError::NoPath(to.to_string()))?;
     Ok(vec![change])
 }
 
@@ -306,7 +387,7 @@ fn drive(
     state: &RobotInTree,
     goal: &NavGoal,
     max_m: f32,
-) -> Result<Option<(Change, RobotInTree)>, String> {
+) -> Result<Option<(Change, RobotInTree)>, ActionError> {
     let Some(path) = nav_grid(view)?
         .plan(state.base.position, goal, robot.radius)
         .filter(|p| p.length_m <= max_m)
@@ -335,13 +416,13 @@ fn approach(
     robot: &RobotSpec,
     state: &RobotInTree,
     id: &str,
-) -> Result<(Vec<Change>, RobotInTree), String> {
+) -> Result<(Vec<Change>, RobotInTree), ActionError> {
     let Err(out_of_reach) = within_reach(view, robot, state, id) else {
         return Ok((Vec::new(), state.clone()));
     };
     let (lo, hi) = view
         .node_bounds(id)
-        .ok_or_else(|| format!("{id} is not in the scene"))?;
+        .ok_or_else(|| ActionError::NotInScene(id.to_string()))?;
     let goal = NavGoal {
         target: ((lo + hi) / 2.0).truncate(),
         reach: robot.reach - 0.1,
@@ -360,7 +441,7 @@ fn approach_point(
     state: &RobotInTree,
     target: Vec2,
     what: &str,
-) -> Result<(Vec<Change>, RobotInTree), String> {
+) -> Result<(Vec<Change>, RobotInTree), ActionError> {
     if state.base.position.distance(target) <= robot.reach {
         return Ok((Vec::new(), state.clone()));
     }
@@ -371,19 +452,19 @@ fn approach_point(
         keep_out: Vec::new(),
     };
     let (change, moved) = drive(view, robot, state, &goal, APPROACH_M)?
-        .ok_or_else(|| format!("no way to get within reach of the free spot on {what}"))?;
+        .ok_or_else(|| ActionError::NoWayToSpot(what.to_string()))?;
     Ok((vec![change], moved))
 }
 
 /// The grid of the scene as it stands, without the robot and what it holds.
-pub fn nav_grid(view: &SceneView) -> Result<NavGrid, String> {
+pub fn nav_grid(view: &SceneView) -> Result<NavGrid, ActionError> {
     let robot = view.link(ROBOT_LINK);
     let floor = view
         .nodes()
         .into_iter()
         .find(|n| view.class_of(n) == Some("floor"))
         .and_then(|n| view.node_link(n))
-        .ok_or("the scene has no floor to drive on")?;
+        .ok_or(ActionError::NoFloor)?;
     let obstacles: Vec<_> = (1..view.tree.links.len())
         .filter(|&l| {
             l != floor
@@ -392,7 +473,7 @@ pub fn nav_grid(view: &SceneView) -> Result<NavGrid, String> {
         })
         .map(|l| view.world_mesh(l))
         .collect();
-    NavGrid::new(&view.world_mesh(floor), &obstacles).ok_or_else(|| "the floor is empty".into())
+    NavGrid::new(&view.world_mesh(floor), &obstacles).ok_or(ActionError::EmptyFloor)
 }
 
 /// Where the base must go to work on node `id`: in front of its doors, out of their swing,
@@ -454,20 +535,23 @@ fn nav_goal(view: &SceneView, robot: &RobotSpec, id: &str, own: usize) -> NavGoa
 }
 
 /// The moving part `part` of `object` (its main one when `None`).
-fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize, String> {
+fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize, ActionError> {
     if view.node_link(object).is_none() {
-        return Err(format!("{object} is not in the scene"));
+        return Err(ActionError::NotInScene(object.to_string()));
     }
     let parts = view.moving_parts(object);
     match part {
         None => parts
             .first()
             .copied()
-            .ok_or_else(|| format!("{object} has no door or drawer")),
+            .ok_or_else(|| ActionError::NotArticulated(object.to_string())),
         Some(p) => parts
             .into_iter()
             .find(|&j| view.tree.links[j].name == format!("{object}_{p}"))
-            .ok_or_else(|| format!("{object} has no part {p}")),
+            .ok_or_else(|| ActionError::NoSuchPart {
+                object: object.to_string(),
+                part: p.to_string(),
+            }),
     }
 }
 
@@ -478,21 +562,22 @@ fn within_reach(
     robot: &RobotSpec,
     state: &RobotInTree,
     id: &str,
-) -> Result<(), String> {
+) -> Result<(), ActionError> {
     let (lo, hi) = view
         .node_bounds(id)
-        .ok_or_else(|| format!("{id} is not in the scene"))?;
+        .ok_or_else(|| ActionError::NotInScene(id.to_string()))?;
     let p = state.base.position;
     let nearest = p.clamp(lo.truncate(), hi.truncate());
     let d = nearest.distance(p);
     if d > robot.reach {
-        return Err(format!(
-            "{id} is {d:.2} m from the robot, beyond its reach of {:.2} m",
-            robot.reach
-        ));
+        return Err(ActionError::BeyondReach {
+            object: id.to_string(),
+            distance_m: d,
+            reach_m: robot.reach,
+        });
     }
     if lo.z > robot.max_reach_height {
-        return Err(format!("{id} is above the robot's reach"));
+        return Err(ActionError::AboveReach(id.to_string()));
     }
     Ok(())
 }
@@ -524,15 +609,18 @@ fn sweep(view: &SceneView, joint: usize, target: f32) -> Result<(), (String, f32
 }
 
 /// The link of `object` if the robot holds it.
-fn held(view: &SceneView, state: &RobotInTree, object: &str) -> Result<usize, String> {
+fn held(view: &SceneView, state: &RobotInTree, object: &str) -> Result<usize, ActionError> {
     if state.holding.as_deref() != Some(object) {
         return Err(match &state.holding {
-            Some(h) => format!("the robot holds {h}, not {object}"),
-            None => format!("the robot does not hold {object}"),
+            Some(h) => ActionError::HoldsAnother {
+                held: h.clone(),
+                object: object.to_string(),
+            },
+            None => ActionError::NotHolding(object.to_string()),
         });
     }
     view.node_link(object)
-        .ok_or_else(|| format!("{object} is not in the scene"))
+        .ok_or_else(|| ActionError::NotInScene(object.to_string()))
 }
 
 fn attach(
@@ -540,10 +628,10 @@ fn attach(
     link: usize,
     to: &str,
     world_from_link: Affine3A,
-) -> Result<Vec<Change>, String> {
+) -> Result<Vec<Change>, ActionError> {
     let parent = view
         .node_link(to)
-        .ok_or_else(|| format!("{to} is not in the scene"))?;
+        .ok_or_else(|| ActionError::NotInScene(to.to_string()))?;
     let from = view.tree.links[link]
         .parent
         .map_or(String::new(), |p| view.tree.links[p].name.clone());
@@ -560,33 +648,39 @@ fn pick(
     robot: &RobotSpec,
     state: &RobotInTree,
     object: &str,
-) -> Result<Vec<Change>, String> {
+) -> Result<Vec<Change>, ActionError> {
     if let Some(h) = &state.holding {
-        return Err(format!("the robot already holds {h}"));
+        return Err(ActionError::AlreadyHolding(h.clone()));
     }
     let Some(link) = view.node_link(object) else {
-        return Err(format!("{object} is not in the scene"));
+        return Err(ActionError::NotInScene(object.to_string()));
     };
     if !view.is_movable(object) {
-        return Err(format!("{object} is not movable"));
+        return Err(ActionError::NotMovable(object.to_string()));
     }
     if let Some(on_top) = view
         .nodes()
         .into_iter()
         .find(|n| view.support_of(n) == Some(object))
     {
-        return Err(format!("{on_top} stands on {object}"));
+        return Err(ActionError::StandsOn {
+            top: on_top.to_string(),
+            object: object.to_string(),
+        });
     }
     if let Some(container) = view.support_of(object)
         && view.is_inside(object, container)
         && !view.is_open(container)
     {
-        return Err(format!("{object} is inside {container}, which is closed"));
+        return Err(ActionError::InsideClosed {
+            object: object.to_string(),
+            container: container.to_string(),
+        });
     }
     within_reach(view, robot, state, object)?;
     let (lo, hi) = view
         .local_bounds(link)
-        .ok_or_else(|| format!("{object} has no geometry"))?;
+        .ok_or_else(|| ActionError::NoGeometry(object.to_string()))?;
     // Carried on the gripper, the centre of its bottom on the gripper's origin.
     let bottom_centre = Vec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, lo.z);
     let gripper_from_link = Affine3A::from_translation(-bottom_centre);
@@ -606,24 +700,24 @@ fn push(
     object: &str,
     direction: Vec2,
     distance: f32,
-) -> Result<Vec<Change>, String> {
+) -> Result<Vec<Change>, ActionError> {
     let Some(link) = view.node_link(object) else {
-        return Err(format!("{object} is not in the scene"));
+        return Err(ActionError::NotInScene(object.to_string()));
     };
     if !view.is_movable(object) {
-        return Err(format!("{object} is not movable"));
+        return Err(ActionError::NotMovable(object.to_string()));
     }
     if state.holding.as_deref() == Some(object) {
-        return Err(format!("the robot holds {object}"));
+        return Err(ActionError::Holds(object.to_string()));
     }
     let support = view
         .support_of(object)
-        .ok_or_else(|| format!("{object} stands on nothing"))?
+        .ok_or_else(|| ActionError::StandsOnNothing(object.to_string()))?
         .to_string();
     within_reach(view, robot, state, object)?;
     let d = direction.normalize_or_zero();
     if d == Vec2::ZERO || !distance.is_finite() || distance <= 0.0 {
-        return Err("a push needs a direction and a positive distance".into());
+        return Err(ActionError::BadPush);
     }
     let ignore = view.body_links(&support);
     let steps = (distance / 0.02).ceil().max(1.0) as usize;
@@ -632,10 +726,10 @@ fn push(
         let shift = (d * distance * k as f32 / steps as f32).extend(0.0);
         pose = Affine3A::from_translation(shift) * view.poses[link];
         if view.overlap_at(link, pose, &ignore) > TOUCH_M {
-            return Err(format!(
-                "{object} would run into something after {:.2} m",
-                distance * (k - 1) as f32 / steps as f32
-            ));
+            return Err(ActionError::WouldRunInto {
+                object: object.to_string(),
+                after_m: distance * (k - 1) as f32 / steps as f32,
+            });
         }
     }
     // It must still stand on its support.
@@ -650,7 +744,10 @@ fn push(
     .into_iter()
     .fold(f32::MIN, f32::max);
     if (top - in_support.z).abs() > 0.02 {
-        return Err(format!("{object} would slide off {support}"));
+        return Err(ActionError::WouldSlideOff {
+            object: object.to_string(),
+            support,
+        });
     }
     attach(view, link, &support, pose)
 }

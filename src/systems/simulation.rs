@@ -139,7 +139,7 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
     let mut motion = Vec::new();
     let outcome = read_kinematic_tree(world).and_then(|tree| {
         let spec = robot_spec(world).ok_or("the scene has no robot")?;
-        let changes = attempt(&tree, &spec, action)?;
+        let changes = attempt(&tree, &spec, action).map_err(|e| e.to_string())?;
         motion = simulate_motions(&tree, &changes);
         if let Some(why) = knocked_reason(&motion) {
             return Err(why);
@@ -169,6 +169,7 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
             }
             let physics_started = Instant::now();
             let physics = read_kinematic_tree(world)
+                .inspect_err(|e| tracing::warn!("no rest test after step {step}: {e}"))
                 .ok()
                 .map(|tree| step_physics(rest_physics(&tree)));
             let physics_ms = physics_started.elapsed().as_secs_f64() * 1e3;
@@ -243,7 +244,9 @@ fn robot_spec(world: &mut World) -> Option<RobotSpec> {
 /// The robot's place and what it holds (for the planner's start state).
 pub fn robot_state(world: &mut World) -> Option<(String, Option<String>)> {
     let place = world.query::<&Robot>().iter(world).next()?.place.clone();
-    let tree = read_kinematic_tree(world).ok()?;
+    let tree = read_kinematic_tree(world)
+        .inspect_err(|e| tracing::warn!("the robot's state is unknown: {e}"))
+        .ok()?;
     Some((place, robot_in_tree(&tree)?.holding))
 }
 

@@ -179,10 +179,8 @@ fn add_render_plugins(app: &mut App, dir: &std::path::Path, offscreen: bool) {
                     ..default()
                 })
                 .set(render)
-                .set(bevy::log::LogPlugin {
-                    level: bevy::log::Level::WARN,
-                    ..default()
-                })
+                // The command line's subscriber (RUST_LOG) shows the renderer's warnings.
+                .disable::<bevy::log::LogPlugin>()
                 .disable::<WinitPlugin>()
                 .disable::<PipelinedRenderingPlugin>(),
         );
@@ -196,7 +194,8 @@ fn add_render_plugins(app: &mut App, dir: &std::path::Path, offscreen: bool) {
                     }),
                     ..default()
                 })
-                .set(render),
+                .set(render)
+                .disable::<bevy::log::LogPlugin>(),
         );
     }
 }

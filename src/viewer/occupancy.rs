@@ -100,7 +100,8 @@ fn update_occupancy(world: &mut World) {
         .iter(world)
         .next()
         .map_or(RobotSpec::default().radius, |r| r.spec.radius);
-    let grid = read_kinematic_tree(world).and_then(|tree| nav_grid(&SceneView::new(&tree)));
+    let grid = read_kinematic_tree(world)
+        .and_then(|tree| nav_grid(&SceneView::new(&tree)).map_err(|e| e.to_string()));
     let grid = match grid {
         Ok(grid) => grid,
         Err(why) => {

@@ -46,8 +46,24 @@ pub(crate) fn print_json(value: &impl serde::Serialize) -> Result<(), IsceneErro
     Ok(())
 }
 
+/// Warnings the library logs (what it skipped or recovered from) go to stderr; `RUST_LOG` asks for
+/// more or less (`RUST_LOG=iscene=debug`, `RUST_LOG=error`). The viewer logs through it too.
+fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
+    let installed = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .try_init();
+    if let Err(e) = installed {
+        eprintln!("iscene: warnings will not be shown: {e}");
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    init_logging();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

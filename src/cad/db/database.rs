@@ -164,7 +164,14 @@ impl CadDatabase {
             .filter_map(|n| n.cad.as_ref())
             .filter(|c| self.get(&c.model).is_none())
             .filter_map(|c| build_sized_model(&c.model))
-            .filter_map(|m| DatabaseModel::new(m).ok())
+            .filter_map(|m| {
+                let id = m.id.clone();
+                DatabaseModel::new(m)
+                    .inspect_err(|e| {
+                        tracing::warn!("model {id} is left out: its parts do not build ({e})")
+                    })
+                    .ok()
+            })
             .collect();
         self.with_models(missing)
     }

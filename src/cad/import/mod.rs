@@ -202,7 +202,9 @@ fn model_files(path: &Path, extension: &str) -> Result<Vec<std::path::PathBuf>, 
     }
     let entries = std::fs::read_dir(path).map_err(|e| InputError::io(path, &e))?;
     let mut files: Vec<std::path::PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
+        .map(|e| e.map(|e| e.path()).map_err(|e| InputError::io(path, &e)))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
         .filter(|p| {
             p.is_file()
                 && p.extension()

@@ -45,7 +45,9 @@ pub fn built_to_fit(
         translation: world_from_model.translation,
     };
     // A library builder gives proper meshes at any positive size (tested in `cad::library`).
-    let mut built = DatabaseModel::new(build.entry.model_sized(size)).ok()?;
+    let mut built = DatabaseModel::new(build.entry.model_sized(size))
+        .inspect_err(|e| tracing::warn!("{} at {size}: not built ({e})", build.entry.id))
+        .ok()?;
     built.built = Some(LibraryBuild {
         entry: build.entry,
         size,
