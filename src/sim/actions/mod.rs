@@ -8,17 +8,21 @@ use serde::{Deserialize, Serialize};
 
 use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, SweepPose};
 use crate::kinematics::tree::KinematicTree;
-use crate::sim::navigation::{NavGoal, NavGrid};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::sim::scene_view::{SceneView, TOUCH_M, closed_value, open_value};
+
+mod error;
+mod reach;
+
+pub use error::ActionError;
+pub use reach::nav_grid;
+use reach::{APPROACH_M, approach, approach_point, drive, nav_goal, navigate, within_reach};
 
 /// A door turns at most this far (radians), a drawer slides this far (metres), between the
 /// poses where its path is checked.
 const SWEEP_STEP: f32 = 0.05;
 /// A door opened as far as it goes must be at least this fraction open.
 const MIN_OPEN_FRACTION: f32 = 0.6;
-/// The longest drive (metres) a pick or place makes on its own to get within reach.
-const APPROACH_M: f32 = 4.0;
 
 /// One robot action, as task scripts write it (`{"action": "open", "object": "fridge_1"}`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -120,77 +124,6 @@ pub enum Change {
         #[serde(skip)]
         parent_from_link: Affine3A,
     },
-}
-
-/// Why an action cannot be done: the precondition that fails. The message is the trace's
-/// `failed_precondition`; a planner can match on the kind (an object the scene lacks, a closed
-/// container, something out of reach) to try another way.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ActionError {
-    #[error("the scene has no robot")]
-    NoRobot,
-    #[error("{0} is not in the scene")]
-    NotInScene(String),
-    #[error("{0} is not a surface of the scene")]
-    NotASurface(String),
-    #[error("no free spot on {0}")]
-    NoFreeSpot(String),
-    #[error("{0} is not a container")]
-    NotAContainer(String),
-    #[error("{0} is closed")]
-    Closed(String),
-    #[error("{object} does not fit in {container}")]
-    DoesNotFit { object: String, container: String },
-    #[error("no place near {0} to work its doors from")]
-    NoPlaceToWorkDoors(String),
-    #[error("{part} would hit {hit} at {at:.2}")]
-    WouldHit { part: String, hit: String, at: f32 },
-    #[error("{part} hits {hit} at {at:.2} before it is open")]
-    HitsBeforeOpen { part: String, hit: String, at: f32 },
-    #[error("no path for the base to {0}")]
-    NoPath(String),
-    #[error("no way to get within reach of the free spot on {0}")]
-    NoWayToSpot(String),
-    #[error("the scene has no floor to drive on")]
-    NoFloor,
-    #[error("the floor is empty")]
-    EmptyFloor,
-    #[error("{0} has no door or drawer")]
-    NotArticulated(String),
-    #[error("{object} has no part {part}")]
-    NoSuchPart { object: String, part: String },
-    #[error("{object} is {distance_m:.2} m from the robot, beyond its reach of {reach_m:.2} m")]
-    BeyondReach {
-        object: String,
-        distance_m: f32,
-        reach_m: f32,
-    },
-    #[error("{0} is above the robot's reach")]
-    AboveReach(String),
-    #[error("the robot holds {held}, not {object}")]
-    HoldsAnother { held: String, object: String },
-    #[error("the robot does not hold {0}")]
-    NotHolding(String),
-    #[error("the robot already holds {0}")]
-    AlreadyHolding(String),
-    #[error("{0} is not movable")]
-    NotMovable(String),
-    #[error("{top} stands on {object}")]
-    StandsOn { top: String, object: String },
-    #[error("{object} is inside {container}, which is closed")]
-    InsideClosed { object: String, container: String },
-    #[error("{0} has no geometry")]
-    NoGeometry(String),
-    #[error("the robot holds {0}")]
-    Holds(String),
-    #[error("{0} stands on nothing")]
-    StandsOnNothing(String),
-    #[error("a push needs a direction and a positive distance")]
-    BadPush,
-    #[error("{object} would run into something after {after_m:.2} m")]
-    WouldRunInto { object: String, after_m: f32 },
-    #[error("{object} would slide off {support}")]
-    WouldSlideOff { object: String, support: String },
 }
 
 /// The robot as the tree holds it: its base pose and what hangs from its gripper.
@@ -364,176 +297,6 @@ fn move_joint(
     Ok(changes)
 }
 
-fn navigate(
-    view: &SceneView,
-    robot: &RobotSpec,
-    state: &RobotInTree,
-    to: &str,
-) -> Result<Vec<Change>, ActionError> {
-    let Some(own) = view.node_link(to) else {
-        return Err(ActionError::NotInScene(to.to_string()));
-    };
-    let goal = nav_goal(view, robot, to, own);
-    let (change, _) = drive(view, robot, state, &goal, f32::INFINITY)?
-        .ok_or_else(|| ActionError::NoPath(to.to_string()))?;
-    Ok(vec![change])
-}
-
-/// The base's drive from where it stands to the cheapest place that meets `goal`, if one is
-/// no farther than `max_m` along the path: the move and the robot after it.
-fn drive(
-    view: &SceneView,
-    robot: &RobotSpec,
-    state: &RobotInTree,
-    goal: &NavGoal,
-    max_m: f32,
-) -> Result<Option<(Change, RobotInTree)>, ActionError> {
-    let Some(path) = nav_grid(view)?
-        .plan(state.base.position, goal, robot.radius)
-        .filter(|p| p.length_m <= max_m)
-    else {
-        return Ok(None);
-    };
-    let end = *path.waypoints.last().unwrap_or(&state.base.position);
-    let moved = RobotInTree {
-        base: BasePose::facing(end, goal.target),
-        holding: state.holding.clone(),
-    };
-    let change = Change::MoveBase {
-        from: state.base,
-        to: moved.base,
-        path_length_m: path.length_m,
-        path: path.waypoints,
-    };
-    Ok(Some((change, moved)))
-}
-
-/// The last stretch before picking or placing: when node `id` is out of reach but a short drive
-/// (at most `APPROACH_M`) brings it within reach (into an open fridge, along a table), the
-/// base drives there first. Returns that drive (if any) and the robot after it.
-fn approach(
-    view: &SceneView,
-    robot: &RobotSpec,
-    state: &RobotInTree,
-    id: &str,
-) -> Result<(Vec<Change>, RobotInTree), ActionError> {
-    let Err(out_of_reach) = within_reach(view, robot, state, id) else {
-        return Ok((Vec::new(), state.clone()));
-    };
-    let (lo, hi) = view
-        .node_bounds(id)
-        .ok_or_else(|| ActionError::NotInScene(id.to_string()))?;
-    let goal = NavGoal {
-        target: ((lo + hi) / 2.0).truncate(),
-        reach: robot.reach - 0.1,
-        facing: None,
-        keep_out: Vec::new(),
-    };
-    let (change, moved) = drive(view, robot, state, &goal, APPROACH_M)?.ok_or(out_of_reach)?;
-    within_reach(view, robot, &moved, id)?;
-    Ok((vec![change], moved))
-}
-
-/// A drive (if needed, at most `APPROACH_M`) to within reach of the point `target` on `what`.
-fn approach_point(
-    view: &SceneView,
-    robot: &RobotSpec,
-    state: &RobotInTree,
-    target: Vec2,
-    what: &str,
-) -> Result<(Vec<Change>, RobotInTree), ActionError> {
-    if state.base.position.distance(target) <= robot.reach {
-        return Ok((Vec::new(), state.clone()));
-    }
-    let goal = NavGoal {
-        target,
-        reach: robot.reach - 0.1,
-        facing: None,
-        keep_out: Vec::new(),
-    };
-    let (change, moved) = drive(view, robot, state, &goal, APPROACH_M)?
-        .ok_or_else(|| ActionError::NoWayToSpot(what.to_string()))?;
-    Ok((vec![change], moved))
-}
-
-/// The grid of the scene as it stands, without the robot and what it holds.
-pub fn nav_grid(view: &SceneView) -> Result<NavGrid, ActionError> {
-    let robot = view.link(ROBOT_LINK);
-    let floor = view
-        .nodes()
-        .into_iter()
-        .find(|n| view.class_of(n) == Some("floor"))
-        .and_then(|n| view.node_link(n))
-        .ok_or(ActionError::NoFloor)?;
-    let obstacles: Vec<_> = (1..view.tree.links.len())
-        .filter(|&l| {
-            l != floor
-                && robot.is_none_or(|r| !view.descends_from(l, r))
-                && !matches!(view.tree.links[l].class.as_deref(), Some("ceiling"))
-        })
-        .map(|l| view.world_mesh(l))
-        .collect();
-    NavGrid::new(&view.world_mesh(floor), &obstacles).ok_or(ActionError::EmptyFloor)
-}
-
-/// Where the base must go to work on node `id`: in front of its doors, out of their swing,
-/// when it has any; anywhere within reach of its centre otherwise.
-fn nav_goal(view: &SceneView, robot: &RobotSpec, id: &str, own: usize) -> NavGoal {
-    let world_from_node = view.poses[own];
-    let bounds = view.body_mesh_in_node(id).bounds();
-    let Some((lo, hi)) = bounds else {
-        return NavGoal {
-            target: world_from_node.translation.truncate(),
-            reach: robot.reach,
-            facing: None,
-            keep_out: Vec::new(),
-        };
-    };
-    if !view.is_container(id) {
-        // Reach its nearest side: the centre, from up to half its smaller side farther out.
-        let centre = world_from_node.transform_point3((lo + hi) / 2.0).truncate();
-        let half = ((hi - lo).truncate() / 2.0).min_element();
-        return NavGoal {
-            target: centre,
-            reach: robot.reach + half,
-            facing: None,
-            keep_out: Vec::new(),
-        };
-    }
-    let front = world_from_node
-        .transform_point3(Vec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0))
-        .truncate();
-    let facing = world_from_node
-        .transform_vector3(-Vec3::Y)
-        .truncate()
-        .normalize_or_zero();
-    // Doors on vertical hinges sweep a disc about the hinge as wide as the door.
-    let keep_out = view
-        .moving_parts(id)
-        .into_iter()
-        .filter(|&j| {
-            let l = &view.tree.links[j];
-            l.joint.kind == crate::kinematics::JointKind::Revolute
-                && view.poses[j].transform_vector3(l.joint.axis).z.abs() > 0.9
-        })
-        .filter_map(|j| {
-            let (dlo, dhi) = view.local_bounds(j)?;
-            let hinge = view.poses[j].translation.truncate();
-            let radius = [dlo.x, dhi.x]
-                .iter()
-                .flat_map(|x| [dlo.y, dhi.y].map(|y| Vec2::new(*x, y).length()))
-                .fold(0.0f32, f32::max);
-            Some((hinge, radius + robot.radius))
-        })
-        .collect();
-    NavGoal {
-        target: front,
-        reach: robot.reach,
-        facing: Some(facing),
-        keep_out,
-    }
-}
-
 /// The moving part `part` of `object` (its main one when `None`).
 fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize, ActionError> {
     if view.node_link(object).is_none() {
@@ -553,33 +316,6 @@ fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize,
                 part: p.to_string(),
             }),
     }
-}
-
-/// Whether the base reaches node `id`: its nearest point within the robot's reach and its
-/// lowest point below the highest the gripper reaches.
-fn within_reach(
-    view: &SceneView,
-    robot: &RobotSpec,
-    state: &RobotInTree,
-    id: &str,
-) -> Result<(), ActionError> {
-    let (lo, hi) = view
-        .node_bounds(id)
-        .ok_or_else(|| ActionError::NotInScene(id.to_string()))?;
-    let p = state.base.position;
-    let nearest = p.clamp(lo.truncate(), hi.truncate());
-    let d = nearest.distance(p);
-    if d > robot.reach {
-        return Err(ActionError::BeyondReach {
-            object: id.to_string(),
-            distance_m: d,
-            reach_m: robot.reach,
-        });
-    }
-    if lo.z > robot.max_reach_height {
-        return Err(ActionError::AboveReach(id.to_string()));
-    }
-    Ok(())
 }
 
 /// Sweeps joint `joint` from its value to `target`; the first thing the moving part (and what
