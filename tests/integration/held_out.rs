@@ -424,6 +424,19 @@ fn the_benchmark_scores_every_room_resumes_and_keeps_its_bounds() {
         .flat_map(|seed| mujoco_disagreements(&out.join(format!("seed_{seed}/reconstruction"))))
         .collect();
     assert!(disagreements.is_empty(), "{disagreements:#?}");
+    // What the reconstructions found, as it was (tests/golden, common/golden.rs).
+    for seed in 0..3 {
+        let dir = out.join(format!("seed_{seed}/reconstruction"));
+        crate::common::golden::assert_json_matches(
+            &dir.join("contact_graph.json"),
+            &format!("seed_{seed}_60/contact_graph.json"),
+            &[],
+        );
+        crate::common::golden::assert_report_matches(
+            &dir.join("report.json"),
+            &format!("seed_{seed}_60/report.json"),
+        );
+    }
     let worst_rooms = summary["worst_rooms"].as_array().expect("worst rooms");
     assert!(
         worst_rooms

@@ -74,6 +74,13 @@ fn a_bare_iscene_renders_the_builtin_kitchen_and_writes_its_output_folder() {
         stdout.contains("ingest"),
         "summary lists stage times: {stdout}"
     );
+    // What the kitchen's reconstruction found, as it was (tests/golden, common/golden.rs).
+    common::golden::assert_json_matches(
+        &out.join("contact_graph.json"),
+        "kitchen/contact_graph.json",
+        &[],
+    );
+    common::golden::assert_report_matches(&out.join("report.json"), "kitchen/report.json");
     // A second run reuses the rendering of the unchanged specification.
     let (code, stdout, stderr) =
         common::iscene(&["reconstruct", "--frames", "0:300:30"], dir.path());
@@ -113,6 +120,15 @@ fn seven_scenes_reconstructs_without_labels() {
     .expect("json");
     assert_eq!(report["ingest"]["frames"], 50);
     assert_eq!(report["ingest"]["has_gravity"], true);
+    common::golden::assert_json_matches(
+        &out.join("contact_graph.json"),
+        "redkitchen_0_1000_20/contact_graph.json",
+        &[],
+    );
+    common::golden::assert_report_matches(
+        &out.join("report.json"),
+        "redkitchen_0_1000_20/report.json",
+    );
     // The oracle needs labels a real sequence does not have.
     let (code, _, stderr) = common::iscene(
         &[
