@@ -41,15 +41,14 @@ pub fn assert_json_matches(actual: &Path, name: &str, volatile: &[&str]) {
         std::fs::write(&golden, pretty + "\n").expect("write golden");
         return;
     }
-    let expected: Value = serde_json::from_str(&std::fs::read_to_string(&golden).unwrap_or_else(
-        |e| {
+    let expected: Value =
+        serde_json::from_str(&std::fs::read_to_string(&golden).unwrap_or_else(|e| {
             panic!(
                 "reading golden {}: {e} (ISCENE_BLESS=1 writes it)",
                 golden.display()
             )
-        },
-    ))
-    .expect("golden JSON");
+        }))
+        .expect("golden JSON");
     let mut differences = Vec::new();
     compare(&expected, &value, String::new(), &mut differences);
     assert!(
@@ -87,7 +86,10 @@ fn strip(value: &mut Value, volatile: &[&str]) {
 fn compare(expected: &Value, actual: &Value, at: String, out: &mut Vec<String>) {
     match (expected, actual) {
         (Value::Number(a), Value::Number(b)) => {
-            let (a, b) = (a.as_f64().unwrap_or(f64::NAN), b.as_f64().unwrap_or(f64::NAN));
+            let (a, b) = (
+                a.as_f64().unwrap_or(f64::NAN),
+                b.as_f64().unwrap_or(f64::NAN),
+            );
             let noise = FLOAT_NOISE * a.abs().max(b.abs()).max(1.0);
             if (a - b).abs() > noise {
                 out.push(format!("{at}: {a} became {b}"));
