@@ -22,7 +22,8 @@ use crate::scene::SceneSpec;
 use crate::scene::{RenderOptions, render_sequence};
 use crate::systems::Reconstruct;
 use crate::systems::cad_replacement::{CadAlignMethod, CadAlignmentCache, CadLibrary, CadReport};
-use crate::systems::contact_graph::{GravityConfig, SceneContactGraph};
+use crate::systems::contact_graph::{GravityConfig, SceneGravity};
+use crate::systems::scene_nodes::read_contact_graph;
 use crate::systems::export::{ExportTarget, ExportedFiles};
 use crate::systems::ingest::{IngestReport, InputSequence};
 use crate::systems::panoptic_mapping::{
@@ -266,10 +267,10 @@ fn map_live_with_previews(
             .world_mut()
             .remove_resource::<CadAlignmentCache>()
             .unwrap_or_default();
-        if let Some(scene) = app.world().get_resource::<SceneContactGraph>() {
+        if app.world().contains_resource::<SceneGravity>() {
             write_file_atomically(
                 &preview_dir.join("contact_graph.json"),
-                scene.graph.to_json().as_bytes(),
+                read_contact_graph(app.world_mut()).to_json().as_bytes(),
             )?;
         }
         if options.progress {
@@ -385,7 +386,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
         return Err(err);
     }
-    let mut report = collect_report(app.world(), options, sequence_dir, format, rendered);
+    let mut report = collect_report(app.world_mut(), options, sequence_dir, format, rendered);
     report.timings.splice(0..0, timings);
     report.live = live_report;
     write_text(
@@ -453,7 +454,7 @@ fn open_sequence(
 
 /// report.json's figures, read from the world the stages and the export left.
 fn collect_report(
-    world: &World,
+    world: &mut World,
     options: &ReconstructOptions,
     input: PathBuf,
     format: SequenceFormat,
@@ -480,7 +481,11 @@ fn collect_report(
         }),
         _ => None,
     };
-    let contact_graph = world.get_resource::<SceneContactGraph>();
+    let gravity = world.get_resource::<SceneGravity>().map(|g| g.0.clone());
+    let relations = match gravity {
+        Some(_) => read_contact_graph(world).edges.len(),
+        None => 0,
+    };
     let mut outputs = vec!["report.json".to_string()];
     outputs.extend(world.resource::<ExportedFiles>().0.iter().cloned());
     ReconstructReport {
@@ -498,8 +503,8 @@ fn collect_report(
             .cloned()
             .unwrap_or_default(),
         entities: panoptic.as_ref().map_or(0, |p| p.entities.len()),
-        relations: contact_graph.map_or(0, |c| c.graph.edges.len()),
-        gravity: contact_graph.map(|c| c.gravity.clone()),
+        relations,
+        gravity,
         panoptic,
         cad: world.get_resource::<CadReport>().cloned(),
         physics: world.get_resource::<PhysicsReport>().cloned(),

@@ -3,11 +3,13 @@
 //! A scene entity (a piece of layout or an object) carries its `SceneEntity` id and `Panoptic`
 //! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, the
 //! `SightedOutline` precise frames measured of it, the `ObservedSurface` the contact graph kept
-//! of it, once replaced its `CadModel`, and in the kinematic tree its `LinkBody`; each moving
+//! of it, the CAD stages' `CadCandidates`, `CadAlignments` or `ShapeRejection`, once replaced
+//! its `CadModel`, and in the kinematic tree its `LinkBody`; each moving
 //! part of its model is a child entity with a `ModelPart`, a `LinkBody` and a `Joint`. Support
 //! is Bevy's `ChildOf`: the parent supports the child, and the child's `Joint` says how it may
 //! move relative to it. `ProximalTo` lists its proximal neighbours.
 
+pub mod cad_candidates;
 pub mod cad_model;
 pub mod joint;
 pub mod link_body;
@@ -20,6 +22,7 @@ pub mod segment_mesh;
 pub mod sighted_outline;
 pub mod surface_planes;
 
+pub use cad_candidates::{CadAlignments, CadCandidates, ShapeRejection};
 pub use cad_model::CadModel;
 pub use joint::Joint;
 pub use link_body::LinkBody;

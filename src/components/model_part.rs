@@ -5,8 +5,8 @@ use bevy::prelude::*;
 
 #[derive(Component, Clone, Debug, PartialEq, Eq)]
 pub struct ModelPart {
-    /// The contact-graph id of the object the part belongs to.
-    pub object: String,
+    /// The object's entity the part belongs to (its `SceneEntity` names it in exports).
+    pub object: Entity,
     /// The part's name in the model (`door`, `drawer_1`).
     pub part: String,
 }

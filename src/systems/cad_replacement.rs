@@ -1,11 +1,15 @@
 //! The CadMatch, CadAlign and PhysicalCheck stages: rank the database's models for every object
 //! of the contact graph, align the best candidates to the object's observed surface, choose
 //! among them so the models neither interpenetrate nor overhang their supports, snap them on,
-//! and let each chosen model's frame become its entity's frame in the transform tree.
+//! and let each chosen model's frame become its entity's frame in the transform tree. Each
+//! stage leaves its result on the object's entity (`CadCandidates`, `ShapeRejection`,
+//! `CadAlignments`, `CadModel`); the Bevy-free algorithms of `cad::replace` read the contact
+//! graph the entities hold (`SceneNodes`).
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use bevy::ecs::system::SystemState;
 use bevy::prelude::*;
 use serde::Serialize;
 
@@ -17,11 +21,13 @@ use crate::cad::replace::replacement::{
     rank_scene,
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
-use crate::components::{ObservedSurface, SceneEntity};
+use crate::components::{
+    CadAlignments, CadCandidates, ObservedSurface, SceneEntity, ShapeRejection,
+};
 use crate::error::IsceneError;
-use crate::graph::ContactGraph;
-use crate::systems::contact_graph::SceneContactGraph;
+use crate::systems::contact_graph::SceneGravity;
 use crate::systems::scene_graph::attach_contact_graph;
+use crate::systems::scene_nodes::SceneNodes;
 use crate::systems::stages::record_failure;
 
 /// The database replacement chooses from (the parametric library unless one is given).
@@ -45,19 +51,6 @@ pub struct RejectedObject {
     pub rejection: Rejection,
 }
 
-/// CadMatch's result: the objects the shape filters rejected.
-#[derive(Resource, Clone, Debug, Default)]
-pub struct CadRejections(pub Vec<RejectedObject>);
-
-/// CadMatch's result: the ranked candidates of each object id (none for a rejected object).
-#[derive(Resource, Clone, Debug, Default)]
-pub struct CadCandidates(pub Vec<(String, Vec<Candidate>)>);
-
-/// CadAlign's result: each object id's aligned candidates, best first.
-#[derive(Resource, Clone, Debug, Default)]
-pub struct CadAlignments(pub Vec<(String, Vec<Alignment>)>);
-
-/// What replacement did, for report.json.
 /// The alignments of the last refresh of a live session, by object: an object whose class and box
 /// have not changed (within 2 cm and 3 degrees) keeps them instead of being aligned again. Only a
 /// live session's refreshes carry it; the final pass aligns everything.
@@ -86,6 +79,7 @@ fn half_turn_difference(a: f32, b: f32) -> f32 {
     d.min(std::f32::consts::PI - d)
 }
 
+/// What replacement did, for report.json.
 #[derive(Resource, Clone, Debug, Serialize)]
 pub struct CadReport {
     pub align_method: AlignMethod,
@@ -107,76 +101,84 @@ pub struct CadReport {
 }
 
 /// Each entity id's observed surface points.
-fn observed_points(world: &mut World) -> HashMap<String, Vec<Vec3>> {
-    world
-        .query::<(&SceneEntity, &ObservedSurface)>()
-        .iter(world)
+fn observed_points<'a>(
+    surfaces: impl IntoIterator<Item = (&'a SceneEntity, &'a ObservedSurface)>,
+) -> HashMap<String, Vec<Vec3>> {
+    surfaces
+        .into_iter()
         .map(|(id, surface)| (id.0.clone(), surface.0.clone()))
         .collect()
 }
 
-/// The contact graph and every entity's observed surface, once the contact graph is built.
-fn observed_scene(world: &mut World) -> Option<(ContactGraph, HashMap<String, Vec<Vec3>>)> {
-    let graph = world.get_resource::<SceneContactGraph>()?.graph.clone();
-    Some((graph, observed_points(world)))
+/// The replacement database, the parametric library unless the caller gave one.
+fn library(commands: &mut Commands, given: Option<Res<CadLibrary>>) -> Arc<CadDatabase> {
+    match given {
+        Some(library) => library.0.clone(),
+        None => {
+            let db = Arc::new(CadDatabase::parametric());
+            commands.insert_resource(CadLibrary(db.clone()));
+            db
+        }
+    }
 }
 
-fn cad_match_stage(world: &mut World) {
-    let Some((graph, points)) = observed_scene(world) else {
-        return;
-    };
-    let db = world
-        .get_resource_or_insert_with(|| CadLibrary(Arc::new(CadDatabase::parametric())))
-        .0
-        .clone();
-    let method = world.get_resource_or_init::<CadAlignMethod>().0;
+/// CadMatch: every object either rejected by the shape filters or given its ranked candidates.
+fn cad_match_stage(
+    mut commands: Commands,
+    nodes: SceneNodes,
+    surfaces: Query<(&SceneEntity, &ObservedSurface)>,
+    given: Option<Res<CadLibrary>>,
+    method: Res<CadAlignMethod>,
+) {
+    let db = library(&mut commands, given);
+    let graph = nodes.contact_graph();
+    let points = observed_points(surfaces.iter());
+    let entity_of = nodes.entities_by_id();
     let layout = layout_planes(&graph);
-    let (mut objects, mut rejected) = (Vec::new(), Vec::new());
+    let mut objects = Vec::new();
     for object in observed_objects(&graph, &points) {
         match rejection(&object, &layout) {
-            Some(rejection) => rejected.push(RejectedObject {
-                id: object.id.to_string(),
-                rejection,
-            }),
+            Some(rejection) => {
+                commands
+                    .entity(entity_of[object.id])
+                    .insert(ShapeRejection(rejection));
+            }
             None => objects.push(object),
         }
     }
-    let ranked = rank_scene(&objects, &db, method);
-    let candidates = objects
-        .iter()
-        .zip(ranked)
-        .map(|(o, c)| (o.id.to_string(), c))
-        .collect();
-    world.insert_resource(CadCandidates(candidates));
-    world.insert_resource(CadRejections(rejected));
+    let ranked = rank_scene(&objects, &db, method.0);
+    for (object, candidates) in objects.iter().zip(ranked) {
+        commands
+            .entity(entity_of[object.id])
+            .insert(CadCandidates(candidates));
+    }
 }
 
-fn cad_align_stage(world: &mut World) {
-    let Some((graph, points)) = observed_scene(world) else {
-        return;
-    };
-    let (Some(candidates), Some(db)) = (
-        world.get_resource::<CadCandidates>(),
-        world.get_resource::<CadLibrary>(),
-    ) else {
-        return;
-    };
-    let candidates = &candidates.0;
-    let db = db.0.clone();
+/// CadAlign: every object's candidates aligned to its observed surface (a rejected object gets
+/// none), reusing a live session's earlier alignments of objects that have not changed.
+fn cad_align_stage(
+    mut commands: Commands,
+    nodes: SceneNodes,
+    surfaces: Query<(&SceneEntity, &ObservedSurface)>,
+    candidates: Query<&CadCandidates>,
+    library: Res<CadLibrary>,
+    method: Res<CadAlignMethod>,
+    cache: Option<ResMut<CadAlignmentCache>>,
+) {
+    let graph = nodes.contact_graph();
+    let points = observed_points(surfaces.iter());
+    let entity_of = nodes.entities_by_id();
     let objects = observed_objects(&graph, &points);
     let ranked: Vec<Vec<Candidate>> = objects
         .iter()
         .map(|o| {
             candidates
-                .iter()
-                .find(|(id, _)| id == o.id)
-                .map(|(_, c)| c.clone())
+                .get(entity_of[o.id])
+                .map(|c| c.0.clone())
                 .unwrap_or_default()
         })
         .collect();
-    let method = world.get_resource_or_init::<CadAlignMethod>().0;
-    let cache = world.get_resource::<CadAlignmentCache>().cloned();
-    let aligned = align_scene_reusing(&objects, &db, &ranked, method, |o| {
+    let aligned = align_scene_reusing(&objects, &library.0, &ranked, method.0, |o| {
         cache.as_ref().and_then(|c| c.reuse(o))
     });
     if let Some(mut cache) = cache {
@@ -185,28 +187,49 @@ fn cad_align_stage(world: &mut World) {
             .zip(&aligned)
             .map(|(o, a)| (o.id.to_string(), (o.class.to_string(), o.bbox, a.clone())))
             .collect();
-        world.insert_resource(cache);
     }
-    let alignments = objects
-        .iter()
-        .map(|o| o.id.to_string())
-        .zip(aligned)
-        .collect();
-    world.insert_resource(CadAlignments(alignments));
+    for (object, alignments) in objects.iter().zip(aligned) {
+        commands
+            .entity(entity_of[object.id])
+            .insert(CadAlignments(alignments));
+    }
 }
 
+/// PhysicalCheck: chooses among each object's alignments so the models neither interpenetrate
+/// nor overhang their supports, gives the placed objects their `CadModel`s and hangs their frames
+/// on the models', and reports what replacement did.
 fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
-    let Some((mut graph, points)) = observed_scene(world) else {
+    let Some(db) = world.get_resource::<CadLibrary>().map(|l| l.0.clone()) else {
         return Ok(());
     };
-    let (Some(alignments), Some(db)) = (
-        world.get_resource::<CadAlignments>(),
-        world.get_resource::<CadLibrary>(),
-    ) else {
-        return Ok(());
-    };
-    let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = alignments.0.iter().cloned().unzip();
-    let db = db.0.clone();
+    let mut state = SystemState::<(
+        SceneNodes,
+        Query<(&SceneEntity, &ObservedSurface)>,
+        Query<&CadAlignments>,
+        Query<&ShapeRejection>,
+    )>::new(world);
+    let (nodes, surfaces, aligned, rejections) = state
+        .get(world)
+        .map_err(|e| IsceneError::Internal(format!("CAD replacement: {e}")))?;
+    let mut graph = nodes.contact_graph();
+    let points = observed_points(surfaces.iter());
+    let entity_of = nodes.entities_by_id();
+    // The aligned objects, in the graph's order (CadAlign's).
+    let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = nodes
+        .entities()
+        .into_iter()
+        .filter_map(|e| Some((nodes.id(e)?.to_string(), aligned.get(e).ok()?.0.clone())))
+        .unzip();
+    let rejected: Vec<RejectedObject> = nodes
+        .entities()
+        .into_iter()
+        .filter_map(|e| {
+            Some(RejectedObject {
+                id: nodes.id(e)?.to_string(),
+                rejection: rejections.get(e).ok()?.0.clone(),
+            })
+        })
+        .collect();
     let object_count = graph
         .nodes
         .iter()
@@ -218,22 +241,12 @@ fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
         .into_iter()
         .partition(|r| r.check.conflicts == 0);
     world.insert_resource(SceneModels(Arc::new(db.with_models(placements.built))));
-    let by_id: HashMap<String, Entity> = world
-        .query::<(Entity, &SceneEntity)>()
-        .iter(world)
-        .map(|(e, id)| (id.0.clone(), e))
-        .collect();
-    attach_contact_graph(world, &graph, &by_id)
+    attach_contact_graph(world, &graph, &entity_of)
         .map_err(|problem| IsceneError::Internal(format!("CAD replacement: {problem}")))?;
     let mean_alignment_error_m = (!replaced.is_empty())
         .then(|| replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32);
-    let align_method = world.get_resource_or_init::<CadAlignMethod>().0;
-    let rejected = world
-        .get_resource::<CadRejections>()
-        .map(|r| r.0.clone())
-        .unwrap_or_default();
     world.insert_resource(CadReport {
-        align_method,
+        align_method: world.resource::<CadAlignMethod>().0,
         database_models: db.len(),
         rejected,
         objects: object_count,
@@ -243,7 +256,6 @@ fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
         replaced,
         mean_alignment_error_m,
     });
-    world.resource_mut::<SceneContactGraph>().graph = graph;
     Ok(())
 }
 
@@ -253,13 +265,16 @@ pub struct CadReplacementPlugin;
 impl Plugin for CadReplacementPlugin {
     fn build(&self, app: &mut App) {
         use crate::systems::ReconstructionStage as Stage;
-        app.add_systems(
+        // The stages run once the ContactGraph stage has built the graph.
+        let graph_built = resource_exists::<SceneGravity>;
+        app.init_resource::<CadAlignMethod>().add_systems(
             crate::systems::Reconstruct,
             (
-                cad_match_stage.in_set(Stage::CadMatch),
-                cad_align_stage.in_set(Stage::CadAlign),
+                cad_match_stage.run_if(graph_built).in_set(Stage::CadMatch),
+                cad_align_stage.run_if(graph_built).in_set(Stage::CadAlign),
                 physical_check_stage
                     .pipe(record_failure)
+                    .run_if(graph_built)
                     .in_set(Stage::PhysicalCheck),
             ),
         );

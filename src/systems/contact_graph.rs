@@ -8,7 +8,6 @@ use glam::Affine3A;
 
 use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh, SightedOutline};
 use crate::error::IsceneError;
-use crate::graph::ContactGraph;
 use crate::graph::build::{
     COUNTER_CLASS, ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces,
 };
@@ -28,12 +27,10 @@ pub struct GravityConfig {
     pub estimate: bool,
 }
 
-/// The stage's result: the graph in the aligned world, and the gravity that aligned it.
+/// The gravity that aligned the world (the stage's other result, the graph, is the scene
+/// entities' components: `scene_nodes` reads it off them).
 #[derive(Resource, Clone, Debug)]
-pub struct SceneContactGraph {
-    pub graph: ContactGraph,
-    pub gravity: GravityReport,
-}
+pub struct SceneGravity(pub GravityReport);
 
 fn contact_graph_stage(world: &mut World) -> Result<(), IsceneError> {
     let mut query = world.query::<(Entity, &SceneEntity, &Panoptic, &SegmentMesh)>();
@@ -41,6 +38,8 @@ fn contact_graph_stage(world: &mut World) -> Result<(), IsceneError> {
         .iter(world)
         .map(|(e, id, p, m)| (e, id.0.clone(), p.clone(), m.0.clone()))
         .collect();
+    // Spawn order, the order `SceneNodes` lists the graph's nodes in.
+    entities.sort_by_key(|(e, ..)| e.index_u32());
     let outlines: Vec<Vec<Vec<glam::Vec3>>> = entities
         .iter()
         .map(|(e, ..)| {
@@ -128,7 +127,7 @@ fn contact_graph_stage(world: &mut World) -> Result<(), IsceneError> {
     }
     attach_contact_graph(world, &graph, &by_id)
         .map_err(|problem| IsceneError::Internal(format!("contact graph: {problem}")))?;
-    world.insert_resource(SceneContactGraph { graph, gravity });
+    world.insert_resource(SceneGravity(gravity));
     Ok(())
 }
 

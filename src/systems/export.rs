@@ -13,9 +13,10 @@ use crate::export::augmented::augmented_points;
 use crate::export::{write_augmented, write_occupancy, write_tree_exports};
 use crate::panoptic::panoptic_dir::{PanopticIndex, write_panoptic};
 use crate::systems::cad_replacement::SceneModels;
-use crate::systems::contact_graph::SceneContactGraph;
+use crate::systems::contact_graph::SceneGravity;
 use crate::systems::kinematic_tree::SceneKinematicTree;
 use crate::systems::panoptic_mapping::{MappingConfig, PanopticSurface};
+use crate::systems::scene_nodes::SceneNodes;
 use crate::systems::stages::record_failure;
 
 /// The folder the Export stage writes into.
@@ -52,22 +53,21 @@ fn export_panoptic(
 /// `contact_graph.json`, and the models built for this scene (`cad/`) that its placements name.
 fn export_contact_graph(
     target: Res<ExportTarget>,
-    scene: Option<Res<SceneContactGraph>>,
+    gravity: Option<Res<SceneGravity>>,
+    nodes: SceneNodes,
     models: Option<Res<SceneModels>>,
     mut files: ResMut<ExportedFiles>,
 ) -> Result<(), IsceneError> {
-    let Some(scene) = scene else {
+    if gravity.is_none() {
         return Ok(());
-    };
-    crate::io::write_sequence::write_text(
-        &target.0.join("contact_graph.json"),
-        &scene.graph.to_json(),
-    )?;
+    }
+    let graph = nodes.contact_graph();
+    crate::io::write_sequence::write_text(&target.0.join("contact_graph.json"), &graph.to_json())?;
     files.0.push("contact_graph.json".into());
     if let Some(models) = models {
         files
             .0
-            .extend(write_scene_models(&target.0, &scene.graph, &models.0)?);
+            .extend(write_scene_models(&target.0, &graph, &models.0)?);
     }
     Ok(())
 }
@@ -86,23 +86,23 @@ fn export_kinematic_tree(
     Ok(())
 }
 
-/// The 2D occupancy grid and the augmented point cloud (segments replaced by model surfaces),
-/// both in the gravity-aligned world.
-fn export_occupancy_and_points(
+/// The gravity-aligned world's frame, once the ContactGraph stage has found it.
+fn aligned_from_world(gravity: &SceneGravity) -> glam::Affine3A {
+    glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(&gravity.0.aligned_from_world))
+}
+
+/// The 2D occupancy grid of the map and the kinematic tree, in the gravity-aligned world.
+fn export_occupancy(
     target: Res<ExportTarget>,
-    config: Res<MappingConfig>,
     surface: Option<Res<PanopticSurface>>,
-    scene: Option<Res<SceneContactGraph>>,
+    gravity: Option<Res<SceneGravity>>,
     tree: Option<Res<SceneKinematicTree>>,
-    models: Option<Res<SceneModels>>,
     mut files: ResMut<ExportedFiles>,
 ) -> Result<(), IsceneError> {
-    let (Some(surface), Some(scene)) = (surface, scene) else {
+    let (Some(surface), Some(gravity)) = (surface, gravity) else {
         return Ok(());
     };
-    let aligned_from_world = glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(
-        &scene.gravity.aligned_from_world,
-    ));
+    let aligned_from_world = aligned_from_world(&gravity);
     let map_points: Vec<glam::Vec3> = surface
         .voxels
         .iter()
@@ -113,19 +113,34 @@ fn export_occupancy_and_points(
         &map_points,
         tree.as_ref().map(|t| &t.0),
     )?);
-    if let Some(models) = models {
-        let points = augmented_points(
-            &surface.voxels,
-            &aligned_from_world,
-            &surface.entities,
-            &scene.graph,
-            &models.0,
-            config.params.voxel_size,
-        );
-        files
-            .0
-            .push(write_augmented(&target.0, &points, &surface.entities)?);
-    }
+    Ok(())
+}
+
+/// The augmented point cloud: the map's surface with replaced segments swapped for their
+/// models' surfaces, in the gravity-aligned world.
+fn export_augmented_points(
+    target: Res<ExportTarget>,
+    config: Res<MappingConfig>,
+    surface: Option<Res<PanopticSurface>>,
+    gravity: Option<Res<SceneGravity>>,
+    nodes: SceneNodes,
+    models: Option<Res<SceneModels>>,
+    mut files: ResMut<ExportedFiles>,
+) -> Result<(), IsceneError> {
+    let (Some(surface), Some(gravity), Some(models)) = (surface, gravity, models) else {
+        return Ok(());
+    };
+    let points = augmented_points(
+        &surface.voxels,
+        &aligned_from_world(&gravity),
+        &surface.entities,
+        &nodes.contact_graph(),
+        &models.0,
+        config.params.voxel_size,
+    );
+    files
+        .0
+        .push(write_augmented(&target.0, &points, &surface.entities)?);
     Ok(())
 }
 
@@ -140,7 +155,8 @@ impl Plugin for ExportPlugin {
                 export_panoptic.pipe(record_failure),
                 export_contact_graph.pipe(record_failure),
                 export_kinematic_tree.pipe(record_failure),
-                export_occupancy_and_points.pipe(record_failure),
+                export_occupancy.pipe(record_failure),
+                export_augmented_points.pipe(record_failure),
             )
                 .chain()
                 .run_if(resource_exists::<ExportTarget>)

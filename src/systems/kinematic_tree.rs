@@ -7,7 +7,9 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use bevy::ecs::system::SystemState;
 use bevy::prelude::*;
+use bevy::transform::helper::TransformHelper;
 use glam::Affine3A;
 use rayon::prelude::*;
 
@@ -19,39 +21,20 @@ use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::tree::{KinematicTree, TreeLink};
 use crate::systems::cad_replacement::SceneModels;
-use crate::systems::contact_graph::SceneContactGraph;
+use crate::systems::contact_graph::SceneGravity;
 use crate::systems::scene_graph::{SceneRoot, transform_of};
+use crate::systems::scene_nodes::read_contact_graph;
 use crate::systems::stages::record_failure;
 
 /// The kinematic tree as the ECS held it at the end of the KinematicTree stage.
 #[derive(Resource, Clone, Debug)]
 pub struct SceneKinematicTree(pub KinematicTree);
 
-fn affine_of(t: &Transform) -> Affine3A {
-    Affine3A::from_scale_rotation_translation(t.scale, t.rotation, t.translation)
-}
-
-/// The entity's pose in the world, composed along its `ChildOf` chain (the reconstruction runs
-/// once, without Bevy's transform propagation).
-pub fn world_from_entity(world: &World, entity: Entity) -> Affine3A {
-    let mut pose = Affine3A::IDENTITY;
-    let mut at = Some(entity);
-    while let Some(e) = at {
-        if let Some(t) = world.get::<Transform>(e) {
-            pose = affine_of(t) * pose;
-        }
-        at = world.get::<ChildOf>(e).map(ChildOf::parent);
-    }
-    pose
-}
-
 fn kinematic_tree_stage(world: &mut World) -> Result<(), IsceneError> {
-    let Some(graph) = world
-        .get_resource::<SceneContactGraph>()
-        .map(|s| s.graph.clone())
-    else {
+    if !world.contains_resource::<SceneGravity>() {
         return Ok(());
-    };
+    }
+    let graph = read_contact_graph(world);
     let db = world.get_resource::<SceneModels>().map(|l| l.0.clone());
     spawn_node_links(world, &graph, db.as_deref());
     let tree = read_kinematic_tree(world)
@@ -69,9 +52,17 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
         .map(|(e, id)| (e, id.0.clone()))
         .collect();
     entities.sort_by(|a, b| a.1.cmp(&b.1));
+    // Poses composed along the `ChildOf` chains now: the reconstruction runs its schedule once,
+    // without the transform propagation systems.
+    let mut helper = SystemState::<TransformHelper>::new(world);
+    let helper = helper.get(world).expect("queries are always valid");
     let poses: Vec<Affine3A> = entities
         .iter()
-        .map(|(e, _)| world_from_entity(world, *e))
+        .map(|(e, _)| {
+            helper
+                .compute_global_transform(*e)
+                .map_or(Affine3A::IDENTITY, |g| g.affine())
+        })
         .collect();
     let floor = graph.nodes.iter().find(|n| n.class == "floor");
     let links: Vec<Vec<NodeLink>> = entities
@@ -110,7 +101,7 @@ fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>
             .spawn((
                 Name::new(format!("{id}_{part}")),
                 ModelPart {
-                    object: id.to_string(),
+                    object: entity,
                     part,
                 },
                 body,
@@ -155,14 +146,17 @@ pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, String> {
                 spec: JointSpec::FIXED,
                 value: 0.0,
             });
-            let local = e.get::<Transform>().map_or(Affine3A::IDENTITY, affine_of);
+            let local = e.get::<Transform>().map_or(Affine3A::IDENTITY, Transform::compute_affine);
             // A part's class is its object's.
             let (node, class) = match (e.get::<SceneEntity>(), e.get::<ModelPart>()) {
                 (Some(id), _) => (
                     Some(id.0.clone()),
                     e.get::<Panoptic>().map(|p| p.class.clone()),
                 ),
-                (None, Some(part)) => (Some(part.object.clone()), tree.links[index].class.clone()),
+                (None, Some(part)) => (
+                    world.get::<SceneEntity>(part.object).map(|id| id.0.clone()),
+                    tree.links[index].class.clone(),
+                ),
                 (None, None) => (None, None),
             };
             tree.links.push(TreeLink {

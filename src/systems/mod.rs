@@ -10,6 +10,7 @@ pub mod motion_physics;
 pub mod panoptic_mapping;
 pub mod physics_validation;
 pub mod scene_graph;
+pub mod scene_nodes;
 pub mod simulation;
 pub mod stages;
 

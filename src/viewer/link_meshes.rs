@@ -85,8 +85,7 @@ fn object_instance(
         return (0, String::new());
     };
     panoptic
-        .iter()
-        .find(|(id, _)| id.0 == part.object)
+        .get(part.object)
         .map_or((0, String::new()), |(_, p)| (p.instance, p.class.clone()))
 }
 

@@ -1,0 +1,164 @@
+//! The contact graph as the scene's entities hold it. The world is the truth: each node is an
+//! entity's components (`SceneEntity`, `Panoptic`, `OrientedBox`, `SurfacePlanes`, its
+//! `CadModel` once replaced, the values of its moving parts' `Joint`s), support is its `ChildOf`
+//! and the proximal pairs are `ProximalTo`. `ContactGraph` is what this reads off it: the
+//! export format (contact_graph.json), and the view the Bevy-free algorithms of the CAD stages
+//! take, as `read_kinematic_tree` reads the kinematic tree off the transform hierarchy.
+
+use std::collections::{BTreeMap, HashMap};
+
+use bevy::ecs::system::{SystemParam, SystemState};
+use bevy::prelude::*;
+use glam::Mat4;
+
+use crate::components::{
+    CadModel, Joint, ModelPart, OrientedBox, Panoptic, ProximalTo, SceneEntity, SurfacePlanes,
+};
+use crate::geometry::Plane;
+use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
+
+type NodeComponents = (
+    Entity,
+    &'static SceneEntity,
+    &'static Panoptic,
+    &'static OrientedBox,
+    &'static SurfacePlanes,
+    Option<&'static CadModel>,
+    Option<&'static ChildOf>,
+    Option<&'static ProximalTo>,
+);
+
+/// The scene entities that are contact-graph nodes (those the ContactGraph stage gave a box and
+/// planes), for systems that read the graph.
+#[derive(SystemParam)]
+pub struct SceneNodes<'w, 's> {
+    nodes: Query<'w, 's, NodeComponents>,
+    ids: Query<'w, 's, &'static SceneEntity>,
+    parts: Query<'w, 's, (&'static ModelPart, &'static Joint)>,
+}
+
+impl SceneNodes<'_, '_> {
+    /// The nodes' entities in the graph's order: the order they were spawned in, which is the
+    /// panoptic map's extraction order with the counters the ContactGraph stage found after it,
+    /// the order that stage built the graph in. (Entity indices follow spawn order: nothing in
+    /// a reconstruction is despawned, so none is reused.)
+    pub fn entities(&self) -> Vec<Entity> {
+        let mut entities: Vec<Entity> = self.nodes.iter().map(|n| n.0).collect();
+        entities.sort_by_key(|e| e.index_u32());
+        entities
+    }
+
+    /// Each node's entity by its id.
+    pub fn entities_by_id(&self) -> HashMap<String, Entity> {
+        self.nodes.iter().map(|n| (n.1.0.clone(), n.0)).collect()
+    }
+
+    /// The node's id, if `entity` is a scene entity.
+    pub fn id(&self, entity: Entity) -> Option<&str> {
+        self.ids.get(entity).ok().map(|id| id.0.as_str())
+    }
+
+    /// The contact graph the entities hold. A joint value is listed where a part stands away
+    /// from its rest (a reconstruction's parts all rest, as its graph has them). `parts` stay
+    /// empty: the reconstruction perceives none yet (issue 36).
+    pub fn contact_graph(&self) -> ContactGraph {
+        let order = self.entities();
+        let position: HashMap<Entity, usize> =
+            order.iter().enumerate().map(|(k, e)| (*e, k)).collect();
+        let mut joints: HashMap<Entity, BTreeMap<String, f32>> = HashMap::new();
+        for (part, joint) in &self.parts {
+            if joint.value != 0.0 {
+                joints
+                    .entry(part.object)
+                    .or_default()
+                    .insert(part.part.clone(), joint.value);
+            }
+        }
+        let rows: Vec<_> = order
+            .iter()
+            .filter_map(|e| self.nodes.get(*e).ok())
+            .collect();
+        let nodes = rows
+            .iter()
+            .map(|(e, id, panoptic, bbox, planes, cad, ..)| GraphNode {
+                id: id.0.clone(),
+                class: panoptic.class.clone(),
+                kind: panoptic.kind,
+                bbox: bbox.0.into(),
+                planes: planes.0.iter().map(Plane::to_array).collect(),
+                cad: cad.map(placement),
+                joints: joints.remove(e).unwrap_or_default(),
+                parts: Vec::new(),
+            })
+            .collect();
+        // Support edges in the order of their children, then each proximal pair once, in the
+        // order of its first and then its second end (the order the ContactGraph stage found them).
+        let mut edges: Vec<GraphEdge> = rows
+            .iter()
+            .filter_map(|(_, id, _, _, _, _, parent, _)| {
+                let parent = self.id(parent.as_ref()?.parent())?;
+                Some(GraphEdge::Support {
+                    parent: parent.to_string(),
+                    child: id.0.clone(),
+                })
+            })
+            .collect();
+        for (k, (_, id, _, _, _, _, _, near)) in rows.iter().enumerate() {
+            let mut after: Vec<usize> = near
+                .map_or(&[][..], |n| &n.0[..])
+                .iter()
+                .filter_map(|e| position.get(e).copied())
+                .filter(|&j| j > k)
+                .collect();
+            after.sort_unstable();
+            edges.extend(after.into_iter().map(|j| GraphEdge::Proximal {
+                a: id.0.clone(),
+                b: rows[j].1.0.clone(),
+            }));
+        }
+        ContactGraph { nodes, edges }
+    }
+}
+
+fn placement(cad: &CadModel) -> CadPlacement {
+    CadPlacement {
+        model: cad.model.clone(),
+        world_from_model: Mat4::from(cad.world_from_model).to_cols_array(),
+        scale: cad.scale,
+        alignment_error: cad.alignment_error,
+    }
+}
+
+/// The contact graph `world`'s scene entities hold (`SceneNodes::contact_graph`).
+pub fn read_contact_graph(world: &mut World) -> ContactGraph {
+    let mut state = SystemState::<SceneNodes>::new(world);
+    state
+        .get(world)
+        .expect("queries are always valid")
+        .contact_graph()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cad::db::database::CadDatabase;
+    use crate::systems::kinematic_tree::spawn_node_links;
+    use crate::systems::scene_graph::spawn_contact_graph;
+
+    #[test]
+    fn the_graph_read_off_the_world_is_the_graph_spawned_into_it() {
+        let graph = crate::scene::kitchen_contact_graph();
+        let mut world = World::new();
+        spawn_contact_graph(&mut world, &graph).expect("spawn");
+        spawn_node_links(&mut world, &graph, Some(&CadDatabase::parametric()));
+        let read = read_contact_graph(&mut world);
+        // The ground truth lists its models' parts, which the world holds as part entities with
+        // their joints, not as a list.
+        let mut expected = graph.clone();
+        for node in &mut expected.nodes {
+            node.parts.clear();
+            node.joints.retain(|_, v| *v != 0.0);
+        }
+        assert_eq!(read, expected);
+    }
+}
