@@ -23,13 +23,13 @@ use crate::scene::{RenderOptions, render_sequence};
 use crate::systems::Reconstruct;
 use crate::systems::cad_replacement::{CadAlignMethod, CadAlignmentCache, CadLibrary, CadReport};
 use crate::systems::contact_graph::{GravityConfig, SceneGravity};
-use crate::systems::scene_nodes::read_contact_graph;
 use crate::systems::export::{ExportTarget, ExportedFiles};
 use crate::systems::ingest::{IngestReport, InputSequence};
 use crate::systems::panoptic_mapping::{
     LivePreview, MappingConfig, PanopticMap, PanopticSurface, Segmenter, segmentation_service,
 };
 use crate::systems::physics_validation::PhysicsReport;
+use crate::systems::scene_nodes::read_contact_graph;
 use crate::systems::stages::{StageError, StageMarks};
 
 pub use crate::cad::replace::replacement::AlignMethod;

@@ -146,7 +146,9 @@ pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, String> {
                 spec: JointSpec::FIXED,
                 value: 0.0,
             });
-            let local = e.get::<Transform>().map_or(Affine3A::IDENTITY, Transform::compute_affine);
+            let local = e
+                .get::<Transform>()
+                .map_or(Affine3A::IDENTITY, Transform::compute_affine);
             // A part's class is its object's.
             let (node, class) = match (e.get::<SceneEntity>(), e.get::<ModelPart>()) {
                 (Some(id), _) => (
