@@ -69,7 +69,11 @@ pub struct SimulationSummary {
 /// The live world of `graph`: its entities, their links (CAD models from `db`, usually
 /// `CadDatabase::for_scene` of the scene's folder) and the robot at `start` (default: the most
 /// open spot of the floor).
-pub fn simulation_app(graph: &ContactGraph, task: &Task, db: &CadDatabase) -> Result<App, String> {
+pub fn simulation_app(
+    graph: &ContactGraph,
+    task: &Task,
+    db: &CadDatabase,
+) -> Result<App, IsceneError> {
     let mut app = App::new();
     app.add_plugins(SimulationPlugin);
     let world = app.world_mut();
@@ -82,10 +86,12 @@ pub fn simulation_app(graph: &ContactGraph, task: &Task, db: &CadDatabase) -> Re
         },
         None => {
             let tree = read_kinematic_tree(world)?;
-            default_start(&tree).ok_or("the scene has no floor to put the robot on")?
+            default_start(&tree).ok_or_else(|| {
+                IsceneError::Internal("the scene has no floor to put the robot on".into())
+            })?
         }
     };
-    spawn_robot(world, task.robot, pose)?;
+    spawn_robot(world, task.robot, pose).map_err(IsceneError::Internal)?;
     Ok(app)
 }
 
@@ -123,8 +129,8 @@ fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneEr
     let graph =
         add_unseen_objects(graph, &task.add, &db).map_err(|p| InputError::invalid(task_path, p))?;
     check_steps_name_movable_nodes(&task, &graph).map_err(|p| InputError::invalid(task_path, p))?;
-    let mut app = simulation_app(&graph, &task, &db).map_err(IsceneError::Internal)?;
-    let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
+    let mut app = simulation_app(&graph, &task, &db)?;
+    let before = read_kinematic_tree(app.world_mut())?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
     let scene = symbolic_scene(&SceneView::new(&before), &place, holding.as_deref());
     let goals: Vec<Fact> = task
@@ -212,9 +218,9 @@ fn add_unseen_objects(
         });
         let mut app = App::new();
         app.add_plugins(SimulationPlugin);
-        spawn_contact_graph(app.world_mut(), &graph).map_err(at)?;
+        spawn_contact_graph(app.world_mut(), &graph).map_err(|e| at(e.to_string()))?;
         spawn_node_links(app.world_mut(), &graph, Some(db));
-        let tree = read_kinematic_tree(app.world_mut()).map_err(at)?;
+        let tree = read_kinematic_tree(app.world_mut()).map_err(|e| at(e.to_string()))?;
         let view = SceneView::new(&tree);
         let link = view
             .node_link(&added.id)
@@ -343,11 +349,11 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
         options.force,
     )?;
     let (prepared, mut app) = prepare(&options.dir, &options.task)?;
-    let before = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
+    let before = read_kinematic_tree(app.world_mut())?;
     let physics_before = step_physics(rest_physics(&before));
     run_actions(&mut app, &prepared.actions);
     let steps = app.world().resource::<SimulationTrace>().0.clone();
-    let after = read_kinematic_tree(app.world_mut()).map_err(IsceneError::Internal)?;
+    let after = read_kinematic_tree(app.world_mut())?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
     let end = symbolic_scene(&SceneView::new(&after), &place, holding.as_deref());
     let goals_hold = prepared.goals.iter().all(|g| end.facts.contains(g));
@@ -410,8 +416,7 @@ pub fn bench_simulation(
     for _ in 0..runs {
         let mut app = match first.take() {
             Some(app) => app,
-            None => simulation_app(&prepared.graph, &prepared.task, &prepared.db)
-                .map_err(IsceneError::Internal)?,
+            None => simulation_app(&prepared.graph, &prepared.task, &prepared.db)?,
         };
         let update_ms = run_actions(&mut app, &prepared.actions);
         let steps = app.world().resource::<SimulationTrace>().0.clone();

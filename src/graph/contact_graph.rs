@@ -85,6 +85,28 @@ pub struct ContactGraph {
     pub edges: Vec<GraphEdge>,
 }
 
+/// What makes a contact graph malformed, whatever its schema allows.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum GraphError {
+    #[error("nodes: {0} nodes, more than the {MAX_NODES} a room's graph may have")]
+    TooManyNodes(usize),
+    #[error("nodes: duplicate id {0:?}")]
+    DuplicateId(String),
+    /// An id that cannot name the files made for it (`file_name::check_file_name`'s reason).
+    #[error("nodes: {0}")]
+    BadId(String),
+    #[error("node {0:?}: NaN or infinite number in its box or planes")]
+    NotFinite(String),
+    #[error("edges: unknown node {0:?}")]
+    UnknownNode(String),
+    #[error("edges: {0:?} has two support parents")]
+    TwoParents(String),
+    #[error("edges: support cycle through {0:?}")]
+    SupportCycle(String),
+    #[error("edges: {0:?} stands on a stack of more than {MAX_SUPPORT_DEPTH} objects")]
+    TooDeep(String),
+}
+
 /// The most nodes a contact graph read from a file may have.
 pub const MAX_NODES: usize = 2000;
 /// The tallest stack of objects on one another a graph may describe (the kinematic tree follows
@@ -113,19 +135,16 @@ impl ContactGraph {
 
     /// Checks what the schema cannot: unique ids, edges between known nodes, at most one support
     /// parent per node, no support cycles, finite numbers.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), GraphError> {
         if self.nodes.len() > MAX_NODES {
-            return Err(format!(
-                "nodes: {} nodes, more than the {MAX_NODES} a room's graph may have",
-                self.nodes.len()
-            ));
+            return Err(GraphError::TooManyNodes(self.nodes.len()));
         }
         let mut ids = HashSet::new();
         for n in &self.nodes {
             if !ids.insert(n.id.as_str()) {
-                return Err(format!("nodes: duplicate id {:?}", n.id));
+                return Err(GraphError::DuplicateId(n.id.clone()));
             }
-            crate::file_name::check_file_name(&n.id).map_err(|e| format!("nodes: {e}"))?;
+            crate::file_name::check_file_name(&n.id).map_err(GraphError::BadId)?;
             let finite = n
                 .bbox
                 .center
@@ -134,10 +153,7 @@ impl ContactGraph {
                 .all(|v| v.is_finite())
                 && n.bbox.yaw.is_finite();
             if !finite || n.planes.iter().flatten().any(|v| !v.is_finite()) {
-                return Err(format!(
-                    "node {:?}: NaN or infinite number in its box or planes",
-                    n.id
-                ));
+                return Err(GraphError::NotFinite(n.id.clone()));
             }
         }
         let mut children = HashSet::new();
@@ -148,13 +164,13 @@ impl ContactGraph {
             };
             for id in [a, b] {
                 if !ids.contains(id.as_str()) {
-                    return Err(format!("edges: unknown node {id:?}"));
+                    return Err(GraphError::UnknownNode(id.clone()));
                 }
             }
             if let GraphEdge::Support { child, .. } = e
                 && !children.insert(child.as_str())
             {
-                return Err(format!("edges: {child:?} has two support parents"));
+                return Err(GraphError::TwoParents(child.clone()));
             }
         }
         let parents: std::collections::HashMap<&str, &str> =
@@ -167,13 +183,10 @@ impl ContactGraph {
                     None => break,
                 }
                 if current == n.id {
-                    return Err(format!("edges: support cycle through {:?}", n.id));
+                    return Err(GraphError::SupportCycle(n.id.clone()));
                 }
                 if depth >= MAX_SUPPORT_DEPTH {
-                    return Err(format!(
-                        "edges: {:?} stands on a stack of more than {MAX_SUPPORT_DEPTH} objects",
-                        n.id
-                    ));
+                    return Err(GraphError::TooDeep(n.id.clone()));
                 }
             }
         }
@@ -184,7 +197,9 @@ impl ContactGraph {
         let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, &e))?;
         let graph: ContactGraph = serde_json::from_str(&text)
             .map_err(|e| InputError::invalid(path, format!("invalid contact graph: {e}")))?;
-        graph.check().map_err(|p| InputError::invalid(path, p))?;
+        graph
+            .check()
+            .map_err(|e| InputError::invalid(path, e.to_string()))?;
         Ok(graph)
     }
 

@@ -11,4 +11,4 @@ pub mod sighted_extent;
 pub mod sparse_ends;
 pub mod support;
 
-pub use contact_graph::{BoxJson, CadPlacement, ContactGraph, GraphEdge, GraphNode};
+pub use contact_graph::{BoxJson, CadPlacement, ContactGraph, GraphEdge, GraphError, GraphNode};

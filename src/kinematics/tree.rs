@@ -130,29 +130,42 @@ impl KinematicTree {
 
     /// Whether the tree is well formed: one root first, parents before children, unique names,
     /// finite rigid frames and a geometry on every link but the root.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), TreeError> {
         let mut names = std::collections::HashSet::new();
         for (i, link) in self.links.iter().enumerate() {
             if !names.insert(link.name.as_str()) {
-                return Err(format!("two links are named {:?}", link.name));
+                return Err(TreeError::DuplicateName(link.name.clone()));
             }
             match link.parent {
-                None if i != 0 => return Err(format!("link {:?} has no parent", link.name)),
-                Some(p) if p >= i => {
-                    return Err(format!("link {:?} comes before its parent", link.name));
-                }
+                None if i != 0 => return Err(TreeError::NoParent(link.name.clone())),
+                Some(p) if p >= i => return Err(TreeError::BeforeParent(link.name.clone())),
                 _ => {}
             }
             if i > 0 && link.geometry.is_none() {
-                return Err(format!("link {:?} has no geometry", link.name));
+                return Err(TreeError::NoGeometry(link.name.clone()));
             }
             let m = glam::Mat4::from(link.parent_from_link);
             if !m.is_finite() || !link.value.is_finite() {
-                return Err(format!("link {:?} has a non-finite pose", link.name));
+                return Err(TreeError::NotFinite(link.name.clone()));
             }
         }
         Ok(())
     }
+}
+
+/// What makes a kinematic tree malformed: the exports and the simulators would misread it.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum TreeError {
+    #[error("two links are named {0:?}")]
+    DuplicateName(String),
+    #[error("link {0:?} has no parent")]
+    NoParent(String),
+    #[error("link {0:?} comes before its parent")]
+    BeforeParent(String),
+    #[error("link {0:?} has no geometry")]
+    NoGeometry(String),
+    #[error("link {0:?} has a non-finite pose")]
+    NotFinite(String),
 }
 
 /// Effort and velocity limits written for a moving joint: what a person's hand or a mobile

@@ -19,12 +19,27 @@ use crate::error::IsceneError;
 use crate::graph::ContactGraph;
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
-use crate::kinematics::tree::{KinematicTree, TreeLink};
+use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
 use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneGravity;
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 use crate::systems::scene_nodes::read_contact_graph;
 use crate::systems::stages::record_failure;
+
+/// Why the transform hierarchy could not be read as a kinematic tree.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadTreeError {
+    #[error("no scene root")]
+    NoSceneRoot,
+    #[error(transparent)]
+    Malformed(#[from] TreeError),
+}
+
+impl From<ReadTreeError> for IsceneError {
+    fn from(e: ReadTreeError) -> Self {
+        IsceneError::Internal(e.to_string())
+    }
+}
 
 /// The kinematic tree as the ECS held it at the end of the KinematicTree stage.
 #[derive(Resource, Clone, Debug)]
@@ -119,12 +134,12 @@ fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>
 
 /// The transform hierarchy under the `SceneRoot` as a kinematic tree, depth first, children in
 /// name order (so the same scene always gives the same files).
-pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, String> {
+pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, ReadTreeError> {
     let root = world
         .query_filtered::<Entity, With<SceneRoot>>()
         .iter(world)
         .next()
-        .ok_or("no scene root")?;
+        .ok_or(ReadTreeError::NoSceneRoot)?;
     let mut children_of: HashMap<Entity, Vec<(String, Entity)>> = HashMap::new();
     for (e, parent, name) in world.query::<(Entity, &ChildOf, &Name)>().iter(world) {
         children_of

@@ -10,9 +10,25 @@ use crate::classes::{ClassTable, EntityKind};
 use crate::components::{
     CadModel, Joint, OrientedBox, Panoptic, ProximalTo, SceneEntity, SurfacePlanes,
 };
+use crate::error::IsceneError;
 use crate::geometry::{GravityBox, Plane};
-use crate::graph::{ContactGraph, GraphEdge};
+use crate::graph::{ContactGraph, GraphEdge, GraphError};
 use crate::kinematics::JointSpec;
+
+/// Why a contact graph could not be hung into the ECS.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneGraphError {
+    #[error(transparent)]
+    Malformed(#[from] GraphError),
+    #[error("node {0:?} has no entity")]
+    NoEntity(String),
+}
+
+impl From<SceneGraphError> for IsceneError {
+    fn from(e: SceneGraphError) -> Self {
+        IsceneError::Internal(e.to_string())
+    }
+}
 
 /// Marks the root of the kinematic tree (the world frame).
 #[derive(Component, Clone, Copy, Debug, Default)]
@@ -58,7 +74,7 @@ pub fn support_joint(class: &str, has_model: bool) -> JointSpec {
 pub fn spawn_contact_graph(
     world: &mut World,
     graph: &ContactGraph,
-) -> Result<HashMap<String, Entity>, String> {
+) -> Result<HashMap<String, Entity>, SceneGraphError> {
     graph.check()?;
     let mut entities = HashMap::new();
     for node in &graph.nodes {
@@ -85,10 +101,10 @@ pub fn attach_contact_graph(
     world: &mut World,
     graph: &ContactGraph,
     entities: &HashMap<String, Entity>,
-) -> Result<Entity, String> {
+) -> Result<Entity, SceneGraphError> {
     graph.check()?;
     if let Some(missing) = graph.nodes.iter().find(|n| !entities.contains_key(&n.id)) {
-        return Err(format!("node {:?} has no entity", missing.id));
+        return Err(SceneGraphError::NoEntity(missing.id.clone()));
     }
     // Attaching again (the CAD stage moves frames to the models) re-hangs under the same root.
     let existing = world

@@ -137,15 +137,17 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
         .get_resource::<SimulationTrace>()
         .map_or(0, |t| t.0.len());
     let mut motion = Vec::new();
-    let outcome = read_kinematic_tree(world).and_then(|tree| {
-        let spec = robot_spec(world).ok_or("the scene has no robot")?;
-        let changes = attempt(&tree, &spec, action).map_err(|e| e.to_string())?;
-        motion = simulate_motions(&tree, &changes);
-        if let Some(why) = knocked_reason(&motion) {
-            return Err(why);
-        }
-        Ok(changes)
-    });
+    let outcome = read_kinematic_tree(world)
+        .map_err(|e| e.to_string())
+        .and_then(|tree| {
+            let spec = robot_spec(world).ok_or("the scene has no robot")?;
+            let changes = attempt(&tree, &spec, action).map_err(|e| e.to_string())?;
+            motion = simulate_motions(&tree, &changes);
+            if let Some(why) = knocked_reason(&motion) {
+                return Err(why);
+            }
+            Ok(changes)
+        });
     let record = match outcome {
         Err(reason) => StepRecord {
             step,

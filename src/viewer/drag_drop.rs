@@ -23,11 +23,10 @@ use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::physics_validation::settle_object;
 use crate::systems::scene_graph::transform_of;
 use crate::systems::simulation::apply_change;
-use crate::viewer::interaction::{
-    CLICK_SLOP_PX, PendingClicks, PointerPosition, ViewerStatus, ray_through, scene_changed,
-};
+use crate::viewer::interaction::{CLICK_SLOP_PX, PendingClicks, ray_through, scene_changed};
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
 use crate::viewer::motion::{finish_motion, show_fall};
+use crate::viewer::state::{PointerPosition, ViewerStatus};
 
 /// A dropped object may touch what it lands on, not sink into anything deeper than this.
 const DROP_TOLERANCE_M: f32 = 0.01;
@@ -122,7 +121,7 @@ pub fn drop_object(world: &mut World, from: Vec2, to: Vec2) -> Vec<String> {
     finish_motion(world);
     let tree = match read_kinematic_tree(world) {
         Ok(tree) => tree,
-        Err(why) => return vec![why],
+        Err(why) => return vec![why.to_string()],
     };
     let view = SceneView::new(&tree);
     let plan = match plan_drop(&tree, &view, grab, put) {

@@ -15,19 +15,7 @@ use crate::systems::simulation::apply_change;
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
 use crate::viewer::motion::{finish_motion, show_motion};
 use crate::viewer::physics_layer::run_rest_test;
-
-/// The pointer's last position over the view, in pixels from its top-left corner.
-#[derive(Resource, Clone, Copy, Debug, Default)]
-pub struct PointerPosition(pub Option<Vec2>);
-
-/// Counts the changes made to the scene from the viewer: layers that depend on the scene as it
-/// stands (occupancy, physics) rebuild when it moves on.
-#[derive(Resource, Clone, Copy, Debug, Default)]
-pub struct SceneRevision(pub u64);
-
-/// Lines the panel shows about the last interaction.
-#[derive(Resource, Clone, Debug, Default)]
-pub struct ViewerStatus(pub Vec<String>);
+use crate::viewer::state::{PointerPosition, SceneRevision, ViewerStatus};
 
 /// Clicks not yet worked, where the pointer was, and left drags (from, to) not yet dropped.
 #[derive(Resource, Clone, Debug, Default)]
@@ -104,7 +92,7 @@ pub fn work_joint_at(world: &mut World, at: Vec2) -> Vec<String> {
     finish_motion(world);
     let tree = match read_kinematic_tree(world) {
         Ok(tree) => tree,
-        Err(why) => return vec![why],
+        Err(why) => return vec![why.to_string()],
     };
     let Some((hit, _)) = pick_link(&tree, ray.origin, *ray.direction, &HIDDEN_CLASSES) else {
         return vec!["nothing there".into()];

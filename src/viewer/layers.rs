@@ -4,8 +4,8 @@
 
 use bevy::prelude::*;
 
-use crate::viewer::interaction::ViewerStatus;
 use crate::viewer::physics_layer::RestVerdicts;
+use crate::viewer::state::ViewerStatus;
 use crate::viewer::task_player::TaskPlayer;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]

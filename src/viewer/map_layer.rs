@@ -13,11 +13,11 @@ use crate::error::IsceneError;
 use crate::geometry::TriMesh;
 use crate::panoptic::panoptic_dir::{read_index, read_segment_meshes};
 use crate::replay::{read_report, reconstruction_sequence, vertex_colours};
-use crate::viewer::interaction::ViewerStatus;
 use crate::viewer::layers::{ActiveLayers, Layer};
 use crate::viewer::link_meshes::{
     HIDDEN_CLASSES, LinkMaterials, coloured_bevy_mesh, instance_colour, material,
 };
+use crate::viewer::state::ViewerStatus;
 
 /// A map vertex no colour frame saw is drawn in this grey.
 const UNSEEN_GREY: [u8; 3] = [150, 150, 150];

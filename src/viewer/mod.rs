@@ -22,6 +22,7 @@ mod occupancy;
 mod physics_layer;
 mod replay_scene;
 mod screenshot;
+mod state;
 mod task_player;
 mod timeline;
 
@@ -47,13 +48,13 @@ pub use camera::OrbitCamera;
 pub use drag_drop::{DragPreview, DropGhost, drop_object};
 pub use graph_labels::{NodeLabel, ReplayLabel};
 pub use interaction::work_joint_at;
-pub use interaction::{PointerPosition, SceneRevision, ViewerStatus};
 pub use layers::{ActiveLayers, Layer};
 pub use map_layer::{MapSegments, read_map};
 pub use motion::Motion;
 pub use physics_layer::RestVerdicts;
 pub use replay_scene::ReplayData;
 pub use screenshot::{RenderTiming, render_offscreen};
+pub use state::{PointerPosition, SceneRevision, ViewerStatus};
 pub use task_player::{TaskPlayer, action_words};
 pub use timeline::ReplayClock;
 
@@ -132,8 +133,7 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
                 ContactGraph::load(&options.dir.join("contact_graph.json"))?
             };
             let db = CadDatabase::for_scene(&options.dir)?;
-            let app =
-                simulation_app(&graph, &Task::default(), &db).map_err(IsceneError::Internal)?;
+            let app = simulation_app(&graph, &Task::default(), &db)?;
             (Vec::new(), app)
         }
     };
@@ -248,7 +248,7 @@ fn run_whole_task(app: &mut App, task: &std::path::Path) -> Result<(), IsceneErr
 /// Opens the main door or drawer of each object in `objects`.
 fn open_doors(world: &mut World, objects: &[String]) -> Result<(), String> {
     for object in objects {
-        let tree = read_kinematic_tree(world)?;
+        let tree = read_kinematic_tree(world).map_err(|e| e.to_string())?;
         let view = SceneView::new(&tree);
         let part = view
             .main_part(object)

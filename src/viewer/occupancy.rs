@@ -14,9 +14,9 @@ use crate::sim::robot::RobotSpec;
 use crate::sim::scene_view::SceneView;
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::Robot;
-use crate::viewer::interaction::{SceneRevision, ViewerStatus};
 use crate::viewer::layers::{ActiveLayers, Layer};
 use crate::viewer::motion::Motion;
+use crate::viewer::state::{SceneRevision, ViewerStatus};
 
 /// Height of the grid above the floor's top (z = 0), metres: above it, below everything else.
 const GRID_Z_M: f32 = 0.004;
@@ -101,6 +101,7 @@ fn update_occupancy(world: &mut World) {
         .next()
         .map_or(RobotSpec::default().radius, |r| r.spec.radius);
     let grid = read_kinematic_tree(world)
+        .map_err(|e| e.to_string())
         .and_then(|tree| nav_grid(&SceneView::new(&tree)).map_err(|e| e.to_string()));
     let grid = match grid {
         Ok(grid) => grid,

@@ -8,9 +8,9 @@ use crate::components::{OrientedBox, SceneEntity};
 use crate::kinematics::rest_test::Verdict;
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::physics_validation::{PhysicsReport, rest_physics};
-use crate::viewer::interaction::SceneRevision;
 use crate::viewer::layers::{ActiveLayers, Layer};
 use crate::viewer::motion::Motion;
+use crate::viewer::state::SceneRevision;
 
 /// The last rest test and the scene revision it ran on.
 #[derive(Resource, Clone, Debug, Default)]

@@ -8,8 +8,8 @@ use bevy::prelude::*;
 
 use crate::sim::actions::Action;
 use crate::systems::simulation::{ActionRequest, SimulationTrace, StepPhysics};
-use crate::viewer::interaction::{SceneRevision, ViewerStatus};
 use crate::viewer::motion::{Motion, animate, show_motion};
+use crate::viewer::state::{SceneRevision, ViewerStatus};
 
 /// The task's actions and how far the viewer has run them.
 #[derive(Resource, Clone, Debug, Default)]
