@@ -214,16 +214,15 @@ fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
     let mut graph = nodes.contact_graph();
     let points = observed_points(surfaces.iter());
     let entity_of = nodes.entities_by_id();
+    let order = nodes.entities();
     // The aligned objects, in the graph's order (CadAlign's).
-    let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = nodes
-        .entities()
-        .into_iter()
-        .filter_map(|e| Some((nodes.id(e)?.to_string(), aligned.get(e).ok()?.0.clone())))
+    let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = order
+        .iter()
+        .filter_map(|&e| Some((nodes.id(e)?.to_string(), aligned.get(e).ok()?.0.clone())))
         .unzip();
-    let rejected: Vec<RejectedObject> = nodes
-        .entities()
-        .into_iter()
-        .filter_map(|e| {
+    let rejected: Vec<RejectedObject> = order
+        .iter()
+        .filter_map(|&e| {
             Some(RejectedObject {
                 id: nodes.id(e)?.to_string(),
                 rejection: rejections.get(e).ok()?.0.clone(),

@@ -17,6 +17,7 @@ use crate::map::extract_mesh;
 use crate::systems::ingest::InputSequence;
 use crate::systems::panoptic_mapping::{PanopticMap, PanopticSurface};
 use crate::systems::scene_graph::attach_contact_graph;
+use crate::systems::scene_nodes::graph_order;
 use crate::systems::stages::record_failure;
 
 /// How the stage finds gravity.
@@ -38,8 +39,7 @@ fn contact_graph_stage(world: &mut World) -> Result<(), IsceneError> {
         .iter(world)
         .map(|(e, id, p, m)| (e, id.0.clone(), p.clone(), m.0.clone()))
         .collect();
-    // Spawn order, the order `SceneNodes` lists the graph's nodes in.
-    entities.sort_by_key(|(e, ..)| e.index_u32());
+    entities.sort_by_key(|(e, ..)| graph_order(*e));
     let outlines: Vec<Vec<Vec<glam::Vec3>>> = entities
         .iter()
         .map(|(e, ..)| {

@@ -17,6 +17,15 @@ use crate::components::{
 use crate::geometry::Plane;
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
 
+/// Where an entity's node stands in the contact graph: the order the entities were spawned in,
+/// which is the panoptic map's extraction order with the counters the ContactGraph stage found
+/// after it, the order that stage builds the graph in. Entity indices follow spawn order, as
+/// nothing in a reconstruction is despawned (so none is reused); `Entity`'s own ordering compares
+/// opaque bits and does not.
+pub fn graph_order(entity: Entity) -> u32 {
+    entity.index_u32()
+}
+
 type NodeComponents = (
     Entity,
     &'static SceneEntity,
@@ -33,18 +42,14 @@ type NodeComponents = (
 #[derive(SystemParam)]
 pub struct SceneNodes<'w, 's> {
     nodes: Query<'w, 's, NodeComponents>,
-    ids: Query<'w, 's, &'static SceneEntity>,
     parts: Query<'w, 's, (&'static ModelPart, &'static Joint)>,
 }
 
 impl SceneNodes<'_, '_> {
-    /// The nodes' entities in the graph's order: the order they were spawned in, which is the
-    /// panoptic map's extraction order with the counters the ContactGraph stage found after it,
-    /// the order that stage built the graph in. (Entity indices follow spawn order: nothing in
-    /// a reconstruction is despawned, so none is reused.)
+    /// The nodes' entities in the graph's order ([`graph_order`]).
     pub fn entities(&self) -> Vec<Entity> {
         let mut entities: Vec<Entity> = self.nodes.iter().map(|n| n.0).collect();
-        entities.sort_by_key(|e| e.index_u32());
+        entities.sort_by_key(|e| graph_order(*e));
         entities
     }
 
@@ -53,9 +58,9 @@ impl SceneNodes<'_, '_> {
         self.nodes.iter().map(|n| (n.1.0.clone(), n.0)).collect()
     }
 
-    /// The node's id, if `entity` is a scene entity.
+    /// The node's id, if `entity` is a node.
     pub fn id(&self, entity: Entity) -> Option<&str> {
-        self.ids.get(entity).ok().map(|id| id.0.as_str())
+        self.nodes.get(entity).ok().map(|n| n.1.0.as_str())
     }
 
     /// The contact graph the entities hold. A joint value is listed where a part stands away
