@@ -290,6 +290,16 @@ fn the_kitchen_reconstructs_with_table_chairs_cups_and_a_counter_holding_the_mon
     let urdf = std::fs::read_to_string(&urdf_path).expect("urdf");
     assert!(urdf.contains(&format!("<link name=\"{table}\"")));
     exports_load_and_rest_in_the_validators(out.path(), urdf.matches("<link ").count());
+    // What the real kitchen reconstructs to, as it was (tests/golden, common/golden.rs).
+    common::golden::assert_json_matches(
+        &out.path().join("contact_graph.json"),
+        "redkitchen_onnx_frames_0__2/contact_graph.json",
+        &[],
+    );
+    common::golden::assert_report_matches(
+        &out.path().join("report.json"),
+        "redkitchen_onnx_frames_0__2/report.json",
+    );
 }
 
 /// Issue 6's bar on the real kitchen's exports: check_urdf silent with every link; MuJoCo loads
