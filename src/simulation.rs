@@ -28,7 +28,7 @@ use crate::sim::symbolic::{Fact, SymbolicScene, parse_goal, symbolic_scene};
 use crate::sim::task::{AddedObject, Task};
 use crate::sim::{actions::Action, pddl};
 use crate::systems::kinematic_tree::{read_kinematic_tree, spawn_node_links};
-use crate::systems::physics_validation::rest_physics;
+use crate::systems::physics_validation::scene_rest_physics;
 use crate::systems::scene_graph::spawn_contact_graph;
 use crate::systems::simulation::{
     ActionRequest, SimulationPlugin, SimulationTrace, StepPhysics, StepRecord, robot_state,
@@ -350,7 +350,7 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
     )?;
     let (prepared, mut app) = prepare(&options.dir, &options.task)?;
     let before = read_kinematic_tree(app.world_mut())?;
-    let physics_before = step_physics(rest_physics(&before));
+    let physics_before = step_physics(scene_rest_physics(app.world_mut())?);
     run_actions(&mut app, &prepared.actions);
     let steps = app.world().resource::<SimulationTrace>().0.clone();
     let after = read_kinematic_tree(app.world_mut())?;

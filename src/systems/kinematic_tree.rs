@@ -135,6 +135,13 @@ fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>
 /// The transform hierarchy under the `SceneRoot` as a kinematic tree, depth first, children in
 /// name order (so the same scene always gives the same files).
 pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, ReadTreeError> {
+    read_kinematic_tree_entities(world).map(|(tree, _)| tree)
+}
+
+/// The kinematic tree as `read_kinematic_tree` reads it, with the entity of each link.
+pub fn read_kinematic_tree_entities(
+    world: &mut World,
+) -> Result<(KinematicTree, Vec<Entity>), ReadTreeError> {
     let root = world
         .query_filtered::<Entity, With<SceneRoot>>()
         .iter(world)
@@ -150,6 +157,7 @@ pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, ReadTreeE
     let mut tree = KinematicTree {
         links: vec![TreeLink::root()],
     };
+    let mut entities = vec![root];
     let mut stack: Vec<(Entity, usize)> = vec![(root, 0)];
     while let Some((entity, index)) = stack.pop() {
         let mut children = children_of.remove(&entity).unwrap_or_default();
@@ -187,13 +195,14 @@ pub fn read_kinematic_tree(world: &mut World) -> Result<KinematicTree, ReadTreeE
                 geometry: e.get::<LinkBody>().map(|b| b.0.clone()),
                 modelled: e.contains::<CadModel>() || e.contains::<ModelPart>(),
             });
+            entities.push(child);
             pushed.push((child, tree.links.len() - 1));
         }
         // Depth first: the stack pops from the back, so the first child goes on last.
         stack.extend(pushed.into_iter().rev());
     }
     tree.check()?;
-    Ok(tree)
+    Ok((tree, entities))
 }
 
 /// Adds the KinematicTree stage.

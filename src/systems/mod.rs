@@ -9,6 +9,7 @@ pub mod kinematic_tree;
 pub mod motion_physics;
 pub mod panoptic_mapping;
 pub mod physics_validation;
+pub mod rapier_session;
 pub mod scene_graph;
 pub mod scene_nodes;
 pub mod simulation;

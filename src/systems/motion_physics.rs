@@ -1,6 +1,7 @@
 //! An action's motion simulated in rapier: the moving link (the robot's base with its gripper
 //! and what it holds, or a door or drawer with what stands on it) is a kinematic body driven
-//! along its path, step by step, through the rest test's world, and the objects near its path
+//! along its path, step by step, through a scratch world of the rest test's bodies (the motion
+//! is not made yet: the scene's own entities stay where they are), and the objects near its path
 //! are free to be pushed, tipped or knocked down. The grid search and the joint sweeps plan
 //! motions that touch nothing; this is the check that the physics agrees, and it catches what
 //! they cannot see (a chair nudged by the base's corner falls against the table).
@@ -19,7 +20,8 @@ use crate::kinematics::rest_test::{
 };
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::motion_path::LinkMotion;
-use crate::systems::physics_validation::{RestBodyIndex, pose_of, rest_world, rigid, spawn_bodies};
+use crate::systems::physics_validation::{attach_bodies, scratch_world};
+use crate::systems::rapier_session::RapierSession;
 
 /// An object moved farther than this (metres) or turned more than `KNOCK_TURN_DEG` was knocked.
 pub const KNOCK_DISTANCE_M: f32 = 0.01;
@@ -58,10 +60,6 @@ pub struct MotionCheck {
     pub knocked: Vec<Knocked>,
     pub wall_ms: f64,
 }
-
-/// Marks the kinematic body of the moving links.
-#[derive(Component)]
-struct Mover;
 
 /// Drives `motion.link` (with everything under it in `tree`) along `motion` in rapier, the
 /// objects near its path free, and reports what it moved. `motion.step_s` must be the rest
@@ -110,54 +108,51 @@ pub fn simulate_motion(tree: &KinematicTree, motion: &LinkMotion) -> MotionCheck
         .map(|b| !near[b] || penetrations[b].0 > MAX_START_PENETRATION_M)
         .collect();
 
-    let mut app = rest_world();
-    let starts = spawn_bodies(app.world_mut(), tree, &bodies, &frozen);
-    let world = app.world_mut();
-    if let Some(owner) = owner {
-        let entities: Vec<Entity> = world
-            .query::<(Entity, &RestBodyIndex)>()
-            .iter(world)
-            .filter(|(_, i)| i.0 == owner)
-            .map(|(e, _)| e)
-            .collect();
-        for e in entities {
-            world
-                .entity_mut(e)
-                .insert(CollisionGroups::new(OWNER_GROUP, Group::ALL ^ MOVER_GROUP));
-        }
-    }
+    let (mut world, entities) = scratch_world(tree);
+    let world = &mut world;
+    let mut session = RapierSession::begin(world);
+    let owner_groups = |b: usize| {
+        (Some(b) == owner).then(|| CollisionGroups::new(OWNER_GROUP, Group::ALL ^ MOVER_GROUP))
+    };
+    let (starts, on) = attach_bodies(
+        &mut session,
+        world,
+        tree,
+        &entities,
+        &bodies,
+        &frozen,
+        &owner_groups,
+    );
     let start = motion.world_from_link[0];
-    if let Some(collider) = mover_collider(tree, &moving, &poses, start) {
-        world.spawn((
-            RigidBody::KinematicPositionBased,
-            collider,
-            CollisionGroups::new(MOVER_GROUP, Group::ALL ^ OWNER_GROUP),
-            rigid(&start),
-            Mover,
-        ));
-    }
+    let mover = mover_collider(tree, &moving, &poses, start).map(|collider| {
+        let mover = world.spawn(Name::new("mover")).id();
+        session.attach(
+            world,
+            mover,
+            start,
+            (
+                RigidBody::KinematicPositionBased,
+                collider,
+                CollisionGroups::new(MOVER_GROUP, Group::ALL ^ OWNER_GROUP),
+            ),
+        );
+        mover
+    });
     for pose in &motion.world_from_link[1..] {
-        let world = app.world_mut();
-        for mut t in world
-            .query_filtered::<&mut Transform, With<Mover>>()
-            .iter_mut(world)
-        {
-            *t = rigid(pose);
+        if let Some(mover) = mover {
+            session.drive(world, mover, *pose);
         }
-        app.update();
+        session.step(world);
     }
     let aftermath = (AFTERMATH_S / REST_STEP_S).round() as usize;
     for _ in 0..aftermath {
-        app.update();
+        session.step(world);
     }
-    let world = app.world_mut();
     let mut knocked = Vec::new();
-    for (index, transform) in world.query::<(&RestBodyIndex, &Transform)>().iter(world) {
-        let b = index.0;
-        if frozen[b] {
+    for (b, entity) in on.iter().enumerate() {
+        let Some(end) = entity.filter(|_| !frozen[b]).and_then(|e| session.pose(world, e)) else {
             continue;
-        }
-        let end = pose_of(transform);
+        };
         let moved_m = end.translation.distance(starts[b].translation);
         let turned_deg = glam::Quat::from_mat3a(&end.matrix3)
             .angle_between(glam::Quat::from_mat3a(&starts[b].matrix3))

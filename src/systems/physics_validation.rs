@@ -1,25 +1,28 @@
-//! The PhysicsValidation stage: the kinematic tree as rapier bodies in an ECS world of its own
-//! (bevy_rapier3d), simulated at rest for `REST_SECONDS` at a fixed step, each object judged
-//! stable, unstable or penetrating with the reason; and every door and drawer swept across its
-//! range for collisions.
+//! The PhysicsValidation stage: the scene's own entities as rapier bodies (bevy_rapier3d),
+//! simulated at rest for `REST_SECONDS` at a fixed step, each object judged stable, unstable or
+//! penetrating with the reason; and every door and drawer swept across its range for
+//! collisions. The same rest test checks the scene after each simulated action; a tree that is
+//! no scene's state (a pose being tried) is simulated in a scratch world of its own.
 
-use bevy::ecs::schedule::SingleThreadedExecutor;
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier3d::rapier::prelude::{
-    IntegrationParameters, MassProperties as ParryMassProperties,
-};
+use bevy_rapier3d::rapier::prelude::MassProperties as ParryMassProperties;
 use glam::Affine3A;
 use serde::Serialize;
 
 use crate::kinematics::contact_pieces::contact_pieces;
 use crate::kinematics::joint_sweep::{JointSweep, sweep_joints};
 use crate::kinematics::rest_test::{
-    MAX_START_PENETRATION_M, ObjectVerdict, REST_SECONDS, REST_STEP_S, REST_SUBSTEPS, RestBody,
+    MAX_START_PENETRATION_M, ObjectVerdict, REST_SECONDS, REST_STEP_S, RestBody,
     Verdict, judge, rest_bodies, start_penetrations,
 };
+use crate::error::IsceneError;
 use crate::kinematics::tree::KinematicTree;
-use crate::systems::kinematic_tree::SceneKinematicTree;
+use crate::systems::kinematic_tree::{
+    ReadTreeError, SceneKinematicTree, read_kinematic_tree_entities,
+};
+use crate::systems::rapier_session::RapierSession;
+use crate::systems::stages::record_failure;
 
 /// What physics validation found, for report.json.
 #[derive(Resource, Clone, Debug, Serialize)]
@@ -33,21 +36,6 @@ pub struct PhysicsReport {
     /// Wall-clock seconds of the rest simulation.
     pub rest_wall_s: f64,
 }
-
-/// The pose of a simulated body.
-pub(crate) fn pose_of(transform: &Transform) -> Affine3A {
-    Affine3A::from_rotation_translation(transform.rotation, transform.translation)
-}
-
-/// A rapier pose is rigid: drop the rounding-level scale a composed affine carries.
-pub(crate) fn rigid(a: &Affine3A) -> Transform {
-    let (_, rotation, translation) = a.to_scale_rotation_translation();
-    Transform::from_translation(translation).with_rotation(rotation.normalize())
-}
-
-/// Marks a simulated body with its index among the rest test's bodies.
-#[derive(Component)]
-pub(crate) struct RestBodyIndex(pub usize);
 
 /// The collider of a dynamic body: a compound of the convex pieces of all its links, with the
 /// links' own mass properties summed in the body's frame.
@@ -96,16 +84,25 @@ pub(crate) fn dynamic_collider(
     })
 }
 
-/// Spawns the bodies; those in `frozen` (they start inside another body, already judged
-/// penetrating) stay where they are, so their overlap does not throw their neighbours about.
-pub(crate) fn spawn_bodies(
+/// The rest test's bodies on the entities of their links (`entities[l]` is link `l`'s): a
+/// dynamic body on the entity of its own link, carrying the pieces of every link locked to it; a
+/// fixed body with its exact triangle mesh on each link of the static body. Those in `frozen`
+/// (they start inside another body, already judged penetrating) are fixed where they stand, so
+/// their overlap does not throw their neighbours about. `groups` gives a body's collision
+/// groups where it has its own. Returns each body's world pose at the start; the entity each
+/// dynamic body went on, `None` for the rest.
+pub(crate) fn attach_bodies(
+    session: &mut RapierSession,
     world: &mut World,
     tree: &KinematicTree,
+    entities: &[Entity],
     bodies: &[RestBody],
     frozen: &[bool],
-) -> Vec<Affine3A> {
+    groups: &dyn Fn(usize) -> Option<CollisionGroups>,
+) -> (Vec<Affine3A>, Vec<Option<Entity>>) {
     let poses = tree.world_from_links();
     let mut starts = Vec::with_capacity(bodies.len());
+    let mut on = vec![None; bodies.len()];
     for (b, body) in bodies.iter().enumerate() {
         let world_from_body = body.links.first().map_or(Affine3A::IDENTITY, |&l| poses[l]);
         starts.push(world_from_body);
@@ -125,17 +122,15 @@ pub(crate) fn spawn_bodies(
             } else {
                 RigidBody::Dynamic
             };
-            world.spawn((
-                kind,
-                collider,
-                mass,
-                Friction::coefficient(friction),
-                rigid(&world_from_body),
-                RestBodyIndex(b),
-            ));
+            let entity = entities[body.links[0]];
+            let rapier_body = (kind, collider, mass, Friction::coefficient(friction));
+            match groups(b) {
+                Some(g) => session.attach(world, entity, world_from_body, (rapier_body, g)),
+                None => session.attach(world, entity, world_from_body, rapier_body),
+            }
+            on[b] = Some(entity);
             continue;
         }
-        // The static body: each link's exact triangle mesh where it stands.
         for &l in &body.links {
             let Some(g) = tree.links[l].geometry.as_ref() else {
                 continue;
@@ -145,33 +140,27 @@ pub(crate) fn spawn_bodies(
             else {
                 continue;
             };
-            world.spawn((
-                RigidBody::Fixed,
-                collider,
-                Friction::coefficient(g.friction),
-                rigid(&poses[l]),
-            ));
+            session.attach(
+                world,
+                entities[l],
+                poses[l],
+                (RigidBody::Fixed, collider, Friction::coefficient(g.friction)),
+            );
         }
     }
-    starts
+    (starts, on)
 }
 
-/// The rapier world of the rest test: z up, and contacts recomputed every step. Rapier's
-/// default recycles a pair's contact points until the bodies have drifted 5 cm apart, which
-/// is a whole bottle's width: small objects on furniture then rested on stale points, drifted
-/// about a centimetre and tipped up to 19 degrees (MuJoCo rests the same files to 0.1 mm);
-/// recomputed, the rendered scenes' small objects stay within 3 mm and 0.3 degrees.
-fn rest_test_context() -> RapierContextInitialization {
-    RapierContextInitialization::InitializeDefaultRapierContext {
-        integration_parameters: IntegrationParameters {
-            contact_recycling: false,
-            ..default()
-        },
-        rapier_configuration: RapierConfiguration {
-            gravity: Vec3::new(0.0, 0.0, -9.81),
-            ..RapierConfiguration::new(1.0)
-        },
-    }
+/// A world of its own for a tree that is no scene's state (a pose the viewer is trying, a
+/// motion not yet made): one entity per link. Returns it with the entity of each link.
+pub(crate) fn scratch_world(tree: &KinematicTree) -> (World, Vec<Entity>) {
+    let mut world = World::new();
+    let entities = tree
+        .links
+        .iter()
+        .map(|link| world.spawn(Name::new(link.name.clone())).id())
+        .collect();
+    (world, entities)
 }
 
 /// Simulates `tree` at rest and judges every object; sweeps its joints.
@@ -182,16 +171,29 @@ pub fn validate_physics(tree: &KinematicTree) -> PhysicsReport {
     }
 }
 
-/// Simulates `tree` at rest and judges every object (no joint sweeps: the check after each
-/// simulated action).
+/// Simulates `tree` at rest and judges every object, in a world of its own (no joint sweeps).
 pub fn rest_physics(tree: &KinematicTree) -> PhysicsReport {
+    let (mut world, entities) = scratch_world(tree);
+    rest_report(&mut world, tree, &entities)
+}
+
+/// The rest test of the scene in `world` as it stands, on the scene's own entities: the check
+/// after each simulated action. The world is left as it was.
+pub fn scene_rest_physics(world: &mut World) -> Result<PhysicsReport, ReadTreeError> {
+    let (tree, entities) = read_kinematic_tree_entities(world)?;
+    Ok(rest_report(world, &tree, &entities))
+}
+
+/// Simulates at rest the bodies of `tree`, whose links are `entities` of `world`, and judges
+/// every object.
+fn rest_report(world: &mut World, tree: &KinematicTree, entities: &[Entity]) -> PhysicsReport {
     let bodies = rest_bodies(tree);
     let penetrations = start_penetrations(tree, &bodies);
     let frozen: Vec<bool> = penetrations
         .iter()
         .map(|(depth, _)| *depth > MAX_START_PENETRATION_M)
         .collect();
-    let run = simulate(tree, &bodies, &frozen, REST_SECONDS, None);
+    let run = simulate(world, tree, entities, &bodies, &frozen, REST_SECONDS, None);
     let objects: Vec<ObjectVerdict> = bodies
         .iter()
         .enumerate()
@@ -227,35 +229,8 @@ pub fn settle_object(tree: &KinematicTree, link: usize, seconds: f32) -> Option<
         .iter()
         .position(|b| b.dynamic && b.links.first() == Some(&link))?;
     let frozen: Vec<bool> = (0..bodies.len()).map(|b| b != body).collect();
-    Some(simulate(tree, &bodies, &frozen, seconds, Some(body)).path)
-}
-
-/// An empty rapier world as the rest test runs it: z up, gravity, a fixed step of
-/// `REST_STEP_S` per update, contacts recomputed every step, on one thread.
-pub(crate) fn rest_world() -> App {
-    let mut app = App::new();
-    app.add_plugins((
-        // Transform propagation asks for the compute pool even on one thread.
-        bevy::app::TaskPoolPlugin::default(),
-        bevy::time::TimePlugin,
-        bevy::transform::TransformPlugin,
-        RapierPhysicsPlugin::<NoUserData>::default()
-            .with_custom_initialization(rest_test_context()),
-    ));
-    app.insert_resource(TimestepMode::Fixed {
-        dt: REST_STEP_S,
-        substeps: REST_SUBSTEPS,
-    });
-    app.finish();
-    app.cleanup();
-    // A scene's worth of bodies steps in well under a millisecond; handing each system to a
-    // thread pool and back cost more than that (three quarters of the kitchen's rest test went
-    // to parking and waking threads: 120 ms, 32 ms on one thread).
-    for (_, schedule) in app.world_mut().resource_mut::<Schedules>().iter_mut() {
-        schedule.set_executor(SingleThreadedExecutor::new());
-    }
-    app.update();
-    app
+    let (mut world, entities) = scratch_world(tree);
+    Some(simulate(&mut world, tree, &entities, &bodies, &frozen, seconds, Some(body)).path)
 }
 
 /// Where the bodies started and ended, and what simulating them cost.
@@ -268,37 +243,45 @@ struct Simulated {
     path: Vec<Affine3A>,
 }
 
-/// Simulates the bodies in rapier for `seconds` at the rest test's fixed step; those in `frozen`
-/// are fixed where they stand. The body `follow` has its pose recorded after every step.
+/// Simulates the bodies in rapier on their links' entities for `seconds` at the rest test's
+/// fixed step; those in `frozen` are fixed where they stand. The body `follow` has its pose
+/// recorded after every step. The entities are left as they were.
 fn simulate(
+    world: &mut World,
     tree: &KinematicTree,
+    entities: &[Entity],
     bodies: &[RestBody],
     frozen: &[bool],
     seconds: f32,
     follow: Option<usize>,
 ) -> Simulated {
-    let mut app = rest_world();
-    let starts = spawn_bodies(app.world_mut(), tree, bodies, frozen);
+    let mut session = RapierSession::begin(world);
+    let (starts, on) = attach_bodies(
+        &mut session,
+        world,
+        tree,
+        entities,
+        bodies,
+        frozen,
+        &|_| None,
+    );
     let started = std::time::Instant::now();
     let steps = (seconds / REST_STEP_S).round() as usize;
-    let mut poses = app.world_mut().query::<(&RestBodyIndex, &Transform)>();
-    let mut ends = starts.clone();
+    let followed = follow.and_then(|b| on[b]);
     let mut path = follow.map(|b| vec![starts[b]]).unwrap_or_default();
-    // One update registers the new bodies (and steps once); the rest are the simulated time.
     for _ in 0..steps {
-        app.update();
-        if let Some(followed) = follow {
-            for (index, transform) in poses.iter(app.world()) {
-                if index.0 == followed {
-                    path.push(pose_of(transform));
-                }
-            }
+        session.step(world);
+        if let Some(pose) = followed.and_then(|e| session.pose(world, e)) {
+            path.push(pose);
         }
     }
     let wall_s = started.elapsed().as_secs_f64();
-    for (index, transform) in poses.iter(app.world()) {
-        ends[index.0] = pose_of(transform);
-    }
+    let ends = on
+        .iter()
+        .zip(&starts)
+        .map(|(e, start)| e.and_then(|e| session.pose(world, e)).unwrap_or(*start))
+        .collect();
+    session.end(world);
     Simulated {
         starts,
         ends,
@@ -308,13 +291,19 @@ fn simulate(
     }
 }
 
-fn physics_validation_stage(world: &mut World) {
-    let Some(tree) = world.get_resource::<SceneKinematicTree>() else {
-        return;
+/// The rest test on the scene's own entities, then the joint sweeps.
+fn physics_validation_stage(world: &mut World) -> Result<(), IsceneError> {
+    if !world.contains_resource::<SceneKinematicTree>() {
+        return Ok(());
+    }
+    let (tree, entities) = read_kinematic_tree_entities(world)?;
+    let report = PhysicsReport {
+        joints: sweep_joints(&tree),
+        ..rest_report(world, &tree, &entities)
     };
-    let report = validate_physics(&tree.0);
     narrow_blocked_joints(world, &report.joints);
     world.insert_resource(report);
+    Ok(())
 }
 
 /// Narrows each joint whose sweep met something near its limit to the range it moves freely
@@ -354,7 +343,9 @@ impl Plugin for PhysicsValidationPlugin {
     fn build(&self, app: &mut App) {
         app.add_systems(
             crate::systems::Reconstruct,
-            physics_validation_stage.in_set(crate::systems::ReconstructionStage::PhysicsValidation),
+            physics_validation_stage
+                .pipe(record_failure)
+                .in_set(crate::systems::ReconstructionStage::PhysicsValidation),
         );
     }
 }

@@ -21,7 +21,7 @@ use crate::sim::motion_path::{apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::motion_physics::{MotionCheck, simulate_motion};
-use crate::systems::physics_validation::{PhysicsReport, rest_physics};
+use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 
 /// The robot's base entity: its figures and the place it last navigated to (for the planner).
@@ -170,10 +170,10 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
                 }
             }
             let physics_started = Instant::now();
-            let physics = read_kinematic_tree(world)
+            let physics = scene_rest_physics(world)
                 .inspect_err(|e| tracing::warn!("no rest test after step {step}: {e}"))
                 .ok()
-                .map(|tree| step_physics(rest_physics(&tree)));
+                .map(step_physics);
             let physics_ms = physics_started.elapsed().as_secs_f64() * 1e3;
             StepRecord {
                 step,

@@ -6,8 +6,7 @@ use bevy::prelude::*;
 
 use crate::components::{OrientedBox, SceneEntity};
 use crate::kinematics::rest_test::Verdict;
-use crate::systems::kinematic_tree::read_kinematic_tree;
-use crate::systems::physics_validation::{PhysicsReport, rest_physics};
+use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics};
 use crate::viewer::layers::{ActiveLayers, Layer};
 use crate::viewer::motion::Motion;
 use crate::viewer::state::SceneRevision;
@@ -43,9 +42,9 @@ impl RestVerdicts {
 
 /// Runs the rest test on the scene as it stands and keeps it for `revision`.
 pub fn run_rest_test(world: &mut World, revision: u64) {
-    let report = read_kinematic_tree(world)
-        .ok()
-        .map(|tree| rest_physics(&tree));
+    let report = scene_rest_physics(world)
+        .inspect_err(|e| tracing::warn!("no rest test: {e}"))
+        .ok();
     *world.resource_mut::<RestVerdicts>() = RestVerdicts {
         revision: Some(revision),
         report,
