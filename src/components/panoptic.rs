@@ -2,6 +2,7 @@
 
 use bevy::prelude::*;
 
+use crate::base::ClassId;
 use crate::classes::EntityKind;
 
 /// The entity's id in the contact graph and every export (`table_1`, `floor`, `wall_2`).
@@ -12,6 +13,6 @@ pub struct SceneEntity(pub String);
 #[derive(Component, Clone, Debug, PartialEq)]
 pub struct Panoptic {
     pub instance: u32,
-    pub class: String,
+    pub class: ClassId,
     pub kind: EntityKind,
 }

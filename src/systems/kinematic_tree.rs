@@ -176,7 +176,7 @@ pub fn read_kinematic_tree_entities(
             let (node, class) = match (e.get::<SceneEntity>(), e.get::<ModelPart>()) {
                 (Some(id), _) => (
                     Some(id.0.clone()),
-                    e.get::<Panoptic>().map(|p| p.class.clone()),
+                    e.get::<Panoptic>().map(|p| p.class.to_string()),
                 ),
                 (None, Some(part)) => (
                     world.get::<SceneEntity>(part.object).map(|id| id.0.clone()),

@@ -150,7 +150,10 @@ pub fn simulate_motion(tree: &KinematicTree, motion: &LinkMotion) -> MotionCheck
     }
     let mut knocked = Vec::new();
     for (b, entity) in on.iter().enumerate() {
-        let Some(end) = entity.filter(|_| !frozen[b]).and_then(|e| session.pose(world, e)) else {
+        let Some(end) = entity
+            .filter(|_| !frozen[b])
+            .and_then(|e| session.pose(world, e))
+        else {
             continue;
         };
         let moved_m = end.translation.distance(starts[b].translation);

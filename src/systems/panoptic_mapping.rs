@@ -174,7 +174,7 @@ fn spawn_scene_entities(
             SceneEntity(e.id.clone()),
             Panoptic {
                 instance: e.instance,
-                class: e.class.clone(),
+                class: crate::base::ClassId::new(&e.class),
                 kind: e.kind,
             },
             SegmentMesh(e.mesh.clone()),

@@ -10,13 +10,13 @@ use bevy_rapier3d::rapier::prelude::MassProperties as ParryMassProperties;
 use glam::Affine3A;
 use serde::Serialize;
 
+use crate::error::IsceneError;
 use crate::kinematics::contact_pieces::contact_pieces;
 use crate::kinematics::joint_sweep::{JointSweep, sweep_joints};
 use crate::kinematics::rest_test::{
-    MAX_START_PENETRATION_M, ObjectVerdict, REST_SECONDS, REST_STEP_S, RestBody,
-    Verdict, judge, rest_bodies, start_penetrations,
+    MAX_START_PENETRATION_M, ObjectVerdict, REST_SECONDS, REST_STEP_S, RestBody, Verdict, judge,
+    rest_bodies, start_penetrations,
 };
-use crate::error::IsceneError;
 use crate::kinematics::tree::KinematicTree;
 use crate::systems::kinematic_tree::{
     ReadTreeError, SceneKinematicTree, read_kinematic_tree_entities,
@@ -144,7 +144,11 @@ pub(crate) fn attach_bodies(
                 world,
                 entities[l],
                 poses[l],
-                (RigidBody::Fixed, collider, Friction::coefficient(g.friction)),
+                (
+                    RigidBody::Fixed,
+                    collider,
+                    Friction::coefficient(g.friction),
+                ),
             );
         }
     }
@@ -230,7 +234,18 @@ pub fn settle_object(tree: &KinematicTree, link: usize, seconds: f32) -> Option<
         .position(|b| b.dynamic && b.links.first() == Some(&link))?;
     let frozen: Vec<bool> = (0..bodies.len()).map(|b| b != body).collect();
     let (mut world, entities) = scratch_world(tree);
-    Some(simulate(&mut world, tree, &entities, &bodies, &frozen, seconds, Some(body)).path)
+    Some(
+        simulate(
+            &mut world,
+            tree,
+            &entities,
+            &bodies,
+            &frozen,
+            seconds,
+            Some(body),
+        )
+        .path,
+    )
 }
 
 /// Where the bodies started and ended, and what simulating them cost.
@@ -256,15 +271,9 @@ fn simulate(
     follow: Option<usize>,
 ) -> Simulated {
     let mut session = RapierSession::begin(world);
-    let (starts, on) = attach_bodies(
-        &mut session,
-        world,
-        tree,
-        entities,
-        bodies,
-        frozen,
-        &|_| None,
-    );
+    let (starts, on) = attach_bodies(&mut session, world, tree, entities, bodies, frozen, &|_| {
+        None
+    });
     let started = std::time::Instant::now();
     let steps = (seconds / REST_STEP_S).round() as usize;
     let followed = follow.and_then(|b| on[b]);

@@ -177,7 +177,10 @@ impl RapierSession {
             .bodies
             .get(handle.0)?;
         let t = bevy_rapier3d::utils::iso_to_transform(body.position());
-        Some(Affine3A::from_rotation_translation(t.rotation, t.translation))
+        Some(Affine3A::from_rotation_translation(
+            t.rotation,
+            t.translation,
+        ))
     }
 
     /// Takes every component the session added away from its entities (bevy_rapier's handles
@@ -256,7 +259,13 @@ mod tests {
             .map(|&e| world.entity(e).archetype().components().len())
             .collect();
         assert_eq!(before, after);
-        assert!(world.query::<&RapierContextSimulation>().iter(&world).next().is_none());
+        assert!(
+            world
+                .query::<&RapierContextSimulation>()
+                .iter(&world)
+                .next()
+                .is_none()
+        );
 
         // A second session on the same world starts afresh and gives the same fall.
         let mut again = RapierSession::begin(&mut world);

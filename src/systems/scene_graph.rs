@@ -82,7 +82,7 @@ pub fn spawn_contact_graph(
             SceneEntity(node.id.clone()),
             Panoptic {
                 instance: entities.len() as u32 + 1,
-                class: node.class.clone(),
+                class: crate::base::ClassId::new(&node.class),
                 kind: node.kind,
             },
         ));

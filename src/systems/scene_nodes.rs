@@ -87,7 +87,7 @@ impl SceneNodes<'_, '_> {
             .iter()
             .map(|(e, id, panoptic, bbox, planes, cad, ..)| GraphNode {
                 id: id.0.clone(),
-                class: panoptic.class.clone(),
+                class: panoptic.class.to_string(),
                 kind: panoptic.kind,
                 bbox: bbox.0.into(),
                 planes: planes.0.iter().map(Plane::to_array).collect(),

@@ -305,10 +305,9 @@ pub fn apply_change(world: &mut World, change: &Change) {
             } else {
                 let class = world
                     .get::<Panoptic>(child)
-                    .map(|p| p.class.clone())
-                    .unwrap_or_default();
+                    .map_or("", |p| p.class.as_str());
                 let has_model = world.get::<crate::components::CadModel>(child).is_some();
-                crate::systems::scene_graph::support_joint(&class, has_model)
+                crate::systems::scene_graph::support_joint(class, has_model)
             };
             world.entity_mut(child).insert((
                 ChildOf(parent),

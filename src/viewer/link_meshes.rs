@@ -79,14 +79,16 @@ fn object_instance(
     panoptic: &Query<(&SceneEntity, &Panoptic)>,
 ) -> (u32, String) {
     if let Ok((_, p)) = panoptic.get(entity) {
-        return (p.instance, p.class.clone());
+        return (p.instance, p.class.to_string());
     }
     let Some(part) = part else {
         return (0, String::new());
     };
     panoptic
         .get(part.object)
-        .map_or((0, String::new()), |(_, p)| (p.instance, p.class.clone()))
+        .map_or((0, String::new()), |(_, p)| {
+            (p.instance, p.class.to_string())
+        })
 }
 
 fn attach_link_meshes(

@@ -8,33 +8,41 @@ use glam::Vec3;
 
 use crate::geometry::TriMesh;
 
-/// Reads the mesh file at `path` (in the file's units and frame). Errors say what is wrong, not
-/// which file: the caller names it.
-pub fn read_mesh_file(path: &Path) -> Result<TriMesh, String> {
+/// Why a mesh file could not be read. The message says what is wrong, not which file: the
+/// caller names it.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshFileError {
+    #[error("cannot read: {0}")]
+    Unreadable(#[from] std::io::Error),
+    /// A format this reader does not read: the model may be valid, its mesh is not for us.
+    #[error("not a mesh format read here (.msh, .stl or .obj)")]
+    UnsupportedFormat,
+    /// The file is broken, in words.
+    #[error("{0}")]
+    Malformed(String),
+}
+
+fn malformed(problem: impl Into<String>) -> MeshFileError {
+    MeshFileError::Malformed(problem.into())
+}
+
+/// Reads the mesh file at `path` (in the file's units and frame).
+pub fn read_mesh_file(path: &Path) -> Result<TriMesh, MeshFileError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     let mesh = match extension.as_deref() {
-        Some("msh") => {
-            let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
-            msh_mesh(&bytes)?
-        }
-        Some("stl") => {
-            let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
-            stl_mesh(&mut BufReader::new(file))?
-        }
-        Some("obj") => {
-            let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
-            obj_mesh(&bytes)?
-        }
-        _ => return Err("not a mesh format read here (.msh, .stl or .obj)".into()),
+        Some("msh") => msh_mesh(&std::fs::read(path)?)?,
+        Some("stl") => stl_mesh(&mut BufReader::new(std::fs::File::open(path)?))?,
+        Some("obj") => obj_mesh(&std::fs::read(path)?)?,
+        _ => return Err(MeshFileError::UnsupportedFormat),
     };
     if mesh.triangles.is_empty() {
-        return Err("the mesh has no triangles".into());
+        return Err(malformed("the mesh has no triangles"));
     }
     if let Some(p) = mesh.positions.iter().find(|p| !p.is_finite()) {
-        return Err(format!("a vertex is not a number: {p}"));
+        return Err(malformed(format!("a vertex is not a number: {p}")));
     }
     Ok(mesh)
 }
@@ -42,22 +50,22 @@ pub fn read_mesh_file(path: &Path) -> Result<TriMesh, String> {
 /// MuJoCo's legacy binary mesh: four little-endian i32 counts (vertices, normals, texture
 /// coordinates, faces), then the vertices (3 f32 each), normals (3 f32), texture coordinates
 /// (2 f32) and faces (3 i32 each). Without faces, consecutive vertex triples are the triangles.
-fn msh_mesh(bytes: &[u8]) -> Result<TriMesh, String> {
-    let count = |i: usize| -> Result<usize, String> {
+fn msh_mesh(bytes: &[u8]) -> Result<TriMesh, MeshFileError> {
+    let count = |i: usize| -> Result<usize, MeshFileError> {
         let raw = bytes
             .get(4 * i..4 * i + 4)
-            .ok_or("shorter than the 16-byte header of a .msh file")?;
+            .ok_or_else(|| malformed("shorter than the 16-byte header of a .msh file"))?;
         let n = i32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]);
-        usize::try_from(n).map_err(|_| format!("negative count {n} in the header"))
+        usize::try_from(n).map_err(|_| malformed(format!("negative count {n} in the header")))
     };
     let (vertices, normals, texcoords, faces) = (count(0)?, count(1)?, count(2)?, count(3)?);
     let expected = 16 + 12 * vertices + 12 * normals + 8 * texcoords + 12 * faces;
     if bytes.len() != expected {
-        return Err(format!(
+        return Err(malformed(format!(
             "{} bytes, but the header ({vertices} vertices, {normals} normals, {texcoords} \
              texture coordinates, {faces} faces) makes {expected}",
             bytes.len()
-        ));
+        )));
     }
     let word = |offset: usize| {
         [
@@ -80,9 +88,9 @@ fn msh_mesh(bytes: &[u8]) -> Result<TriMesh, String> {
     let faces_at = 16 + 12 * vertices + 12 * normals + 8 * texcoords;
     let triangles: Vec<[u32; 3]> = if faces == 0 {
         if vertices % 3 != 0 {
-            return Err(format!(
+            return Err(malformed(format!(
                 "no faces, and {vertices} vertices are not whole triangles"
-            ));
+            )));
         }
         (0..vertices as u32 / 3)
             .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
@@ -97,7 +105,9 @@ fn msh_mesh(bytes: &[u8]) -> Result<TriMesh, String> {
                 t.iter()
                     .all(|&i| i >= 0 && (i as usize) < vertices)
                     .then(|| t.map(|i| i as u32))
-                    .ok_or_else(|| format!("a face {t:?} refers to a vertex that is not there"))
+                    .ok_or_else(|| {
+                        malformed(format!("a face {t:?} refers to a vertex that is not there"))
+                    })
             })
             .collect::<Result<_, _>>()?
     };
@@ -107,8 +117,8 @@ fn msh_mesh(bytes: &[u8]) -> Result<TriMesh, String> {
     })
 }
 
-fn stl_mesh(reader: &mut (impl std::io::Read + std::io::Seek)) -> Result<TriMesh, String> {
-    let stl = stl_io::read_stl(reader).map_err(|e| format!("not an STL file: {e}"))?;
+fn stl_mesh(reader: &mut (impl std::io::Read + std::io::Seek)) -> Result<TriMesh, MeshFileError> {
+    let stl = stl_io::read_stl(reader).map_err(|e| malformed(format!("not an STL file: {e}")))?;
     let positions = stl.vertices.iter().map(|v| Vec3::from(v.0)).collect();
     let triangles = stl
         .faces
@@ -122,7 +132,7 @@ fn stl_mesh(reader: &mut (impl std::io::Read + std::io::Seek)) -> Result<TriMesh
 }
 
 /// Every group of an OBJ file as one mesh; materials are not read.
-fn obj_mesh(bytes: &[u8]) -> Result<TriMesh, String> {
+fn obj_mesh(bytes: &[u8]) -> Result<TriMesh, MeshFileError> {
     let (groups, _) = obj_groups(bytes, |_| Err(tobj::LoadError::OpenFileFailed))?;
     let mut mesh = TriMesh::default();
     for group in groups {
@@ -145,7 +155,7 @@ pub struct ObjGroup {
 pub fn obj_groups(
     bytes: &[u8],
     material_file: impl Fn(&Path) -> tobj::MTLLoadResult,
-) -> Result<(Vec<ObjGroup>, Vec<tobj::Material>), String> {
+) -> Result<(Vec<ObjGroup>, Vec<tobj::Material>), MeshFileError> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -153,7 +163,7 @@ pub fn obj_groups(
         ignore_lines: true,
     };
     let (models, materials) = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, material_file)
-        .map_err(|e| format!("not an OBJ file: {e}"))?;
+        .map_err(|e| malformed(format!("not an OBJ file: {e}")))?;
     let groups = models
         .into_iter()
         .map(|model| {
@@ -172,7 +182,9 @@ pub fn obj_groups(
                     t.iter()
                         .all(|&i| (i as usize) < n)
                         .then(|| [t[0], t[1], t[2]])
-                        .ok_or_else(|| format!("group {:?} has a face out of range", model.name))
+                        .ok_or_else(|| {
+                            malformed(format!("group {:?} has a face out of range", model.name))
+                        })
                 })
                 .collect::<Result<_, _>>()?;
             Ok(ObjGroup {
@@ -184,7 +196,7 @@ pub fn obj_groups(
                 material: model.mesh.material_id,
             })
         })
-        .collect::<Result<Vec<_>, String>>()?;
+        .collect::<Result<Vec<_>, MeshFileError>>()?;
     Ok((groups, materials.unwrap_or_default()))
 }
 
@@ -212,7 +224,14 @@ mod tests {
         assert_eq!(soup.triangles, vec![[0, 1, 2]]);
         assert!(msh_mesh(&msh_bytes([3, 0, 0, 1], &triangle, &[0, 2, 3])).is_err());
         let short = msh_mesh(&msh_bytes([4, 0, 0, 0], &triangle, &[])).expect_err("short");
-        assert!(short.contains("makes"), "{short}");
+        assert!(
+            matches!(&short, MeshFileError::Malformed(why) if why.contains("makes")),
+            "{short}"
+        );
+        assert!(matches!(
+            read_mesh_file(Path::new("a.dae")),
+            Err(MeshFileError::UnsupportedFormat)
+        ));
     }
 
     #[test]

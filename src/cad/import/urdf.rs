@@ -18,7 +18,7 @@ use crate::base::JointKind;
 use crate::cad::import::body_tree::{
     Body, BodyJoint, BodyTree, MAX_BODIES, ModelFileError, check_xml_depth,
 };
-use crate::cad::import::mesh_files::read_mesh_file;
+use crate::cad::import::mesh_files::{MeshFileError, read_mesh_file};
 use crate::file_name::inside_folder;
 use crate::geometry::TriMesh;
 
@@ -244,10 +244,9 @@ fn geometry_mesh(geometry: &urdf_rs::Geometry, folder: &Path) -> Result<TriMesh,
             let file = mesh_path(filename, folder)?;
             let mesh = read_mesh_file(&file).map_err(|e| {
                 let problem = format!("{}: {e}", file.display());
-                if e.starts_with("not a mesh format") {
-                    ModelFileError::Unsupported(problem)
-                } else {
-                    ModelFileError::Malformed(problem)
+                match e {
+                    MeshFileError::UnsupportedFormat => ModelFileError::Unsupported(problem),
+                    _ => ModelFileError::Malformed(problem),
                 }
             })?;
             let scale = scale.as_ref().map_or(Vec3::ONE, vec3);
