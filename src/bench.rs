@@ -92,7 +92,7 @@ pub fn bench_tsdf(options: &TsdfBenchOptions) -> Result<TsdfBenchReport, IsceneE
     let mesh_s = clock.elapsed().as_secs_f64();
     if let Some(path) = &options.mesh {
         let bytes = crate::io::ply::mesh_ply_bytes(&mesh, [0.7, 0.7, 0.7])
-            .map_err(IsceneError::Internal)?;
+            .map_err(|e| IsceneError::Internal(format!("PLY of the map: {e}")))?;
         write_file_atomically(path, &bytes)?;
     }
 

@@ -21,7 +21,7 @@ pub fn write_tree_exports(
     tree: &KinematicTree,
     name: &str,
 ) -> Result<Vec<String>, IsceneError> {
-    let files = urdf::urdf_files(tree, name).map_err(IsceneError::Internal)?;
+    let files = urdf::urdf_files(tree, name).map_err(|e| IsceneError::Internal(e.to_string()))?;
     std::fs::create_dir_all(dir.join(urdf::MESH_DIR)).map_err(|e| {
         IsceneError::io(
             format!("creating {}", dir.join(urdf::MESH_DIR).display()),

@@ -2,13 +2,13 @@
 //! the link (contact-graph ids for objects and layout, `<id>_<part>` for moving parts), posed at
 //! the current joint values, with the joint, class and mass in the node's extras.
 
-use crate::io::gltf_write::{GltfNode, glb_bytes, nest};
+use crate::io::gltf_write::{GlbError, GltfNode, glb_bytes, nest};
 use crate::kinematics::tree::KinematicTree;
 
 /// The name of the node that turns the scene's +z up into glTF's +y up.
 pub const UP_AXIS_NODE: &str = "z_up";
 
-pub fn scene_glb(tree: &KinematicTree) -> Result<Vec<u8>, String> {
+pub fn scene_glb(tree: &KinematicTree) -> Result<Vec<u8>, GlbError> {
     let nodes: Vec<GltfNode> = tree
         .links
         .iter()
@@ -31,7 +31,6 @@ pub fn scene_glb(tree: &KinematicTree) -> Result<Vec<u8>, String> {
             node
         })
         .collect();
-    let root =
-        nest(nodes, |i| tree.links[i].parent.unwrap_or(0)).ok_or("an empty kinematic tree")?;
+    let root = nest(nodes, |i| tree.links[i].parent.unwrap_or(0)).ok_or(GlbError::Empty)?;
     glb_bytes(&root, UP_AXIS_NODE)
 }

@@ -187,10 +187,22 @@ pub fn urdf_robot(tree: &KinematicTree, name: &str) -> urdf_rs::Robot {
     }
 }
 
+/// Why the URDF could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum UrdfWriteError {
+    #[error("writing URDF: {0}")]
+    Write(#[from] urdf_rs::UrdfError),
+    /// urdf-rs's text lacks a link's element, where friction goes.
+    #[error("writing URDF: no element for link {0}")]
+    NoLinkElement(String),
+    #[error("writing URDF: link {0} is not closed")]
+    UnclosedLink(String),
+}
+
 /// `scene.urdf` and every mesh it references.
-pub fn urdf_files(tree: &KinematicTree, name: &str) -> Result<Vec<ExportFile>, String> {
+pub fn urdf_files(tree: &KinematicTree, name: &str) -> Result<Vec<ExportFile>, UrdfWriteError> {
     let robot = urdf_robot(tree, name);
-    let text = urdf_rs::write_to_string(&robot).map_err(|e| format!("writing URDF: {e}"))?;
+    let text = urdf_rs::write_to_string(&robot)?;
     let text = with_friction(&text, tree)?;
     let mut files = vec![ExportFile {
         path: "scene.urdf".into(),
@@ -216,7 +228,7 @@ pub fn urdf_files(tree: &KinematicTree, name: &str) -> Result<Vec<ExportFile>, S
 /// element at the end of the link. URDF itself has no friction; this is the extension PyBullet
 /// reads (and Gazebo's importer maps), and parsers that do not know it skip it (check_urdf stays
 /// silent, MuJoCo ignores it). urdf-rs cannot write it, so it goes into urdf-rs's text.
-fn with_friction(urdf: &str, tree: &KinematicTree) -> Result<String, String> {
+fn with_friction(urdf: &str, tree: &KinematicTree) -> Result<String, UrdfWriteError> {
     let mut out = String::with_capacity(urdf.len() + 80 * tree.links.len());
     let mut rest = urdf;
     for link in &tree.links {
@@ -224,11 +236,11 @@ fn with_friction(urdf: &str, tree: &KinematicTree) -> Result<String, String> {
         let open = format!("<link name=\"{}\">", link.name);
         let start = rest
             .find(&open)
-            .ok_or_else(|| format!("writing URDF: no element for link {}", link.name))?;
+            .ok_or_else(|| UrdfWriteError::NoLinkElement(link.name.clone()))?;
         let end = start
             + rest[start..]
                 .find("</link>")
-                .ok_or_else(|| format!("writing URDF: link {} is not closed", link.name))?;
+                .ok_or_else(|| UrdfWriteError::UnclosedLink(link.name.clone()))?;
         out.push_str(&rest[..end]);
         out.push_str(&format!(
             "  <contact>\n      <lateral_friction value=\"{}\"/>\n    </contact>\n  ",

@@ -46,9 +46,20 @@ pub fn nest(mut nodes: Vec<GltfNode>, parent_of: impl Fn(usize) -> usize) -> Opt
     nodes.pop()
 }
 
+/// Why a node tree could not be written as a .glb.
+#[derive(Debug, thiserror::Error)]
+pub enum GlbError {
+    #[error("no nodes to write")]
+    Empty,
+    #[error("glTF JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error("GLB container: {0}")]
+    Container(#[from] gltf::Error),
+}
+
 /// Serialises `root` as a .glb. glTF is y up: the scene's z-up content is wrapped in a node named
 /// `up_axis_node` that turns +z into +y, so any viewer shows it upright.
-pub fn glb_bytes(root: &GltfNode, up_axis_node: &str) -> Result<Vec<u8>, String> {
+pub fn glb_bytes(root: &GltfNode, up_axis_node: &str) -> Result<Vec<u8>, GlbError> {
     let mut doc = json::Root::default();
     doc.asset.generator = Some("iscene".into());
     let mut bin: Vec<u8> = Vec::new();
@@ -81,7 +92,7 @@ pub fn glb_bytes(root: &GltfNode, up_axis_node: &str) -> Result<Vec<u8>, String>
     if let Some(b) = doc.buffers.first_mut() {
         b.byte_length = USize64::from(bin.len());
     }
-    let json_string = json::serialize::to_string(&doc).map_err(|e| e.to_string())?;
+    let json_string = json::serialize::to_string(&doc)?;
     let length = (12 + 8 + json_string.len().next_multiple_of(4) + 8 + bin.len()) as u32;
     let glb = gltf::binary::Glb {
         header: gltf::binary::Header {
@@ -92,7 +103,7 @@ pub fn glb_bytes(root: &GltfNode, up_axis_node: &str) -> Result<Vec<u8>, String>
         json: std::borrow::Cow::Owned(json_string.into_bytes()),
         bin: Some(std::borrow::Cow::Owned(bin)),
     };
-    glb.to_vec().map_err(|e| e.to_string())
+    Ok(glb.to_vec()?)
 }
 
 fn quat_array(q: Quat) -> [f32; 4] {
@@ -105,7 +116,7 @@ fn push_node(
     bin: &mut Vec<u8>,
     buffer: json::Index<json::Buffer>,
     node: &GltfNode,
-) -> Result<json::Index<json::Node>, String> {
+) -> Result<json::Index<json::Node>, GlbError> {
     let mesh = match &node.mesh {
         Some((m, color)) if !m.is_empty() => {
             Some(push_mesh(doc, bin, buffer, &node.name, m, *color))
@@ -118,7 +129,7 @@ fn push_node(
         .map(|c| push_node(doc, bin, buffer, c))
         .collect::<Result<Vec<_>, _>>()?;
     let extras = match &node.extras {
-        Some(v) => Some(serde_json::value::to_raw_value(v).map_err(|e| e.to_string())?),
+        Some(v) => Some(serde_json::value::to_raw_value(v)?),
         None => None,
     };
     let rotation = (node.rotation != Quat::IDENTITY)

@@ -14,7 +14,7 @@ use crate::error::InputError;
 use crate::geometry::TriMesh;
 
 /// The mesh as binary little-endian PLY with one colour (0..1) on every vertex.
-pub fn mesh_ply_bytes(mesh: &TriMesh, color: [f32; 3]) -> Result<Vec<u8>, String> {
+pub fn mesh_ply_bytes(mesh: &TriMesh, color: [f32; 3]) -> std::io::Result<Vec<u8>> {
     let mut ply = Ply::<DefaultElement>::new();
     ply.header.encoding = Encoding::BinaryLittleEndian;
     ply.header.comments.push("written by iscene".into());
@@ -68,9 +68,7 @@ pub fn mesh_ply_bytes(mesh: &TriMesh, color: [f32; 3]) -> Result<Vec<u8>, String
         .collect();
     ply.payload.insert("face".into(), faces);
     let mut bytes = Vec::new();
-    Writer::new()
-        .write_ply(&mut bytes, &mut ply)
-        .map_err(|e| e.to_string())?;
+    Writer::new().write_ply(&mut bytes, &mut ply)?;
     Ok(bytes)
 }
 

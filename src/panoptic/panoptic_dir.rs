@@ -46,8 +46,8 @@ pub fn write_panoptic(
     std::fs::create_dir_all(dir).map_err(|e| IsceneError::io(dir.display().to_string(), e))?;
     let mut written = Vec::new();
     for e in &index.entities {
-        let bytes =
-            mesh_ply_bytes(&e.mesh, class_color(&e.class)).map_err(IsceneError::Internal)?;
+        let bytes = mesh_ply_bytes(&e.mesh, class_color(&e.class))
+            .map_err(|why| IsceneError::Internal(format!("PLY of {}: {why}", e.id)))?;
         let path = dir.join(format!("{}.ply", e.id));
         std::fs::write(&path, bytes)
             .map_err(|err| IsceneError::io(path.display().to_string(), err))?;

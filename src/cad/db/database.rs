@@ -67,7 +67,7 @@ impl DatabaseModel {
             .is_some_and(|b| b.size == b.entry.nominal_size && b.entry.id == self.model.id)
     }
 
-    pub fn new(model: CadModel) -> Result<Self, String> {
+    pub fn new(model: CadModel) -> Result<Self, DatabaseError> {
         let mesh = model.merged_mesh(&[]);
         let largest_face = {
             let s = model.size;
@@ -77,7 +77,10 @@ impl DatabaseModel {
             .into_iter()
             .map(|(p, _)| p)
             .collect();
-        let shape = parry_mesh(&mesh).map_err(|e| format!("model {}: {e}", model.id))?;
+        let shape = parry_mesh(&mesh).map_err(|problem| DatabaseError::UnusableMesh {
+            model: model.id.clone(),
+            problem,
+        })?;
         let pieces = mesh
             .connected_components()
             .into_iter()
@@ -110,9 +113,22 @@ impl DatabaseModel {
 }
 
 /// A parry triangle mesh (with its BVH) of `mesh`.
-pub fn parry_mesh(mesh: &TriMesh) -> Result<parry3d::shape::TriMesh, String> {
+pub fn parry_mesh(
+    mesh: &TriMesh,
+) -> Result<parry3d::shape::TriMesh, parry3d::shape::TriMeshBuilderError> {
     parry3d::shape::TriMesh::new(mesh.positions.clone(), mesh.triangles.clone())
-        .map_err(|e| format!("not a usable triangle mesh: {e:?}"))
+}
+
+/// Why models could not make a database.
+#[derive(Debug, thiserror::Error)]
+pub enum DatabaseError {
+    #[error("model id {0:?} appears twice")]
+    DuplicateId(String),
+    #[error("model {model}: not a usable triangle mesh: {problem:?}")]
+    UnusableMesh {
+        model: String,
+        problem: parry3d::shape::TriMeshBuilderError,
+    },
 }
 
 /// The models replacement chooses from.
@@ -123,16 +139,16 @@ pub struct CadDatabase {
 
 impl CadDatabase {
     /// Pre-processes `models` (in parallel); ids must be unique.
-    pub fn from_models(models: Vec<CadModel>) -> Result<Self, String> {
+    pub fn from_models(models: Vec<CadModel>) -> Result<Self, DatabaseError> {
         let mut ids: Vec<&str> = models.iter().map(|m| m.id.as_str()).collect();
         ids.sort_unstable();
         if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
-            return Err(format!("model id {:?} appears twice", w[0]));
+            return Err(DatabaseError::DuplicateId(w[0].to_string()));
         }
         let models = models
             .into_par_iter()
             .map(DatabaseModel::new)
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Self { models })
     }
 
@@ -208,7 +224,7 @@ impl CadDatabase {
                 "the database holds no models",
             ));
         }
-        Self::from_models(models).map_err(|e| InputError::invalid(dir, e))
+        Self::from_models(models).map_err(|e| InputError::invalid(dir, e.to_string()))
     }
 
     /// The models a reconstructed scene folder can refer to: the parametric library and the
@@ -224,7 +240,7 @@ impl CadDatabase {
             models.retain(|m| copied.iter().all(|c| c.id != m.id));
             models.extend(copied);
         }
-        Self::from_models(models).map_err(|e| InputError::invalid(&own, e))
+        Self::from_models(models).map_err(|e| InputError::invalid(&own, e.to_string()))
     }
 
     /// The model with id `id`.
@@ -279,6 +295,7 @@ mod tests {
         let err = CadDatabase::from_models(vec![m.clone(), m])
             .err()
             .expect("refused");
-        assert!(err.contains("twice"), "{err}");
+        assert!(matches!(err, DatabaseError::DuplicateId(_)), "{err}");
+        assert!(err.to_string().contains("twice"), "{err}");
     }
 }

@@ -12,7 +12,7 @@ use crate::cad::model::CadModel;
 use crate::error::IsceneError;
 use crate::graph::ContactGraph;
 use crate::io::atomic::write_file_atomically;
-use crate::io::gltf_write::{GltfNode, glb_bytes, nest};
+use crate::io::gltf_write::{GlbError, GltfNode, glb_bytes, nest};
 
 /// The metadata file `<id>.json` beside `<id>.glb`.
 #[derive(Debug, Serialize, Deserialize)]
@@ -78,7 +78,7 @@ pub fn metadata(model: &CadModel) -> ModelMetadata {
 }
 
 /// The model as a glTF node tree: a node per part under its parent, joints in the nodes' extras.
-pub fn model_glb(model: &CadModel) -> Result<Vec<u8>, String> {
+pub fn model_glb(model: &CadModel) -> Result<Vec<u8>, GlbError> {
     let nodes: Vec<GltfNode> = model
         .parts
         .iter()
