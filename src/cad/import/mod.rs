@@ -90,10 +90,13 @@ pub fn import_sh3d(path: &Path, into: &Path) -> Result<ImportSummary, IsceneErro
     if !path.exists() {
         return Err(InputError::missing(path, "no such catalogue file or folder (the Debian package sweethome3d-furniture installs /usr/share/sweethome3d/furniture)").into());
     }
-    let files = sh3d::catalogue_files(path).map_err(|e| InputError::invalid(path, e))?;
+    let files =
+        sh3d::catalogue_files(path).map_err(|e| InputError::invalid(path, e.to_string()))?;
     let catalogues = files
         .par_iter()
-        .map(|file| sh3d::import_catalogue(file).map_err(|e| InputError::invalid(file, e)))
+        .map(|file| {
+            sh3d::import_catalogue(file).map_err(|e| InputError::invalid(file, e.to_string()))
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let mut summary = ImportSummary::new(into, files.len());
     let mut imported: Vec<CadModel> = Vec::new();

@@ -90,22 +90,69 @@ pub struct ImportedCatalogue {
     pub failed: Vec<String>,
 }
 
+/// Why a catalogue, or a folder of them, could not be read. Each names the file; a model of the
+/// catalogue that cannot be used is no error but an entry of `ImportedCatalogue::failed`.
+#[derive(Debug, thiserror::Error)]
+pub enum Sh3dError {
+    #[error("{}: {source}", path.display())]
+    Unreadable {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: not a zip catalogue: {source}", path.display())]
+    NotAZip {
+        path: PathBuf,
+        source: zip::result::ZipError,
+    },
+    #[error("{}: holds neither {PLUGIN_CATALOGUE} nor {DEFAULT_CATALOGUE}", path.display())]
+    NoCatalogue { path: PathBuf },
+    #[error("{}: no Sweet Home 3D catalogue (*.sh3f, sweethome3d.jar) in this folder", path.display())]
+    NoCatalogueInFolder { path: PathBuf },
+    /// The catalogue's properties file could not be read out of the zip.
+    #[error("{}: {problem}", path.display())]
+    BadMember { path: PathBuf, problem: String },
+    #[error("{}: {member}: {source}", path.display())]
+    BadEntry {
+        path: PathBuf,
+        member: &'static str,
+        source: EntryError,
+    },
+}
+
+/// An entry of a catalogue's properties that is not a usable furniture entry.
+#[derive(Debug, thiserror::Error)]
+#[error("entry #{index}: {problem}")]
+pub struct EntryError {
+    pub index: usize,
+    pub problem: String,
+}
+
 /// Reads a catalogue file (`*.sh3f` or `sweethome3d.jar`) into models of the project's classes.
-pub fn import_catalogue(path: &Path) -> Result<ImportedCatalogue, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut zip = zip::ZipArchive::new(BufReader::new(file))
-        .map_err(|e| format!("{}: not a zip catalogue: {e}", path.display()))?;
+pub fn import_catalogue(path: &Path) -> Result<ImportedCatalogue, Sh3dError> {
+    let file = std::fs::File::open(path).map_err(|source| Sh3dError::Unreadable {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut zip =
+        zip::ZipArchive::new(BufReader::new(file)).map_err(|source| Sh3dError::NotAZip {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let name = [PLUGIN_CATALOGUE, DEFAULT_CATALOGUE]
         .into_iter()
         .find(|n| zip.index_for_name(n).is_some())
-        .ok_or_else(|| {
-            format!(
-                "{}: holds neither {PLUGIN_CATALOGUE} nor {DEFAULT_CATALOGUE}",
-                path.display()
-            )
+        .ok_or_else(|| Sh3dError::NoCatalogue {
+            path: path.to_path_buf(),
         })?;
-    let text = read_text(&mut zip, name).map_err(|e| format!("{}: {e}", path.display()))?;
-    let entries = parse_catalogue(&text).map_err(|e| format!("{}: {name}: {e}", path.display()))?;
+    let text = read_text(&mut zip, name).map_err(|problem| Sh3dError::BadMember {
+        path: path.to_path_buf(),
+        problem,
+    })?;
+    let entries = parse_catalogue(&text).map_err(|source| Sh3dError::BadEntry {
+        path: path.to_path_buf(),
+        member: name,
+        source,
+    })?;
     let mut imported = ImportedCatalogue::default();
     // The zip is read in order; the meshes are made in parallel (the decomposition is the cost).
     let mut files = Vec::new();
@@ -136,11 +183,14 @@ pub fn import_catalogue(path: &Path) -> Result<ImportedCatalogue, String> {
 
 /// The catalogue files under `path`: the file itself, or the `*.sh3f` and `*.jar` files of a
 /// folder, sorted.
-pub fn catalogue_files(path: &Path) -> Result<Vec<PathBuf>, String> {
+pub fn catalogue_files(path: &Path) -> Result<Vec<PathBuf>, Sh3dError> {
     if path.is_file() {
         return Ok(vec![path.to_path_buf()]);
     }
-    let read = std::fs::read_dir(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let read = std::fs::read_dir(path).map_err(|source| Sh3dError::Unreadable {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut files: Vec<PathBuf> = read
         .filter_map(Result::ok)
         .map(|e| e.path())
@@ -148,16 +198,15 @@ pub fn catalogue_files(path: &Path) -> Result<Vec<PathBuf>, String> {
         .collect();
     files.sort();
     if files.is_empty() {
-        return Err(format!(
-            "{}: no Sweet Home 3D catalogue (*.sh3f, sweethome3d.jar) in this folder",
-            path.display()
-        ));
+        return Err(Sh3dError::NoCatalogueInFolder {
+            path: path.to_path_buf(),
+        });
     }
     Ok(files)
 }
 
 /// The entries of a catalogue's properties text, in their order.
-pub fn parse_catalogue(text: &str) -> Result<Vec<CatalogueEntry>, String> {
+pub fn parse_catalogue(text: &str) -> Result<Vec<CatalogueEntry>, EntryError> {
     let mut by_index: BTreeMap<usize, BTreeMap<String, String>> = BTreeMap::new();
     for (key, value) in java_properties(text) {
         let Some((field, index)) = key.split_once('#') else {
@@ -173,7 +222,7 @@ pub fn parse_catalogue(text: &str) -> Result<Vec<CatalogueEntry>, String> {
     }
     by_index
         .into_iter()
-        .map(|(index, fields)| entry_of(&fields).map_err(|e| format!("entry #{index}: {e}")))
+        .map(|(index, fields)| entry_of(&fields).map_err(|problem| EntryError { index, problem }))
         .collect()
 }
 
@@ -442,7 +491,7 @@ fn obj_mesh(
 
 /// `mesh` turned upright by `model_rotation`, into the canonical axes, scaled to `size` and
 /// with its origin at the bottom centre of its box; simplified to [`SIMPLIFY_CELLS`].
-pub fn canonical_mesh(mesh: &TriMesh, model_rotation: Mat3, size: Vec3) -> Result<TriMesh, String> {
+fn canonical_mesh(mesh: &TriMesh, model_rotation: Mat3, size: Vec3) -> Result<TriMesh, String> {
     // Sweet Home 3D (x, y up, z front) to canonical (x, -y front, z up).
     let to_canonical = Mat3::from_cols(Vec3::X, Vec3::Z, -Vec3::Y);
     let turned = mesh.transformed(&Affine3A::from_mat3(to_canonical * model_rotation));
