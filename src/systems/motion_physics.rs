@@ -1,8 +1,9 @@
 //! An action's motion simulated in rapier: the moving link (the robot's base with its gripper
 //! and what it holds, or a door or drawer with what stands on it) is a kinematic body driven
-//! along its path, step by step, through a scratch world of the rest test's bodies (the motion
-//! is not made yet: the scene's own entities stay where they are), and the objects near its path
-//! are free to be pushed, tipped or knocked down. The grid search and the joint sweeps plan
+//! along its path, step by step, among the rest test's bodies on the scene's own entities (a
+//! `RapierSession`, which leaves them where they were: the check comes before the action is
+//! made), and the objects near its path are free to be pushed, tipped or knocked down. A motion
+//! that starts from a state the scene is not in yet runs in a scratch world of the tree. The grid search and the joint sweeps plan
 //! motions that touch nothing; this is the check that the physics agrees, and it catches what
 //! they cannot see (a chair nudged by the base's corner falls against the table).
 
@@ -62,9 +63,23 @@ pub struct MotionCheck {
 }
 
 /// Drives `motion.link` (with everything under it in `tree`) along `motion` in rapier, the
-/// objects near its path free, and reports what it moved. `motion.step_s` must be the rest
-/// test's step.
+/// objects near its path free, and reports what it moved, in a scratch world of `tree`'s links:
+/// for a tree that is not the scene as it stands (a motion after another of the same action).
+/// `motion.step_s` must be the rest test's step.
 pub fn simulate_motion(tree: &KinematicTree, motion: &LinkMotion) -> MotionCheck {
+    let (mut world, entities) = scratch_world(tree);
+    simulate_motion_on(&mut world, tree, &entities, motion)
+}
+
+/// `simulate_motion` on the entities of `world` whose links `tree` holds (`entities[l]` is link
+/// `l`'s): the scene's own entities when `tree` is the scene as it stands. The moving link's
+/// entity carries the kinematic body. The world is left as it was.
+pub fn simulate_motion_on(
+    world: &mut World,
+    tree: &KinematicTree,
+    entities: &[Entity],
+    motion: &LinkMotion,
+) -> MotionCheck {
     let started = Instant::now();
     debug_assert!((motion.step_s - REST_STEP_S).abs() < 1e-6);
     let n = tree.links.len();
@@ -108,8 +123,6 @@ pub fn simulate_motion(tree: &KinematicTree, motion: &LinkMotion) -> MotionCheck
         .map(|b| !near[b] || penetrations[b].0 > MAX_START_PENETRATION_M)
         .collect();
 
-    let (mut world, entities) = scratch_world(tree);
-    let world = &mut world;
     let mut session = RapierSession::begin(world);
     let owner_groups = |b: usize| {
         (Some(b) == owner).then(|| CollisionGroups::new(OWNER_GROUP, Group::ALL ^ MOVER_GROUP))
@@ -118,14 +131,14 @@ pub fn simulate_motion(tree: &KinematicTree, motion: &LinkMotion) -> MotionCheck
         &mut session,
         world,
         tree,
-        &entities,
+        entities,
         &bodies,
         &frozen,
         &owner_groups,
     );
     let start = motion.world_from_link[0];
     let mover = mover_collider(tree, &moving, &poses, start).map(|collider| {
-        let mover = world.spawn(Name::new("mover")).id();
+        let mover = entities[motion.link];
         session.attach(
             world,
             mover,
@@ -168,6 +181,7 @@ pub fn simulate_motion(tree: &KinematicTree, motion: &LinkMotion) -> MotionCheck
             });
         }
     }
+    session.end(world);
     knocked.sort_by(|a, b| a.object.cmp(&b.object));
     MotionCheck {
         link: tree.links[motion.link].name.clone(),
@@ -378,6 +392,28 @@ mod tests {
         let far = scene(Vec3::new(-0.3, -1.0, 0.0));
         let check = simulate_motion(&far, &slide(&far, Vec3::X * 1.2));
         assert!(!check.near.contains(&"bottle_1".to_string()), "{check:?}");
+    }
+
+    #[test]
+    fn a_check_on_a_worlds_own_entities_finds_what_a_scratch_world_finds_and_changes_nothing() {
+        let tree = scene(Vec3::new(-0.3, 0.0, 0.0));
+        let motion = slide(&tree, Vec3::X * 1.2);
+        let (mut world, entities) = scratch_world(&tree);
+        let components = |world: &World| -> Vec<usize> {
+            entities
+                .iter()
+                .map(|&e| world.entity(e).archetype().components().len())
+                .collect()
+        };
+        let before = components(&world);
+        let on_world = simulate_motion_on(&mut world, &tree, &entities, &motion);
+        assert_eq!(components(&world), before);
+        let scratch = simulate_motion(&tree, &motion);
+        assert_eq!(on_world.knocked, scratch.knocked);
+        assert_eq!(on_world.near, scratch.near);
+        // And again on the same world: each check starts afresh.
+        let again = simulate_motion_on(&mut world, &tree, &entities, &motion);
+        assert_eq!(again.knocked, on_world.knocked);
     }
 
     #[test]

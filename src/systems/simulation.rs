@@ -19,8 +19,8 @@ use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
 use crate::sim::motion_path::{apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
-use crate::systems::kinematic_tree::read_kinematic_tree;
-use crate::systems::motion_physics::{MotionCheck, simulate_motion};
+use crate::systems::kinematic_tree::{read_kinematic_tree, read_kinematic_tree_entities};
+use crate::systems::motion_physics::{MotionCheck, simulate_motion, simulate_motion_on};
 use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 
@@ -137,12 +137,12 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
         .get_resource::<SimulationTrace>()
         .map_or(0, |t| t.0.len());
     let mut motion = Vec::new();
-    let outcome = read_kinematic_tree(world)
+    let outcome = read_kinematic_tree_entities(world)
         .map_err(|e| e.to_string())
-        .and_then(|tree| {
+        .and_then(|(tree, entities)| {
             let spec = robot_spec(world).ok_or("the scene has no robot")?;
             let changes = attempt(&tree, &spec, action).map_err(|e| e.to_string())?;
-            motion = simulate_motions(&tree, &changes);
+            motion = simulate_motions(world, &tree, &entities, &changes);
             if let Some(why) = knocked_reason(&motion) {
                 return Err(why);
             }
@@ -196,14 +196,26 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
 }
 
 /// The motions of `changes` (a drive, a door) simulated in rapier one after another from
-/// `tree`, up to the first attachment (which happens at once) or the first that knocks
-/// something.
-fn simulate_motions(tree: &KinematicTree, changes: &[Change]) -> Vec<MotionCheck> {
+/// `tree`, the scene in `world` as it stands (`entities[l]` is link `l`'s entity), up to the
+/// first attachment (which happens at once) or the first that knocks something. The first
+/// motion runs on the scene's own entities; those after it start from a state the scene is not
+/// in yet, and run in a scratch world of the tree as the motions before left it.
+fn simulate_motions(
+    world: &mut World,
+    tree: &KinematicTree,
+    entities: &[Entity],
+    changes: &[Change],
+) -> Vec<MotionCheck> {
     let mut tree = tree.clone();
     let mut checks = Vec::new();
+    let mut as_the_scene_stands = true;
     for change in changes {
         if let Some(motion) = link_motion(&tree, change, REST_STEP_S) {
-            let check = simulate_motion(&tree, &motion);
+            let check = if as_the_scene_stands {
+                simulate_motion_on(world, &tree, entities, &motion)
+            } else {
+                simulate_motion(&tree, &motion)
+            };
             let knocked = !check.knocked.is_empty();
             checks.push(check);
             if knocked {
@@ -213,6 +225,7 @@ fn simulate_motions(tree: &KinematicTree, changes: &[Change]) -> Vec<MotionCheck
         if !apply_motion(&mut tree, change) {
             break;
         }
+        as_the_scene_stands = false;
     }
     checks
 }
