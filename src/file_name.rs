@@ -8,25 +8,40 @@ use std::path::{Component, Path, PathBuf};
 /// The longest id that becomes a file name.
 pub const MAX_ID_LEN: usize = 100;
 
+/// Why an id cannot be a file name, or a file a folder refers to cannot be read.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum FileNameError {
+    #[error("an empty id")]
+    Empty,
+    /// `start` is the id's first 20 characters.
+    #[error("id {start:?}... is longer than {MAX_ID_LEN} characters")]
+    TooLong { start: String },
+    #[error(
+        "id {0:?} is not a plain name (letters, digits, _, - and ., starting with a letter or \
+         digit): ids become file names"
+    )]
+    NotPlain(String),
+    #[error("{} lies outside the folder {} (only files inside it are read)", name.display(), root.display())]
+    Outside { name: PathBuf, root: PathBuf },
+    #[error("{} leads outside the folder {} through a link (only files inside it are read)", name.display(), root.display())]
+    OutsideThroughLink { name: PathBuf, root: PathBuf },
+}
+
 /// Checks that `id` is a plain file-name stem: 1 to [`MAX_ID_LEN`] ASCII letters, digits, `_`,
 /// `-` or `.`, starting with a letter or digit (so no `..`, no hidden files, no separators, no
 /// quotes that would break the XML and JSON it is written into).
-pub fn check_file_name(id: &str) -> Result<(), String> {
+pub fn check_file_name(id: &str) -> Result<(), FileNameError> {
     let plain = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.');
     if id.is_empty() {
-        return Err("an empty id".into());
+        return Err(FileNameError::Empty);
     }
     if id.len() > MAX_ID_LEN {
-        return Err(format!(
-            "id {:?}... is longer than {MAX_ID_LEN} characters",
-            id.chars().take(20).collect::<String>()
-        ));
+        return Err(FileNameError::TooLong {
+            start: id.chars().take(20).collect(),
+        });
     }
     if !id.starts_with(|c: char| c.is_ascii_alphanumeric()) || !id.chars().all(plain) {
-        return Err(format!(
-            "id {id:?} is not a plain name (letters, digits, _, - and ., starting with a letter or \
-             digit): ids become file names"
-        ));
+        return Err(FileNameError::NotPlain(id.to_string()));
     }
     Ok(())
 }
@@ -34,13 +49,10 @@ pub fn check_file_name(id: &str) -> Result<(), String> {
 /// The file `name` that a file in the folder `root` refers to, resolved inside `root`'s folder
 /// tree, or why not: an absolute path, a `..` that climbs out of `root`, or a symbolic link that
 /// leads out are refused, so that an input can only make the program read its own files.
-pub fn inside_folder(root: &Path, name: &Path) -> Result<PathBuf, String> {
-    let outside = || {
-        format!(
-            "{} lies outside the folder {} (only files inside it are read)",
-            name.display(),
-            root.display()
-        )
+pub fn inside_folder(root: &Path, name: &Path) -> Result<PathBuf, FileNameError> {
+    let outside = || FileNameError::Outside {
+        name: name.to_path_buf(),
+        root: root.to_path_buf(),
     };
     if name.is_absolute() {
         // Allowed only where it names a file inside the folder after all.
@@ -64,11 +76,10 @@ pub fn inside_folder(root: &Path, name: &Path) -> Result<PathBuf, String> {
     if let (Ok(real), Ok(real_root)) = (path.canonicalize(), root.canonicalize())
         && !real.starts_with(&real_root)
     {
-        return Err(format!(
-            "{} leads outside the folder {} through a link (only files inside it are read)",
-            name.display(),
-            root.display()
-        ));
+        return Err(FileNameError::OutsideThroughLink {
+            name: name.to_path_buf(),
+            root: root.to_path_buf(),
+        });
     }
     Ok(path)
 }

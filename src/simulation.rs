@@ -91,7 +91,7 @@ pub fn simulation_app(
             })?
         }
     };
-    spawn_robot(world, task.robot, pose).map_err(IsceneError::Internal)?;
+    spawn_robot(world, task.robot, pose)?;
     Ok(app)
 }
 

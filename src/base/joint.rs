@@ -3,6 +3,24 @@
 use glam::{Affine3A, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+/// What a file may have broken in a joint.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum JointSpecError {
+    #[error("axis {0:?} is not a unit vector")]
+    NotUnitAxis([f32; 3]),
+    #[error("limits {lower}..{upper} reach past {max} {unit} of rest")]
+    BeyondReach {
+        lower: f32,
+        upper: f32,
+        max: f32,
+        unit: &'static str,
+    },
+    #[error("limits {lower}..{upper} are not finite and in order")]
+    BadLimits { lower: f32, upper: f32 },
+    #[error("a revolute or prismatic joint without limits")]
+    NoLimits,
+}
+
 /// How a child link may move relative to its parent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -65,12 +83,9 @@ impl JointSpec {
     /// Checks what a file may have broken: a unit axis, and limits that are finite, in order and
     /// within [`MAX_REVOLUTE_RAD`] or [`MAX_PRISMATIC_M`] of rest (a range of 1e30 would make
     /// every sweep of the joint endless).
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), JointSpecError> {
         if !(self.axis.is_finite() && (self.axis.length() - 1.0).abs() < 1e-3) {
-            return Err(format!(
-                "axis {:?} is not a unit vector",
-                self.axis.to_array()
-            ));
+            return Err(JointSpecError::NotUnitAxis(self.axis.to_array()));
         }
         let max = match self.kind {
             JointKind::Revolute => MAX_REVOLUTE_RAD,
@@ -80,20 +95,25 @@ impl JointSpec {
         match self.limits {
             Some((lo, hi)) if lo.is_finite() && hi.is_finite() && lo <= hi => {
                 if lo < -max || hi > max {
-                    Err(format!(
-                        "limits {lo}..{hi} reach past {max} {} of rest",
-                        if self.kind == JointKind::Revolute {
+                    Err(JointSpecError::BeyondReach {
+                        lower: lo,
+                        upper: hi,
+                        max,
+                        unit: if self.kind == JointKind::Revolute {
                             "rad"
                         } else {
                             "m"
-                        }
-                    ))
+                        },
+                    })
                 } else {
                     Ok(())
                 }
             }
-            Some((lo, hi)) => Err(format!("limits {lo}..{hi} are not finite and in order")),
-            None => Err("a revolute or prismatic joint without limits".into()),
+            Some((lo, hi)) => Err(JointSpecError::BadLimits {
+                lower: lo,
+                upper: hi,
+            }),
+            None => Err(JointSpecError::NoLimits),
         }
     }
 

@@ -94,7 +94,7 @@ pub enum GraphError {
     DuplicateId(String),
     /// An id that cannot name the files made for it (`file_name::check_file_name`'s reason).
     #[error("nodes: {0}")]
-    BadId(String),
+    BadId(crate::file_name::FileNameError),
     #[error("node {0:?}: NaN or infinite number in its box or planes")]
     NotFinite(String),
     #[error("edges: unknown node {0:?}")]

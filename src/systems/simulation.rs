@@ -19,7 +19,9 @@ use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
 use crate::sim::motion_path::{apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
-use crate::systems::kinematic_tree::{read_kinematic_tree, read_kinematic_tree_entities};
+use crate::systems::kinematic_tree::{
+    ReadTreeError, read_kinematic_tree, read_kinematic_tree_entities,
+};
 use crate::systems::motion_physics::{MotionCheck, simulate_motion, simulate_motion_on};
 use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
@@ -87,12 +89,16 @@ pub struct SimulationTrace(pub Vec<StepRecord>);
 
 /// Spawns the robot under the scene root at `pose`: a base link on a fixed joint (the mobile
 /// base is placed, not simulated) and a gripper link fixed on it.
-pub fn spawn_robot(world: &mut World, spec: RobotSpec, pose: BasePose) -> Result<Entity, String> {
+pub fn spawn_robot(
+    world: &mut World,
+    spec: RobotSpec,
+    pose: BasePose,
+) -> Result<Entity, ReadTreeError> {
     let root = world
         .query_filtered::<Entity, With<SceneRoot>>()
         .iter(world)
         .next()
-        .ok_or("no scene root to put the robot in")?;
+        .ok_or(ReadTreeError::NoSceneRoot)?;
     let fixed = Joint {
         spec: JointSpec::FIXED,
         value: 0.0,

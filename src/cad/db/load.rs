@@ -35,7 +35,7 @@ pub fn read_database(dir: &Path) -> Result<Vec<CadModel>, InputError> {
 
 /// The model `id` of the database folder `dir`.
 pub fn read_model(dir: &Path, id: &str) -> Result<CadModel, InputError> {
-    check_file_name(id).map_err(|e| InputError::invalid(dir, e))?;
+    check_file_name(id).map_err(|e| InputError::invalid(dir, e.to_string()))?;
     let meta_path = dir.join(format!("{id}.json"));
     let text = std::fs::read_to_string(&meta_path).map_err(|e| InputError::io(&meta_path, &e))?;
     let meta: ModelMetadata = serde_json::from_str(&text)

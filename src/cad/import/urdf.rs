@@ -260,10 +260,10 @@ fn mesh_path(filename: &str, folder: &Path) -> Result<PathBuf, String> {
     // A package:// name is looked up in the folders around the file, as ROS would; any other
     // name must lie inside the file's own folder.
     if let Some(path) = filename.strip_prefix("file://") {
-        return inside_folder(folder, Path::new(path));
+        return inside_folder(folder, Path::new(path)).map_err(|e| e.to_string());
     }
     let Some(rest) = filename.strip_prefix("package://") else {
-        return inside_folder(folder, Path::new(filename));
+        return inside_folder(folder, Path::new(filename)).map_err(|e| e.to_string());
     };
     let (package, relative) = rest
         .split_once('/')
