@@ -7,7 +7,8 @@
 //! its `CadModel`, and in the kinematic tree its `LinkBody`; each moving
 //! part of its model is a child entity with a `ModelPart`, a `LinkBody` and a `Joint`. Support
 //! is Bevy's `ChildOf`: the parent supports the child, and the child's `Joint` says how it may
-//! move relative to it. `ProximalTo` lists its proximal neighbours.
+//! move relative to it. A proximal pair is an entity of its own, related to both ends
+//! (`ProximalEndA`, `ProximalEndB`).
 
 pub mod cad_candidates;
 pub mod cad_model;
@@ -30,7 +31,10 @@ pub use model_part::ModelPart;
 pub use observed_surface::ObservedSurface;
 pub use oriented_box::OrientedBox;
 pub use panoptic::{Panoptic, SceneEntity};
-pub use proximal::ProximalTo;
+pub use proximal::{
+    ProximalEndA, ProximalEndB, ProximalPairQuery, ProximalPairsAsA, ProximalPairsAsB,
+    proximal_partners,
+};
 pub use segment_mesh::SegmentMesh;
 pub use sighted_outline::SightedOutline;
 pub use surface_planes::SurfacePlanes;

@@ -1,14 +1,14 @@
 //! Spawns a contact graph as ECS entities whose transform hierarchy is the kinematic tree: every
 //! layout entity hangs from the scene root, every object from the entity that supports it.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use bevy::prelude::*;
 use glam::{Affine3A, Mat4};
 
 use crate::classes::{ClassTable, EntityKind};
 use crate::components::{
-    CadModel, Joint, OrientedBox, Panoptic, ProximalTo, SceneEntity, SurfacePlanes,
+    CadModel, Joint, OrientedBox, Panoptic, ProximalEndA, ProximalEndB, SceneEntity, SurfacePlanes,
 };
 use crate::error::IsceneError;
 use crate::geometry::{GravityBox, Plane};
@@ -95,8 +95,8 @@ pub fn spawn_contact_graph(
 /// Gives the entities of `graph`'s nodes (`entities`: node id to entity) their boxes, planes and
 /// CAD models, and hangs them under the `SceneRoot` (made when there is none) as the support
 /// tree says: `ChildOf` the
-/// supporting entity, a `Joint`, and a `Transform` relative to the parent; proximal pairs become
-/// `ProximalTo` on both ends.
+/// supporting entity, a `Joint`, and a `Transform` relative to the parent; each proximal pair
+/// becomes a pair entity related to both ends (attaching again keeps the pairs that stay).
 pub fn attach_contact_graph(
     world: &mut World,
     graph: &ContactGraph,
@@ -160,24 +160,57 @@ pub fn attach_contact_graph(
             },
         ));
     }
-    let mut proximal: HashMap<&str, Vec<Entity>> = HashMap::new();
-    for edge in &graph.edges {
-        if let GraphEdge::Proximal { a, b } = edge {
-            proximal.entry(a).or_default().push(entities[b]);
-            proximal.entry(b).or_default().push(entities[a]);
+    attach_proximal_pairs(world, graph, entities);
+    Ok(root)
+}
+
+/// Makes the proximal pair entities those of `graph`'s edges: pairs that stay are kept (so no
+/// entity is despawned when nothing changed), stale ones despawned, new ones spawned in edge order.
+fn attach_proximal_pairs(
+    world: &mut World,
+    graph: &ContactGraph,
+    entities: &HashMap<String, Entity>,
+) {
+    let unordered = |a: Entity, b: Entity| {
+        if a.index_u32() <= b.index_u32() {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    };
+    let wanted: Vec<(Entity, Entity)> = graph
+        .edges
+        .iter()
+        .filter_map(|edge| match edge {
+            GraphEdge::Proximal { a, b } => Some((entities[a], entities[b])),
+            GraphEdge::Support { .. } => None,
+        })
+        .collect();
+    let wanted_set: HashSet<(Entity, Entity)> =
+        wanted.iter().map(|&(a, b)| unordered(a, b)).collect();
+    let existing: Vec<(Entity, (Entity, Entity))> = world
+        .query::<(Entity, &ProximalEndA, &ProximalEndB)>()
+        .iter(world)
+        .map(|(pair, a, b)| (pair, unordered(a.0, b.0)))
+        .collect();
+    let mut kept = HashSet::new();
+    for (pair, ends) in existing {
+        if wanted_set.contains(&ends) && kept.insert(ends) {
+            continue;
+        }
+        world.despawn(pair);
+    }
+    for (a, b) in wanted {
+        if kept.insert(unordered(a, b)) {
+            world.spawn((Name::new("proximal pair"), ProximalEndA(a), ProximalEndB(b)));
         }
     }
-    for (id, neighbours) in proximal {
-        world
-            .entity_mut(entities[id])
-            .insert(ProximalTo(neighbours));
-    }
-    Ok(root)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::components::{ProximalPairQuery, proximal_partners};
 
     fn kitchen_graph() -> ContactGraph {
         crate::scene::kitchen_contact_graph()
@@ -194,8 +227,8 @@ mod tests {
 
     #[test]
     fn the_transform_hierarchy_is_the_support_tree() {
-        let (app, entities) = kitchen_app();
-        let world = app.world();
+        let (mut app, entities) = kitchen_app();
+        let world = app.world_mut();
         let cup = entities["cup_1"];
         let table = entities["table_1"];
         assert_eq!(
@@ -214,9 +247,28 @@ mod tests {
         // The chair pulled up to the table touches it; the cup on the table is supported, so
         // not proximal.
         let chair = entities["chair_1"];
-        let near = |e: Entity| world.get::<ProximalTo>(e).map_or(&[][..], |p| &p.0[..]);
+        let mut pairs = world.query::<ProximalPairQuery>();
+        let mut near = |e: Entity| proximal_partners(pairs.iter(world), e);
         assert!(near(table).contains(&chair) && near(chair).contains(&table));
         assert!(!near(table).contains(&cup));
+        // Attached again, the same pairs stay, once each.
+        let graph = kitchen_graph();
+        let before: Vec<Entity> = world
+            .query_filtered::<Entity, With<ProximalEndA>>()
+            .iter(world)
+            .collect();
+        attach_contact_graph(world, &graph, &entities).expect("attach again");
+        let after: Vec<Entity> = world
+            .query_filtered::<Entity, With<ProximalEndA>>()
+            .iter(world)
+            .collect();
+        let proximal_edges = graph
+            .edges
+            .iter()
+            .filter(|e| matches!(e, GraphEdge::Proximal { .. }))
+            .count();
+        assert!(proximal_edges > 0);
+        assert_eq!((before.len(), &after), (proximal_edges, &before));
         let global = world.get::<GlobalTransform>(cup).expect("global transform");
         let cad = world.get::<CadModel>(cup).expect("cad");
         let expected = Vec3::from(cad.world_from_model.translation);

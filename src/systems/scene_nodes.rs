@@ -1,9 +1,10 @@
 //! The contact graph as the scene's entities hold it. The world is the truth: each node is an
 //! entity's components (`SceneEntity`, `Panoptic`, `OrientedBox`, `SurfacePlanes`, its
 //! `CadModel` once replaced, the values of its moving parts' `Joint`s), support is its `ChildOf`
-//! and the proximal pairs are `ProximalTo`. `ContactGraph` is what this reads off it: the
-//! export format (contact_graph.json), and the view the Bevy-free algorithms of the CAD stages
-//! take, as `read_kinematic_tree` reads the kinematic tree off the transform hierarchy.
+//! and the proximal pairs are pair entities (`ProximalEndA`, `ProximalEndB`). `ContactGraph` is
+//! what this reads off it: the export format (contact_graph.json), and the view the Bevy-free
+//! algorithms of the CAD stages take, as `read_kinematic_tree` reads the kinematic tree off the
+//! transform hierarchy.
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -12,16 +13,18 @@ use bevy::prelude::*;
 use glam::Mat4;
 
 use crate::components::{
-    CadModel, Joint, ModelPart, OrientedBox, Panoptic, ProximalTo, SceneEntity, SurfacePlanes,
+    CadModel, Joint, ModelPart, OrientedBox, Panoptic, ProximalPairQuery, SceneEntity,
+    SurfacePlanes,
 };
 use crate::geometry::Plane;
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
 
 /// Where an entity's node stands in the contact graph: the order the entities were spawned in,
 /// which is the panoptic map's extraction order with the counters the ContactGraph stage found
-/// after it, the order that stage builds the graph in. Entity indices follow spawn order, as
-/// nothing in a reconstruction is despawned (so none is reused); `Entity`'s own ordering compares
-/// opaque bits and does not.
+/// after it, the order that stage builds the graph in. In a reconstruction entity indices follow
+/// spawn order: no node is spawned after an entity was despawned (only a proximal pair that a
+/// later attachment of the graph drops is ever despawned, and every node exists by then), so no
+/// index is reused. `Entity`'s own ordering compares opaque bits and does not follow it.
 pub fn graph_order(entity: Entity) -> u32 {
     entity.index_u32()
 }
@@ -34,7 +37,6 @@ type NodeComponents = (
     &'static SurfacePlanes,
     Option<&'static CadModel>,
     Option<&'static ChildOf>,
-    Option<&'static ProximalTo>,
 );
 
 /// The scene entities that are contact-graph nodes (those the ContactGraph stage gave a box and
@@ -43,6 +45,7 @@ type NodeComponents = (
 pub struct SceneNodes<'w, 's> {
     nodes: Query<'w, 's, NodeComponents>,
     parts: Query<'w, 's, (&'static ModelPart, &'static Joint)>,
+    pairs: Query<'w, 's, ProximalPairQuery>,
 }
 
 impl SceneNodes<'_, '_> {
@@ -100,7 +103,7 @@ impl SceneNodes<'_, '_> {
         // order of its first and then its second end (the order the ContactGraph stage found them).
         let mut edges: Vec<GraphEdge> = rows
             .iter()
-            .filter_map(|(_, id, _, _, _, _, parent, _)| {
+            .filter_map(|(_, id, _, _, _, _, parent)| {
                 let parent = self.id(parent.as_ref()?.parent())?;
                 Some(GraphEdge::Support {
                     parent: parent.to_string(),
@@ -108,19 +111,18 @@ impl SceneNodes<'_, '_> {
                 })
             })
             .collect();
-        for (k, (_, id, _, _, _, _, _, near)) in rows.iter().enumerate() {
-            let mut after: Vec<usize> = near
-                .map_or(&[][..], |n| &n.0[..])
-                .iter()
-                .filter_map(|e| position.get(e).copied())
-                .filter(|&j| j > k)
-                .collect();
-            after.sort_unstable();
-            edges.extend(after.into_iter().map(|j| GraphEdge::Proximal {
-                a: id.0.clone(),
-                b: rows[j].1.0.clone(),
-            }));
-        }
+        let mut pairs: Vec<(usize, usize)> = self
+            .pairs
+            .iter()
+            .filter_map(|(a, b)| Some((*position.get(&a.0)?, *position.get(&b.0)?)))
+            .map(|(k, j)| (k.min(j), k.max(j)))
+            .collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        edges.extend(pairs.into_iter().map(|(k, j)| GraphEdge::Proximal {
+            a: rows[k].1.0.clone(),
+            b: rows[j].1.0.clone(),
+        }));
         ContactGraph { nodes, edges }
     }
 }

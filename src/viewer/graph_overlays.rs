@@ -3,7 +3,9 @@
 
 use bevy::prelude::*;
 
-use crate::components::{OrientedBox, Panoptic, ProximalTo, SceneEntity, SurfacePlanes};
+use crate::components::{
+    OrientedBox, Panoptic, ProximalEndA, ProximalEndB, SceneEntity, SurfacePlanes,
+};
 use crate::geometry::{GravityBox, Plane};
 use crate::viewer::layers::{ActiveLayers, Layer};
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
@@ -97,34 +99,26 @@ pub fn draw_box(gizmos: &mut Gizmos, gravity_box: &GravityBox) {
     );
 }
 
-/// A node as the graph layer draws it: its box, support parent and proximal partners.
-type GraphNodeView<'a> = (
-    Entity,
-    &'a OrientedBox,
-    Option<&'a ChildOf>,
-    Option<&'a ProximalTo>,
-);
+/// A node as the graph layer draws it: its box and support parent.
+type GraphNodeView<'a> = (&'a OrientedBox, Option<&'a ChildOf>);
 
 fn draw_graph(
     layers: Res<ActiveLayers>,
     nodes: Query<GraphNodeView, With<SceneEntity>>,
+    pairs: Query<(&ProximalEndA, &ProximalEndB)>,
     mut gizmos: Gizmos,
 ) {
     if !layers.is_on(Layer::Graph) {
         return;
     }
-    for (entity, b, parent, proximal) in &nodes {
-        if let Some((_, pb, _, _)) = parent.and_then(|p| nodes.get(p.parent()).ok()) {
+    for (b, parent) in &nodes {
+        if let Some((pb, _)) = parent.and_then(|p| nodes.get(p.parent()).ok()) {
             draw_support(&mut gizmos, &pb.0, &b.0);
         }
-        for &other in proximal.map(|p| p.0.as_slice()).unwrap_or_default() {
-            // Each pair once.
-            if other < entity {
-                continue;
-            }
-            if let Ok((_, ob, _, _)) = nodes.get(other) {
-                draw_proximal(&mut gizmos, &b.0, &ob.0);
-            }
+    }
+    for (a, b) in &pairs {
+        if let (Ok((ab, _)), Ok((bb, _))) = (nodes.get(a.0), nodes.get(b.0)) {
+            draw_proximal(&mut gizmos, &ab.0, &bb.0);
         }
     }
 }
