@@ -32,7 +32,7 @@ use glam::Affine3A;
 use crate::kinematics::rest_test::{REST_STEP_S, REST_SUBSTEPS};
 
 /// A rapier pose is rigid: drop the rounding-level scale a composed affine carries.
-pub(crate) fn rigid_transform(a: &Affine3A) -> Transform {
+fn rigid_transform(a: &Affine3A) -> Transform {
     let (_, rotation, translation) = a.to_scale_rotation_translation();
     Transform::from_translation(translation).with_rotation(rotation.normalize())
 }
