@@ -213,40 +213,49 @@ mod tests {
     use super::*;
     use bevy_rapier3d::prelude::{Collider, RigidBody};
 
+    /// Drops `ball` from 50 cm onto `floor` for one simulated second; returns where it landed.
+    fn drop_ball(world: &mut World, floor: Entity, ball: Entity) -> Affine3A {
+        let at = |z: f32| Affine3A::from_translation(Vec3::Z * z);
+        let mut session = RapierSession::begin(world);
+        session.attach(
+            world,
+            floor,
+            at(-0.05),
+            (RigidBody::Fixed, Collider::cuboid(2.0, 2.0, 0.05)),
+        );
+        session.attach(
+            world,
+            ball,
+            at(0.5),
+            (RigidBody::Dynamic, Collider::ball(0.1)),
+        );
+        for _ in 0..120 {
+            session.step(world);
+        }
+        let landed = session.pose(world, ball).expect("a body");
+        session.end(world);
+        landed
+    }
+
     #[test]
     fn a_session_simulates_the_entities_and_leaves_them_as_they_were() {
         let mut world = World::new();
         let floor = world.spawn(Name::new("floor")).id();
         let start = Transform::from_xyz(0.0, 0.0, 0.5);
         let ball = world.spawn((Name::new("ball"), start)).id();
-        let at = |z: f32| Affine3A::from_translation(Vec3::Z * z);
-        let before: Vec<usize> = [floor, ball]
-            .iter()
-            .map(|&e| world.entity(e).archetype().components().len())
-            .collect();
+        let components = |world: &World| -> Vec<usize> {
+            [floor, ball]
+                .iter()
+                .map(|&e| world.entity(e).archetype().components().len())
+                .collect()
+        };
+        let before = components(&world);
 
-        let mut session = RapierSession::begin(&mut world);
-        session.attach(
-            &mut world,
-            floor,
-            at(-0.05),
-            (RigidBody::Fixed, Collider::cuboid(2.0, 2.0, 0.05)),
-        );
-        session.attach(
-            &mut world,
-            ball,
-            at(0.5),
-            (RigidBody::Dynamic, Collider::ball(0.1)),
-        );
-        for _ in 0..120 {
-            session.step(&mut world);
-        }
-        let landed = session.pose(&world, ball).expect("a body");
+        let landed = drop_ball(&mut world, floor, ball);
         assert!(
             (landed.translation.z - 0.1).abs() < 0.01,
             "it fell onto the floor: {landed:?}"
         );
-        session.end(&mut world);
 
         // The transforms were never written; the components are the ones it had.
         assert_eq!(*world.get::<Transform>(ball).expect("kept"), start);
@@ -254,11 +263,7 @@ mod tests {
             *world.get::<GlobalTransform>(ball).expect("kept"),
             GlobalTransform::IDENTITY
         );
-        let after: Vec<usize> = [floor, ball]
-            .iter()
-            .map(|&e| world.entity(e).archetype().components().len())
-            .collect();
-        assert_eq!(before, after);
+        assert_eq!(components(&world), before);
         assert!(
             world
                 .query::<&RapierContextSimulation>()
@@ -268,23 +273,6 @@ mod tests {
         );
 
         // A second session on the same world starts afresh and gives the same fall.
-        let mut again = RapierSession::begin(&mut world);
-        again.attach(
-            &mut world,
-            floor,
-            at(-0.05),
-            (RigidBody::Fixed, Collider::cuboid(2.0, 2.0, 0.05)),
-        );
-        again.attach(
-            &mut world,
-            ball,
-            at(0.5),
-            (RigidBody::Dynamic, Collider::ball(0.1)),
-        );
-        for _ in 0..120 {
-            again.step(&mut world);
-        }
-        assert_eq!(again.pose(&world, ball), Some(landed));
-        again.end(&mut world);
+        assert_eq!(drop_ball(&mut world, floor, ball), landed);
     }
 }

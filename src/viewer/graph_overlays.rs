@@ -3,9 +3,7 @@
 
 use bevy::prelude::*;
 
-use crate::components::{
-    OrientedBox, Panoptic, ProximalEndA, ProximalEndB, SceneEntity, SurfacePlanes,
-};
+use crate::components::{OrientedBox, Panoptic, ProximalPairQuery, SceneEntity, SurfacePlanes};
 use crate::geometry::{GravityBox, Plane};
 use crate::viewer::layers::{ActiveLayers, Layer};
 use crate::viewer::link_meshes::HIDDEN_CLASSES;
@@ -105,7 +103,7 @@ type GraphNodeView<'a> = (&'a OrientedBox, Option<&'a ChildOf>);
 fn draw_graph(
     layers: Res<ActiveLayers>,
     nodes: Query<GraphNodeView, With<SceneEntity>>,
-    pairs: Query<(&ProximalEndA, &ProximalEndB)>,
+    pairs: Query<ProximalPairQuery>,
     mut gizmos: Gizmos,
 ) {
     if !layers.is_on(Layer::Graph) {

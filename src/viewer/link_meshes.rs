@@ -6,25 +6,29 @@ use bevy::asset::RenderAssetUsages;
 use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
 
+use crate::base::ClassId;
 use crate::components::{LinkBody, ModelPart, Panoptic, SceneEntity};
 use crate::geometry::TriMesh;
 use crate::viewer::layers::{ActiveLayers, Layer};
 use crate::viewer::map_layer::MapSegments;
 
-/// A link's two looks, and the class of its object (empty for the robot's links).
+/// A link's two looks, and the class of its object (`None` for the robot's links).
 #[derive(Component, Clone, Debug)]
 pub struct LinkMaterials {
     pub colour: Handle<StandardMaterial>,
     pub segment: Handle<StandardMaterial>,
-    pub class: String,
+    pub class: Option<ClassId>,
 }
 
 impl LinkMaterials {
     /// Hidden classes never show, and the scene's models hide while the map stands in for
     /// them; the robot always shows.
     pub fn visibility(&self, map_shown: bool) -> Visibility {
-        let robot = self.class.is_empty();
-        if HIDDEN_CLASSES.contains(&self.class.as_str()) || (map_shown && !robot) {
+        let robot = self.class.is_none();
+        let hidden = self
+            .class
+            .is_some_and(|c| HIDDEN_CLASSES.contains(&c.as_str()));
+        if hidden || (map_shown && !robot) {
             Visibility::Hidden
         } else {
             Visibility::Inherited
@@ -77,18 +81,16 @@ fn object_instance(
     entity: Entity,
     part: Option<&ModelPart>,
     panoptic: &Query<(&SceneEntity, &Panoptic)>,
-) -> (u32, String) {
+) -> (u32, Option<ClassId>) {
     if let Ok((_, p)) = panoptic.get(entity) {
-        return (p.instance, p.class.to_string());
+        return (p.instance, Some(p.class));
     }
     let Some(part) = part else {
-        return (0, String::new());
+        return (0, None);
     };
     panoptic
         .get(part.object)
-        .map_or((0, String::new()), |(_, p)| {
-            (p.instance, p.class.to_string())
-        })
+        .map_or((0, None), |(_, p)| (p.instance, Some(p.class)))
 }
 
 fn attach_link_meshes(

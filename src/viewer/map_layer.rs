@@ -9,6 +9,7 @@ use std::path::Path;
 
 use bevy::prelude::*;
 
+use crate::base::ClassId;
 use crate::error::IsceneError;
 use crate::geometry::TriMesh;
 use crate::panoptic::panoptic_dir::{read_index, read_segment_meshes};
@@ -142,7 +143,7 @@ fn spawn_map_meshes(
             LinkMaterials {
                 colour: colour_look,
                 segment: segment_look,
-                class: segment.class.clone(),
+                class: Some(ClassId::new(&segment.class)),
             },
             Transform::IDENTITY,
             shown,
