@@ -133,10 +133,7 @@ fn cad_replacement(c: &mut Criterion) {
     let ids: Vec<String> = kitchen_objects.iter().map(|o| o.id.to_string()).collect();
     let name = format!("physical_check_kitchen_{}_objects", ids.len());
     c.bench_function(&name, |b| {
-        b.iter(|| {
-            let mut graph = kitchen.clone();
-            check_and_place(&mut graph, &library, &ids, &aligned, points)
-        })
+        b.iter(|| check_and_place(kitchen, &library, &ids, &aligned, points))
     });
 }
 

@@ -4,12 +4,12 @@
 //! and let each chosen model's frame become its entity's frame in the transform tree. Each
 //! stage leaves its result on the object's entity (`CadCandidates`, `ShapeRejection`,
 //! `CadAlignments`, `CadModel`); the Bevy-free algorithms of `cad::replace` read the contact
-//! graph the entities hold (`SceneNodes`).
+//! graph the entities hold (`SceneNodes`) and return what they decided, which the stage puts on
+//! the entities.
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use bevy::ecs::system::SystemState;
 use bevy::prelude::*;
 use serde::Serialize;
 
@@ -22,13 +22,11 @@ use crate::cad::replace::replacement::{
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
 use crate::components::{
-    CadAlignments, CadCandidates, ObservedSurface, SceneEntity, ShapeRejection,
+    CadAlignments, CadCandidates, CadModel, ObservedSurface, SceneEntity, ShapeRejection,
 };
-use crate::error::IsceneError;
 use crate::systems::contact_graph::SceneGravity;
-use crate::systems::scene_graph::attach_contact_graph;
+use crate::systems::scene_graph::hang_frames;
 use crate::systems::scene_nodes::SceneNodes;
-use crate::systems::stages::record_failure;
 
 /// The database replacement chooses from (the parametric library unless one is given).
 #[derive(Resource, Clone)]
@@ -196,22 +194,22 @@ fn cad_align_stage(
 }
 
 /// PhysicalCheck: chooses among each object's alignments so the models neither interpenetrate
-/// nor overhang their supports, gives the placed objects their `CadModel`s and hangs their frames
-/// on the models', and reports what replacement did.
-fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
-    let Some(db) = world.get_resource::<CadLibrary>().map(|l| l.0.clone()) else {
-        return Ok(());
+/// nor overhang their supports, gives the placed objects their `CadModel`s, and reports what
+/// replacement did. `hang_frames` runs after it: a placed object's frame becomes its model's,
+/// and a movable one floats on its support.
+fn physical_check_stage(
+    mut commands: Commands,
+    nodes: SceneNodes,
+    surfaces: Query<(&SceneEntity, &ObservedSurface)>,
+    aligned: Query<&CadAlignments>,
+    rejections: Query<&ShapeRejection>,
+    library: Option<Res<CadLibrary>>,
+    method: Res<CadAlignMethod>,
+) {
+    let Some(db) = library.map(|l| l.0.clone()) else {
+        return;
     };
-    let mut state = SystemState::<(
-        SceneNodes,
-        Query<(&SceneEntity, &ObservedSurface)>,
-        Query<&CadAlignments>,
-        Query<&ShapeRejection>,
-    )>::new(world);
-    let (nodes, surfaces, aligned, rejections) = state
-        .get(world)
-        .map_err(|e| IsceneError::Internal(format!("CAD replacement: {e}")))?;
-    let mut graph = nodes.contact_graph();
+    let graph = nodes.contact_graph();
     let points = observed_points(surfaces.iter());
     let entity_of = nodes.entities_by_id();
     let order = nodes.entities();
@@ -234,18 +232,21 @@ fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
         .iter()
         .filter(|n| n.kind != crate::classes::EntityKind::Layout)
         .count();
-    let placements = check_and_place(&mut graph, &db, &ids, &options, &points);
+    let placements = check_and_place(&graph, &db, &ids, &options, &points);
     let (replaced, unplaced): (Vec<_>, Vec<_>) = placements
         .records
         .into_iter()
         .partition(|r| r.check.conflicts == 0);
-    world.insert_resource(SceneModels(Arc::new(db.with_models(placements.built))));
-    attach_contact_graph(world, &graph, &entity_of)
-        .map_err(|problem| IsceneError::Internal(format!("CAD replacement: {problem}")))?;
+    commands.insert_resource(SceneModels(Arc::new(db.with_models(placements.built))));
+    for (id, placement) in &placements.placed {
+        commands
+            .entity(entity_of[id])
+            .insert(CadModel::from(placement));
+    }
     let mean_alignment_error_m = (!replaced.is_empty())
         .then(|| replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32);
-    world.insert_resource(CadReport {
-        align_method: world.resource::<CadAlignMethod>().0,
+    commands.insert_resource(CadReport {
+        align_method: method.0,
         database_models: db.len(),
         rejected,
         objects: object_count,
@@ -255,7 +256,6 @@ fn physical_check_stage(world: &mut World) -> Result<(), IsceneError> {
         replaced,
         mean_alignment_error_m,
     });
-    Ok(())
 }
 
 /// Adds the CadMatch, CadAlign and PhysicalCheck stages.
@@ -271,8 +271,8 @@ impl Plugin for CadReplacementPlugin {
             (
                 cad_match_stage.run_if(graph_built).in_set(Stage::CadMatch),
                 cad_align_stage.run_if(graph_built).in_set(Stage::CadAlign),
-                physical_check_stage
-                    .pipe(record_failure)
+                (physical_check_stage, hang_frames)
+                    .chain()
                     .run_if(graph_built)
                     .in_set(Stage::PhysicalCheck),
             ),

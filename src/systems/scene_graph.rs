@@ -37,11 +37,11 @@ pub struct SceneRoot;
 /// The pose of an entity's own frame: its CAD model's frame without the model's scale when it
 /// has one (links of a kinematic tree are rigid frames; a per-axis scale in a parent's frame
 /// would shear its children), else its box's.
-fn world_from_entity(graph_box: &GravityBox, cad: Option<&crate::graph::CadPlacement>) -> Affine3A {
+fn world_from_entity(graph_box: &GravityBox, cad: Option<&CadModel>) -> Affine3A {
     match cad {
         Some(c) => {
             let (_, rotation, translation) =
-                Mat4::from_cols_array(&c.world_from_model).to_scale_rotation_translation();
+                Mat4::from(c.world_from_model).to_scale_rotation_translation();
             Affine3A::from_rotation_translation(rotation.normalize(), translation)
         }
         None => graph_box.world_from_box(),
@@ -117,51 +117,62 @@ pub fn attach_contact_graph(
             .spawn((SceneRoot, Name::new("world"), Transform::IDENTITY))
             .id(),
     };
-    let mut poses = HashMap::new();
     for node in &graph.nodes {
-        let gbox = GravityBox::from(&node.bbox);
-        let pose = world_from_entity(&gbox, node.cad.as_ref());
         let mut e = world.entity_mut(entities[&node.id]);
         e.insert((
             Name::new(node.id.clone()),
-            OrientedBox(gbox),
+            OrientedBox(GravityBox::from(&node.bbox)),
             SurfacePlanes(node.planes.iter().map(|p| Plane::from_array(*p)).collect()),
         ));
-        if let Some(c) = &node.cad {
-            e.insert(CadModel {
-                model: c.model.clone(),
-                world_from_model: Affine3A::from_mat4(Mat4::from_cols_array(&c.world_from_model)),
-                scale: c.scale,
-                alignment_error: c.alignment_error,
-            });
-        }
-        poses.insert(node.id.clone(), pose);
+        match &node.cad {
+            Some(c) => e.insert(CadModel::from(c)),
+            None => e.remove::<CadModel>(),
+        };
     }
     for node in &graph.nodes {
-        let has_model = node.cad.is_some();
-        let (parent, parent_pose, joint) = match graph.parent_of(&node.id) {
-            Some(p) => (entities[p], poses[p], support_joint(&node.class, has_model)),
-            None => {
-                let joint = if node.kind == EntityKind::Layout {
-                    JointSpec::FIXED
-                } else {
-                    support_joint(&node.class, has_model)
-                };
-                (root, Affine3A::IDENTITY, joint)
-            }
-        };
-        let local = parent_pose.inverse() * poses[&node.id];
-        world.entity_mut(entities[&node.id]).insert((
-            ChildOf(parent),
-            transform_of(local),
-            Joint {
-                spec: joint,
-                value: 0.0,
-            },
-        ));
+        let parent = graph.parent_of(&node.id).map_or(root, |p| entities[p]);
+        world.entity_mut(entities[&node.id]).insert(ChildOf(parent));
     }
+    hang_frames(world);
     attach_proximal_pairs(world, graph, entities);
     Ok(root)
+}
+
+/// Gives every node entity (a `SceneEntity` with a box) its frame and its joint to its support,
+/// from its own components: its `Transform` relative to its parent (both entities' frames as
+/// `world_from_entity` makes them; the `SceneRoot`'s is the world frame) and the joint
+/// `support_joint` gives its class (a layout entity under the root is fixed). The frames follow
+/// the components, so a stage that changes a box or a model runs this again.
+pub fn hang_frames(world: &mut World) {
+    let mut nodes = world.query_filtered::<(
+        Entity,
+        &Panoptic,
+        &OrientedBox,
+        Option<&CadModel>,
+        &ChildOf,
+    ), With<SceneEntity>>();
+    let poses: HashMap<Entity, Affine3A> = nodes
+        .iter(world)
+        .map(|(e, _, gbox, cad, _)| (e, world_from_entity(&gbox.0, cad)))
+        .collect();
+    let frames: Vec<(Entity, Transform, JointSpec)> = nodes
+        .iter(world)
+        .map(|(e, panoptic, _, cad, child_of)| {
+            let parent_pose = poses.get(&child_of.parent()).copied();
+            let joint = if parent_pose.is_none() && panoptic.kind == EntityKind::Layout {
+                JointSpec::FIXED
+            } else {
+                support_joint(panoptic.class.as_str(), cad.is_some())
+            };
+            let local = parent_pose.unwrap_or(Affine3A::IDENTITY).inverse() * poses[&e];
+            (e, transform_of(local), joint)
+        })
+        .collect();
+    for (e, transform, spec) in frames {
+        world
+            .entity_mut(e)
+            .insert((transform, Joint { spec, value: 0.0 }));
+    }
 }
 
 /// Makes the proximal pair entities those of `graph`'s edges: pairs that stay are kept (so no

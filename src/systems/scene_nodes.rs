@@ -10,7 +10,6 @@ use std::collections::{BTreeMap, HashMap};
 
 use bevy::ecs::system::{SystemParam, SystemState};
 use bevy::prelude::*;
-use glam::Mat4;
 
 use crate::components::{
     CadModel, Joint, ModelPart, OrientedBox, Panoptic, ProximalPairQuery, SceneEntity,
@@ -94,7 +93,7 @@ impl SceneNodes<'_, '_> {
                 kind: panoptic.kind,
                 bbox: bbox.0.into(),
                 planes: planes.0.iter().map(Plane::to_array).collect(),
-                cad: cad.map(placement),
+                cad: cad.map(CadPlacement::from),
                 joints: joints.remove(e).unwrap_or_default(),
                 parts: Vec::new(),
             })
@@ -124,15 +123,6 @@ impl SceneNodes<'_, '_> {
             b: rows[j].1.0.clone(),
         }));
         ContactGraph { nodes, edges }
-    }
-}
-
-fn placement(cad: &CadModel) -> CadPlacement {
-    CadPlacement {
-        model: cad.model.clone(),
-        world_from_model: Mat4::from(cad.world_from_model).to_cols_array(),
-        scale: cad.scale,
-        alignment_error: cad.alignment_error,
     }
 }
 

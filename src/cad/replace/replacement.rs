@@ -190,10 +190,12 @@ pub fn align_scene_reusing(
 const SWAP_SLACK_RATIO: f32 = 0.5;
 const SWAP_SLACK_M: f32 = 0.01;
 
-/// What the physical check placed: every checked object's record, and the library models it
+/// What the physical check placed: every checked object's record, the placement of each object
+/// placed without conflict (by id, in the order of the ids checked), and the library models it
 /// built to an object's size that a placement uses (the database does not hold them).
 pub struct Placements {
     pub records: Vec<ReplacementRecord>,
+    pub placed: Vec<(String, CadPlacement)>,
     pub built: Vec<DatabaseModel>,
 }
 
@@ -214,18 +216,18 @@ pub struct ReplacementRecord {
 
 /// The global physical check (PhysicalCheck): chooses among the aligned candidates of the
 /// objects `ids` (`alignments`, best first) so that models neither interpenetrate nor overhang
-/// their supports, snaps them onto what holds them (as `graph`'s support edges say), and writes
-/// each placement into its node's `cad` (the scale there is the geometric mean of what is left
-/// in `world_from_model`: a library model is built to its fitted size instead, and the models
-/// so built that placements use are returned beside the records) with its alignment error
-/// measured again on `points` (the check moves models by millimetres to centimetres). An
-/// object whose final placement still conflicts gets no `cad` and keeps its segment mesh,
+/// their supports, snaps them onto what holds them (as `graph`'s support edges say), and returns
+/// each placement (the scale there is the geometric mean of what is left in `world_from_model`:
+/// a library model is built to its fitted size instead, and the models so built that placements
+/// use are returned beside the records) with its alignment error measured again on `points`
+/// (the check moves models by millimetres to centimetres). An object whose final placement
+/// still conflicts gets no placement and keeps its segment mesh,
 /// which every simulator holds still: a model left 10 cm inside a counter, or on nothing,
 /// would fly off at the first step (a chair in the knee space between two counters, a book on
 /// a chair-shaped segment of label bleeding, in 7-Scenes redkitchen). Its record is returned
 /// all the same, with the conflicts.
 pub fn check_and_place(
-    graph: &mut ContactGraph,
+    graph: &ContactGraph,
     db: &CadDatabase,
     ids: &[String],
     alignments: &[Vec<Alignment>],
@@ -330,14 +332,15 @@ pub fn check_and_place(
         .collect();
     let checked = check_placements(&options, &holders, &movable, &layout, &obstacles);
     let mut records = Vec::new();
+    let mut placed = Vec::new();
     let mut built = Vec::new();
     for (i, id) in ids.iter().enumerate() {
         let (Some((k, pose)), Some(check)) = (checked.chosen[i], checked.checks[i].clone()) else {
             continue;
         };
-        let Some(node) = graph.nodes.iter_mut().find(|n| n.id == *id) else {
+        if graph.node(id).is_none() {
             continue;
-        };
+        }
         let a = &alignments[i][picked[i][k]];
         let sized = checked.built[i].as_ref();
         let entry = sized.unwrap_or(options[i][k].0);
@@ -349,12 +352,15 @@ pub fn check_and_place(
             .and_then(|p| alignment_error(p, entry, &pose))
             .unwrap_or(a.alignment_error);
         if check.conflicts == 0 {
-            node.cad = Some(CadPlacement {
-                model: model.id.clone(),
-                world_from_model: Mat4::from(pose).to_cols_array(),
-                scale: pose_scale(&pose).element_product().cbrt(),
-                alignment_error: error,
-            });
+            placed.push((
+                id.clone(),
+                CadPlacement {
+                    model: model.id.clone(),
+                    world_from_model: Mat4::from(pose).to_cols_array(),
+                    scale: pose_scale(&pose).element_product().cbrt(),
+                    alignment_error: error,
+                },
+            ));
             built.extend(sized.cloned());
         }
         records.push(ReplacementRecord {
@@ -366,7 +372,11 @@ pub fn check_and_place(
             check,
         });
     }
-    Placements { records, built }
+    Placements {
+        records,
+        placed,
+        built,
+    }
 }
 
 #[cfg(test)]
@@ -408,7 +418,7 @@ mod tests {
     #[test]
     fn an_object_left_in_conflict_keeps_its_segment_and_its_record_names_the_conflict() {
         let db = CadDatabase::parametric();
-        let mut graph = kitchen_graph();
+        let graph = kitchen_graph();
         // chair_1's only candidate stands in the middle of the table (which no model replaces
         // here: an obstacle), far deeper than pulling apart may undo; chair_2's stands where
         // chair_2 is.
@@ -417,17 +427,19 @@ mod tests {
             vec![standing_at(&db, "chair_01", &graph, "table_1")],
             vec![standing_at(&db, "chair_01", &graph, "chair_2")],
         ];
-        let records = check_and_place(&mut graph, &db, &ids, &alignments, &HashMap::new()).records;
+        let placements = check_and_place(&graph, &db, &ids, &alignments, &HashMap::new());
+        let records = &placements.records;
         let record = |id: &str| records.iter().find(|r| r.id == id).expect("record");
+        let placed = |id: &str| placements.placed.iter().any(|(p, _)| p == id);
         assert!(record("chair_1").check.conflicts > 0);
         assert!(record("chair_1").check.max_penetration_m > 0.1);
-        assert!(graph.node("chair_1").expect("node").cad.is_none());
+        assert!(!placed("chair_1"));
         assert_eq!(
             record("chair_2").check.conflicts,
             0,
             "{:?}",
             record("chair_2")
         );
-        assert!(graph.node("chair_2").expect("node").cad.is_some());
+        assert!(placed("chair_2"));
     }
 }
