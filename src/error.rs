@@ -14,10 +14,10 @@ pub enum InputError {
 }
 
 impl InputError {
-    pub fn invalid(path: impl AsRef<Path>, problem: impl Into<String>) -> Self {
+    pub fn invalid(path: impl AsRef<Path>, problem: impl std::fmt::Display) -> Self {
         Self::Invalid {
             path: path.as_ref().to_path_buf(),
-            problem: problem.into(),
+            problem: problem.to_string(),
         }
     }
 

@@ -10,6 +10,7 @@ use bevy::prelude::*;
 use glam::Affine3A;
 use serde::Serialize;
 
+use crate::base::InvalidValue;
 use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
 use crate::export::write_tree_exports;
@@ -175,10 +176,10 @@ fn add_unseen_objects(
     mut graph: ContactGraph,
     adds: &[AddedObject],
     db: &CadDatabase,
-) -> Result<ContactGraph, String> {
+) -> Result<ContactGraph, InvalidValue> {
     for (i, added) in adds.iter().enumerate() {
-        let at = |problem: String| format!("add[{i}] ({}): {problem}", added.id);
-        let (host, inside) = added.host().map_err(at)?;
+        let at = |problem: String| InvalidValue::at(format!("add[{i}] ({})", added.id), problem);
+        let (host, inside) = added.host().map_err(|e| at(e.to_string()))?;
         if graph.node(&added.id).is_some() {
             return Err(at("the scene already has a node of this id".into()));
         }
@@ -286,22 +287,22 @@ fn node_of_model(
 
 /// A step that names a node the scene lacks, or would pick up or push the room's layout, is a
 /// wrong task file: refused before anything runs, not a step that fails.
-fn check_steps_name_movable_nodes(task: &Task, graph: &ContactGraph) -> Result<(), String> {
+fn check_steps_name_movable_nodes(task: &Task, graph: &ContactGraph) -> Result<(), InvalidValue> {
     for (i, step) in task.steps.iter().enumerate() {
         for id in step.node_ids() {
             if !graph.nodes.iter().any(|n| n.id == id) {
-                return Err(format!(
-                    "steps[{i}] ({}): the scene has no node {id:?}",
-                    step.label()
+                return Err(InvalidValue::at(
+                    format!("steps[{i}] ({})", step.label()),
+                    format!("the scene has no node {id:?}"),
                 ));
             }
         }
         if let Some(id) = step.moved_object()
             && crate::scene::spec::is_layout_id(id)
         {
-            return Err(format!(
-                "steps[{i}] ({}): {id} is part of the room's layout and cannot be moved",
-                step.label()
+            return Err(InvalidValue::at(
+                format!("steps[{i}] ({})", step.label()),
+                format!("{id} is part of the room's layout and cannot be moved"),
             ));
         }
     }

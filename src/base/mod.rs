@@ -1,12 +1,14 @@
 //! The bottom layer: types and functions that every stage shares and that depend on nothing else
-//! of the crate (class ids, joint kinds and limits, the stable hash, the process's memory). Modules above may use it; it uses none
+//! of the crate (class ids, joint kinds and limits, the stable hash, the process's memory, refused values). Modules above may use it; it uses none
 //! of them.
 
 pub mod class_id;
 pub mod hash;
+pub mod invalid_value;
 pub mod joint;
 pub mod process;
 
 pub use class_id::ClassId;
 pub use hash::stable_hash;
+pub use invalid_value::InvalidValue;
 pub use joint::{JointKind, JointSpec};

@@ -26,6 +26,7 @@ use clap::ValueEnum;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
+use crate::base::InvalidValue;
 use crate::error::InputError;
 use crate::render::noise::NoiseChoice;
 use crate::scene::generate::RoomStyle;
@@ -140,22 +141,22 @@ impl Shard {
     pub const WHOLE: Shard = Shard { index: 0, count: 1 };
 
     /// `I/N` with `0 <= I < N`.
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, InvalidValue> {
         let (i, n) = text
             .split_once('/')
-            .ok_or_else(|| format!("{text:?} is not I/N"))?;
+            .ok_or_else(|| InvalidValue::whole(format!("{text:?} is not I/N")))?;
         let index: usize = i
             .trim()
             .parse()
-            .map_err(|_| format!("{i:?} in {text:?} is not a shard index"))?;
+            .map_err(|_| InvalidValue::whole(format!("{i:?} in {text:?} is not a shard index")))?;
         let count: usize = n
             .trim()
             .parse()
-            .map_err(|_| format!("{n:?} in {text:?} is not a shard count"))?;
+            .map_err(|_| InvalidValue::whole(format!("{n:?} in {text:?} is not a shard count")))?;
         if count == 0 || index >= count {
-            return Err(format!(
+            return Err(InvalidValue::whole(format!(
                 "{text:?}: the index counts from 0 and must be below the count"
-            ));
+            )));
         }
         Ok(Self { index, count })
     }
@@ -184,56 +185,57 @@ impl Manifest {
     }
 
     /// Parses a manifest whose relative paths are relative to `base`.
-    pub fn from_value(value: &Value, base: &Path) -> Result<Self, String> {
+    pub fn from_value(value: &Value, base: &Path) -> Result<Self, InvalidValue> {
         let object = value
             .as_object()
-            .ok_or("the manifest is not a JSON object")?;
-        for key in object.keys() {
-            if !["inputs", "defaults", "benchmark"].contains(&key.as_str()) {
-                return Err(format!(
-                    "unknown key {key:?} (a manifest has inputs, defaults and benchmark)"
-                ));
-            }
-        }
+            .ok_or_else(|| InvalidValue::whole("the manifest is not a JSON object"))?;
+        check_keys(object, &["inputs", "defaults", "benchmark"], "")?;
         let empty = Map::new();
         let defaults = match object.get("defaults") {
             None => &empty,
             Some(Value::Object(d)) => d,
-            Some(_) => return Err("\"defaults\" is not an object".into()),
+            Some(_) => return Err(InvalidValue::at("defaults", "not an object")),
         };
         check_keys(defaults, &OPTION_KEYS, "defaults")?;
         if defaults.contains_key("name") {
-            return Err("\"defaults\" cannot set a name: names are per input".into());
+            return Err(InvalidValue::at(
+                "defaults.name",
+                "a default cannot set a name: names are per input",
+            ));
         }
         let raw = object
             .get("inputs")
             .and_then(Value::as_array)
-            .ok_or("\"inputs\" is missing or not a list")?;
+            .ok_or_else(|| InvalidValue::at("inputs", "missing or not a list"))?;
         let mut inputs = Vec::new();
         for (i, entry) in raw.iter().enumerate() {
+            let context = format!("inputs[{i}]");
             let entry = entry
                 .as_object()
-                .ok_or_else(|| format!("inputs[{i}] is not an object"))?;
-            let context = format!("inputs[{i}]");
+                .ok_or_else(|| InvalidValue::at(&context, "not an object"))?;
             inputs.extend(resolve_entry(entry, defaults, base, &context)?);
         }
         if inputs.is_empty() {
-            return Err("\"inputs\" lists nothing to run".into());
+            return Err(InvalidValue::at("inputs", "lists nothing to run"));
         }
         let mut names = BTreeSet::new();
         for input in &inputs {
             if !names.insert(input.name.as_str()) {
-                return Err(format!(
-                    "two inputs are named {:?}: give one a \"name\" of its own",
-                    input.name
+                return Err(InvalidValue::at(
+                    "inputs",
+                    format!(
+                        "two inputs are named {:?}: give one a \"name\" of its own",
+                        input.name
+                    ),
                 ));
             }
         }
         let benchmark = match object.get("benchmark") {
             None => None,
-            Some(b) => {
-                Some(serde_json::from_value(b.clone()).map_err(|e| format!("\"benchmark\": {e}"))?)
-            }
+            Some(b) => Some(
+                serde_json::from_value(b.clone())
+                    .map_err(|e| InvalidValue::at("benchmark", e.to_string()))?,
+            ),
         };
         Ok(Self { inputs, benchmark })
     }
@@ -244,11 +246,16 @@ impl Manifest {
     }
 }
 
-fn check_keys(map: &Map<String, Value>, allowed: &[&str], context: &str) -> Result<(), String> {
+/// Refuses a key of `map` (the object at `context`) that is not `allowed`.
+fn check_keys(
+    map: &Map<String, Value>,
+    allowed: &[&str],
+    context: &str,
+) -> Result<(), InvalidValue> {
     match map.keys().find(|k| !allowed.contains(&k.as_str())) {
-        Some(key) => Err(format!(
-            "{context}: unknown key {key:?} (allowed: {})",
-            allowed.join(", ")
+        Some(key) => Err(InvalidValue::at(
+            context,
+            format!("unknown key {key:?} (allowed: {})", allowed.join(", ")),
         )),
         None => Ok(()),
     }
@@ -260,25 +267,27 @@ fn resolve_entry(
     defaults: &Map<String, Value>,
     base: &Path,
     context: &str,
-) -> Result<Vec<BatchInput>, String> {
+) -> Result<Vec<BatchInput>, InvalidValue> {
     const SOURCES: [&str; 4] = ["seed", "seeds", "spec", "sequence"];
     let sources: Vec<&str> = SOURCES
         .into_iter()
         .filter(|k| entry.contains_key(*k))
         .collect();
     let [source] = sources[..] else {
-        return Err(format!(
-            "{context}: name exactly one of \"seed\", \"seeds\", \"spec\" and \"sequence\""
+        return Err(InvalidValue::at(
+            context,
+            "name exactly one of \"seed\", \"seeds\", \"spec\" and \"sequence\"",
         ));
     };
+    let at = |key: &str, problem: String| InvalidValue::at(format!("{context}.{key}"), problem);
     let allowed: Vec<&str> = OPTION_KEYS.iter().copied().chain([source]).collect();
     check_keys(entry, &allowed, context)?;
     let option = |key: &str| entry.get(key).or_else(|| defaults.get(key));
     let options = Options::read(&option, base, context)?;
-    let path = |key: &str| -> Result<PathBuf, String> {
+    let path = |key: &str| -> Result<PathBuf, InvalidValue> {
         let text = entry[key]
             .as_str()
-            .ok_or_else(|| format!("{context}: \"{key}\" is not a path"))?;
+            .ok_or_else(|| at(key, "not a path".into()))?;
         let path = base.join(text);
         let exists = if key == "spec" {
             path.is_file()
@@ -286,26 +295,27 @@ fn resolve_entry(
             path.is_dir()
         };
         if !exists {
-            return Err(format!(
-                "{context}: {} is missing (\"{key}\": {text:?}, relative to the manifest)",
-                path.display()
+            return Err(at(
+                key,
+                format!(
+                    "{} is missing ({text:?}, relative to the manifest)",
+                    path.display()
+                ),
             ));
         }
-        std::path::absolute(&path).map_err(|e| format!("{context}: {}: {e}", path.display()))
+        std::path::absolute(&path).map_err(|e| at(key, format!("{}: {e}", path.display())))
     };
-    let name = |default: String| -> Result<String, String> {
+    let name = |default: String| -> Result<String, InvalidValue> {
         let name = match entry.get("name") {
             Some(n) => n
                 .as_str()
-                .ok_or_else(|| format!("{context}: \"name\" is not a string"))?
+                .ok_or_else(|| at("name", "not a string".into()))?
                 .to_string(),
             None => default,
         };
-        crate::file_name::check_file_name(&name).map_err(|e| format!("{context}: {e}"))?;
+        crate::file_name::check_file_name(&name).map_err(|e| at("name", e.to_string()))?;
         if RESERVED_NAMES.contains(&name.as_str()) {
-            return Err(format!(
-                "{context}: the name {name:?} is the batch folder's own"
-            ));
+            return Err(at("name", format!("{name:?} is the batch folder's own")));
         }
         Ok(name)
     };
@@ -317,17 +327,18 @@ fn resolve_entry(
         "seed" => {
             let seed = entry["seed"]
                 .as_u64()
-                .ok_or_else(|| format!("{context}: \"seed\" is not a whole number"))?;
+                .ok_or_else(|| at("seed", "not a whole number".into()))?;
             seed..seed + 1
         }
         "seeds" => {
             if entry.contains_key("name") {
-                return Err(format!(
-                    "{context}: a range of seeds is named seed_N, one name per seed"
+                return Err(at(
+                    "name",
+                    "a range of seeds is named seed_N, one name per seed".into(),
                 ));
             }
             parse_seed_range(entry["seeds"].as_str().unwrap_or_default())
-                .map_err(|e| format!("{context}: \"seeds\": {e}"))?
+                .map_err(|e| e.under(&format!("{context}.seeds")))?
         }
         "spec" => {
             let spec = path("spec")?;
@@ -344,7 +355,8 @@ fn resolve_entry(
         }
     };
     let frames = options.frames.unwrap_or(DEFAULT_GENERATED_FRAMES);
-    crate::scene::spec::check_frame_count(frames).map_err(|e| format!("{context}: {e}"))?;
+    crate::scene::spec::check_frame_count(frames)
+        .map_err(|e| e.under(&format!("{context}.frames")))?;
     seeds
         .map(|seed| {
             Ok(BatchInput {
@@ -363,16 +375,20 @@ fn resolve_entry(
 }
 
 /// `A:B`, B excluded and greater than A.
-pub fn parse_seed_range(text: &str) -> Result<std::ops::Range<u64>, String> {
+pub fn parse_seed_range(text: &str) -> Result<std::ops::Range<u64>, InvalidValue> {
     let (a, b) = text
         .split_once(':')
-        .ok_or_else(|| format!("{text:?} is not A:B"))?;
-    let a: u64 = a.parse().map_err(|e| format!("{a:?}: {e}"))?;
-    let b: u64 = b.parse().map_err(|e| format!("{b:?}: {e}"))?;
+        .ok_or_else(|| InvalidValue::whole(format!("{text:?} is not A:B")))?;
+    let a: u64 = a
+        .parse()
+        .map_err(|e| InvalidValue::whole(format!("{a:?}: {e}")))?;
+    let b: u64 = b
+        .parse()
+        .map_err(|e| InvalidValue::whole(format!("{b:?}: {e}")))?;
     if b <= a || b - a > 10_000 {
-        return Err(format!(
+        return Err(InvalidValue::whole(format!(
             "{text:?}: B must be greater than A, by at most 10000"
-        ));
+        )));
     }
     Ok(a..b)
 }
@@ -394,20 +410,21 @@ impl Options {
         option: &dyn Fn(&str) -> Option<&'a Value>,
         base: &Path,
         context: &str,
-    ) -> Result<Self, String> {
-        let bad = |key: &str, what: &str| format!("{context}: \"{key}\" is not {what}");
-        let text = |key: &str| -> Result<Option<&'a str>, String> {
+    ) -> Result<Self, InvalidValue> {
+        let at = |key: &str, problem: String| InvalidValue::at(format!("{context}.{key}"), problem);
+        let bad = |key: &str, what: &str| at(key, format!("not {what}"));
+        let text = |key: &str| -> Result<Option<&'a str>, InvalidValue> {
             option(key)
                 .map(|v| v.as_str().ok_or_else(|| bad(key, "a string")))
                 .transpose()
         };
-        let flag = |key: &str| -> Result<bool, String> {
+        let flag = |key: &str| -> Result<bool, InvalidValue> {
             option(key)
                 .map(|v| v.as_bool().ok_or_else(|| bad(key, "true or false")))
                 .transpose()
                 .map(Option::unwrap_or_default)
         };
-        let enumerated = |key: &str, values: &str| -> Result<Option<&'a str>, String> {
+        let enumerated = |key: &str, values: &str| -> Result<Option<&'a str>, InvalidValue> {
             text(key).map_err(|_| bad(key, values))
         };
         let frames = option("frames")
@@ -447,18 +464,22 @@ impl Options {
             Some(db) => {
                 let db = base.join(db);
                 if !db.join("index.json").is_file() {
-                    return Err(format!(
-                        "{context}: \"cad\": {} is not a CAD database (`iscene cad import` writes one)",
-                        db.display()
+                    return Err(at(
+                        "cad",
+                        format!(
+                            "{} is not a CAD database (`iscene cad import` writes one)",
+                            db.display()
+                        ),
                     ));
                 }
-                Some(std::path::absolute(&db).map_err(|e| format!("{context}: {e}"))?)
+                Some(std::path::absolute(&db).map_err(|e| at("cad", e.to_string()))?)
             }
         };
         let unseen = flag("unseen")?;
         if unseen && cad.is_none() {
-            return Err(format!(
-                "{context}: \"unseen\" needs a \"cad\" database to leave unsearched"
+            return Err(at(
+                "unseen",
+                "needs a \"cad\" database to leave unsearched".into(),
             ));
         }
         let evaluate = option("evaluate").is_none() || flag("evaluate")?;
@@ -497,7 +518,7 @@ mod tests {
     use serde_json::json;
 
     fn manifest(value: Value) -> Result<Manifest, String> {
-        Manifest::from_value(&value, Path::new("."))
+        Manifest::from_value(&value, Path::new(".")).map_err(|e| e.to_string())
     }
 
     #[test]

@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::base::stable_hash;
+use crate::base::{InvalidValue, stable_hash};
 
 /// Parameters of the pose noise. Lengths in metres, angles in degrees, per frame.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -36,14 +36,17 @@ impl PoseNoise {
     };
 
     /// Checks the parameters: finite, not negative, at most 5 cm or 2 degrees per frame.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), InvalidValue> {
         let lengths = [self.drift_m, self.jitter_m];
         let angles = [self.drift_deg, self.jitter_deg];
         if lengths.iter().any(|v| !(0.0..=0.05).contains(v))
             || angles.iter().any(|v| !(0.0..=2.0).contains(v))
         {
-            return Err(format!(
-                "noise.pose: {self:?}: lengths must lie in 0..0.05 m and angles in 0..2 degrees per frame"
+            return Err(InvalidValue::at(
+                "noise.pose",
+                format!(
+                    "{self:?}: lengths must lie in 0..0.05 m and angles in 0..2 degrees per frame"
+                ),
             ));
         }
         Ok(())

@@ -69,7 +69,7 @@ impl SceneWorld {
             }
             let joint_values: Vec<(String, f32)> =
                 o.joints.iter().map(|(k, v)| (k.clone(), *v)).collect();
-            let placement = spec.placement(i).map_err(|p| err(i, p))?;
+            let placement = spec.placement(i).map_err(|e| err(i, e.to_string()))?;
             let parent_of = |id: &str| {
                 index
                     .get(id)

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::Deserialize;
 
+use crate::base::InvalidValue;
 use crate::cad::db::load::read_database;
 use crate::cad::library::LibraryEntry;
 use crate::cad::{CadModel, ParametricLibrary};
@@ -148,9 +149,11 @@ pub const MAX_OBJECTS: usize = 500;
 pub const MAX_FRAMES: usize = 10_000;
 
 /// Checks a frame count of a rendering.
-pub fn check_frame_count(frames: usize) -> Result<(), String> {
+pub fn check_frame_count(frames: usize) -> Result<(), InvalidValue> {
     if !(1..=MAX_FRAMES).contains(&frames) {
-        return Err(format!("{frames} frames is outside 1..{MAX_FRAMES}"));
+        return Err(InvalidValue::whole(format!(
+            "{frames} frames is outside 1..{MAX_FRAMES}"
+        )));
     }
     Ok(())
 }
@@ -228,7 +231,7 @@ impl SceneSpec {
             })
     }
 
-    pub(crate) fn validate(&self) -> Result<(), String> {
+    pub(crate) fn validate(&self) -> Result<(), InvalidValue> {
         let [rx, ry, rz] = self.room.size;
         if !(rx.is_finite() && ry.is_finite() && rz.is_finite())
             || rx < 1.0
@@ -238,31 +241,41 @@ impl SceneSpec {
             || ry > 30.0
             || rz > 6.0
         {
-            return Err(format!(
-                "room.size: {:?} is not a room (x, y in 1..30 m, height in 1.8..6 m)",
-                self.room.size
+            return Err(InvalidValue::at(
+                "room.size",
+                format!(
+                    "{:?} is not a room (x, y in 1..30 m, height in 1.8..6 m)",
+                    self.room.size
+                ),
             ));
         }
         if self.objects.is_empty() {
-            return Err("objects: a scene needs at least one object".into());
+            return Err(InvalidValue::at(
+                "objects",
+                "a scene needs at least one object",
+            ));
         }
         if self.objects.len() > MAX_OBJECTS {
-            return Err(format!(
-                "objects: {} objects, more than the {MAX_OBJECTS} a room may hold",
-                self.objects.len()
+            return Err(InvalidValue::at(
+                "objects",
+                format!(
+                    "{} objects, more than the {MAX_OBJECTS} a room may hold",
+                    self.objects.len()
+                ),
             ));
         }
         if let Some(pose) = self.noise.pose_model() {
             pose.check()?;
         }
         if let Some(frames) = self.camera.frames {
-            check_frame_count(frames).map_err(|e| format!("camera.frames: {e}"))?;
+            check_frame_count(frames).map_err(|e| e.under("camera.frames"))?;
         }
         if let Some(h) = self.camera.height
             && !(0.3..rz).contains(&h)
         {
-            return Err(format!(
-                "camera.height: {h} is outside the room (0.3..{rz} m)"
+            return Err(InvalidValue::at(
+                "camera.height",
+                format!("{h} is outside the room (0.3..{rz} m)"),
             ));
         }
         let classes = ClassTable::builtin();
@@ -275,19 +288,25 @@ impl SceneSpec {
                     .chars()
                     .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
             {
-                return Err(format!(
-                    "{key}.id: {:?} must be non-empty ASCII letters, digits, '_' or '-'",
-                    o.id
+                return Err(InvalidValue::at(
+                    format!("{key}.id"),
+                    format!(
+                        "{:?} must be non-empty ASCII letters, digits, '_' or '-'",
+                        o.id
+                    ),
                 ));
             }
             if is_layout_id(&o.id) {
-                return Err(format!(
-                    "{key}.id: {:?} is reserved for the room's layout",
-                    o.id
+                return Err(InvalidValue::at(
+                    format!("{key}.id"),
+                    format!("{:?} is reserved for the room's layout", o.id),
                 ));
             }
             if index.insert(o.id.as_str(), i).is_some() {
-                return Err(format!("{key}.id: duplicate id {:?}", o.id));
+                return Err(InvalidValue::at(
+                    format!("{key}.id"),
+                    format!("duplicate id {:?}", o.id),
+                ));
             }
             let Some(info) = classes.get(&o.class) else {
                 let known: Vec<_> = classes
@@ -295,16 +314,18 @@ impl SceneSpec {
                     .filter(|(_, c)| c.kind != EntityKind::Layout)
                     .map(|(n, _)| n)
                     .collect();
-                return Err(format!(
-                    "{key}.class: unknown class {:?} (known: {})",
-                    o.class,
-                    known.join(", ")
+                return Err(InvalidValue::at(
+                    format!("{key}.class"),
+                    format!("unknown class {:?} (known: {})", o.class, known.join(", ")),
                 ));
             };
             if info.kind == EntityKind::Layout {
-                return Err(format!(
-                    "{key}.class: {:?} is layout; the room makes its own floor, walls and ceiling",
-                    o.class
+                return Err(InvalidValue::at(
+                    format!("{key}.class"),
+                    format!(
+                        "{:?} is layout; the room makes its own floor, walls and ceiling",
+                        o.class
+                    ),
                 ));
             }
             if let Some(size) = o.size {
@@ -312,33 +333,44 @@ impl SceneSpec {
                     s.is_finite() && *s >= info.size_min[k] && *s <= info.size_max[k]
                 });
                 if !ok {
-                    return Err(format!(
-                        "{key}.size: {size:?} outside the {} range {} .. {}",
-                        o.class, info.size_min, info.size_max
+                    return Err(InvalidValue::at(
+                        format!("{key}.size"),
+                        format!(
+                            "{size:?} outside the {} range {} .. {}",
+                            o.class, info.size_min, info.size_max
+                        ),
                     ));
                 }
             }
             if let Some(model) = &o.model {
                 match self.model_source(model) {
                     None if self.cad.is_empty() => {
-                        return Err(format!("{key}.model: unknown model {model:?}"));
+                        return Err(InvalidValue::at(
+                            format!("{key}.model"),
+                            format!("unknown model {model:?}"),
+                        ));
                     }
                     None => {
-                        return Err(format!(
-                            "{key}.model: unknown model {model:?} (neither built in nor in the databases of \"cad\": {})",
-                            self.cad.join(", ")
+                        return Err(InvalidValue::at(
+                            format!("{key}.model"),
+                            format!(
+                                "unknown model {model:?} (neither built in nor in the databases of \"cad\": {})",
+                                self.cad.join(", ")
+                            ),
                         ));
                     }
                     Some(e) if e.class() != o.class => {
-                        return Err(format!(
-                            "{key}.model: {model:?} is a {}, not a {}",
-                            e.class(),
-                            o.class
+                        return Err(InvalidValue::at(
+                            format!("{key}.model"),
+                            format!("{model:?} is a {}, not a {}", e.class(), o.class),
                         ));
                     }
                     Some(ModelSource::Database(_)) if o.size.is_some() => {
-                        return Err(format!(
-                            "{key}.size: {model:?} is a database model and keeps the size its author gave it"
+                        return Err(InvalidValue::at(
+                            format!("{key}.size"),
+                            format!(
+                                "{model:?} is a database model and keeps the size its author gave it"
+                            ),
                         ));
                     }
                     Some(_) => {}
@@ -347,14 +379,20 @@ impl SceneSpec {
             if let Some(y) = o.yaw_deg
                 && !y.is_finite()
             {
-                return Err(format!("{key}.yaw_deg: not a finite number"));
+                return Err(InvalidValue::at(
+                    format!("{key}.yaw_deg"),
+                    "not a finite number",
+                ));
             }
             for (name, value) in &o.joints {
                 if !value.is_finite() {
-                    return Err(format!("{key}.joints.{name}: not a finite number"));
+                    return Err(InvalidValue::at(
+                        format!("{key}.joints.{name}"),
+                        "not a finite number",
+                    ));
                 }
             }
-            self.placement(i).map_err(|p| format!("{key}.{p}"))?;
+            self.placement(i).map_err(|e| e.under(&key))?;
         }
         // References must resolve and the support relation must be a tree.
         for (i, o) in self.objects.iter().enumerate() {
@@ -366,13 +404,16 @@ impl SceneSpec {
                 }
                 let Some(&p) = index.get(parent) else {
                     let key = if current.on.is_some() { "on" } else { "in" };
-                    return Err(format!(
-                        "objects[{}].{key}: no object with id {parent:?}",
-                        seen[seen.len() - 1]
+                    return Err(InvalidValue::at(
+                        format!("objects[{}].{key}", seen[seen.len() - 1]),
+                        format!("no object with id {parent:?}"),
                     ));
                 };
                 if seen.contains(&p) {
-                    return Err(format!("objects[{i}].on: support cycle through {parent:?}"));
+                    return Err(InvalidValue::at(
+                        format!("objects[{i}].on"),
+                        format!("support cycle through {parent:?}"),
+                    ));
                 }
                 seen.push(p);
                 current = &self.objects[p];
@@ -382,11 +423,11 @@ impl SceneSpec {
     }
 
     /// The validated placement of object `i`; errors name the offending key.
-    pub fn placement(&self, i: usize) -> Result<Placement, String> {
+    pub fn placement(&self, i: usize) -> Result<Placement, InvalidValue> {
         let o = &self.objects[i];
         let offset = o.offset.unwrap_or([0.0, 0.0]);
         if !offset.iter().all(|v| v.is_finite()) {
-            return Err("offset: not finite".into());
+            return Err(InvalidValue::at("offset", "not finite"));
         }
         match (&o.position, &o.on, &o.inside) {
             (Some(p), None, None) => {
@@ -397,19 +438,26 @@ impl SceneSpec {
                     || p[0] >= rx
                     || p[1] >= ry
                 {
-                    return Err(format!(
-                        "position: {p:?} is outside the floor [0, {rx}] x [0, {ry}]"
+                    return Err(InvalidValue::at(
+                        "position",
+                        format!("{p:?} is outside the floor [0, {rx}] x [0, {ry}]"),
                     ));
                 }
                 if o.offset.is_some() {
-                    return Err("offset: only for objects given with \"on\" or \"in\"".into());
+                    return Err(InvalidValue::at(
+                        "offset",
+                        "only for objects given with \"on\" or \"in\"",
+                    ));
                 }
                 Ok(Placement::Floor { x: p[0], y: p[1] })
             }
             (None, Some(parent), None) => match wall_index(parent) {
                 Some(wall) if wall < 4 => {
                     let Some([along, height]) = o.offset else {
-                        return Err("offset: an object on a wall needs [distance along the wall, height of its bottom]".into());
+                        return Err(InvalidValue::at(
+                            "offset",
+                            "an object on a wall needs [distance along the wall, height of its bottom]",
+                        ));
                     };
                     Ok(Placement::OnWall {
                         wall,
@@ -417,9 +465,13 @@ impl SceneSpec {
                         height,
                     })
                 }
-                Some(_) => Err(format!("on: {parent:?}: the room has walls wall_0..wall_3")),
-                None if is_layout_id(parent) => Err(format!(
-                    "on: {parent:?}: give floor objects a \"position\" instead"
+                Some(_) => Err(InvalidValue::at(
+                    "on",
+                    format!("{parent:?}: the room has walls wall_0..wall_3"),
+                )),
+                None if is_layout_id(parent) => Err(InvalidValue::at(
+                    "on",
+                    format!("{parent:?}: give floor objects a \"position\" instead"),
                 )),
                 None => Ok(Placement::OnObject {
                     parent: parent.clone(),
@@ -430,11 +482,18 @@ impl SceneSpec {
                 parent: parent.clone(),
                 offset,
             }),
-            (None, None, Some(parent)) => Err(format!("in: {parent:?} is not an object")),
-            (None, None, None) => {
-                Err("position: give either \"position\", \"on\" or \"in\"".into())
-            }
-            _ => Err("position: give only one of \"position\", \"on\" and \"in\"".into()),
+            (None, None, Some(parent)) => Err(InvalidValue::at(
+                "in",
+                format!("{parent:?} is not an object"),
+            )),
+            (None, None, None) => Err(InvalidValue::at(
+                "position",
+                "give either \"position\", \"on\" or \"in\"",
+            )),
+            _ => Err(InvalidValue::at(
+                "position",
+                "give only one of \"position\", \"on\" and \"in\"",
+            )),
         }
     }
 }

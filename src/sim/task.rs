@@ -5,6 +5,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use crate::base::InvalidValue;
 use crate::error::InputError;
 use crate::sim::actions::Action;
 use crate::sim::robot::RobotSpec;
@@ -55,14 +56,14 @@ pub struct AddedObject {
 
 impl AddedObject {
     /// The node it goes into or onto, and whether into.
-    pub fn host(&self) -> Result<(&str, bool), String> {
+    pub fn host(&self) -> Result<(&str, bool), InvalidValue> {
         match (&self.inside, &self.on) {
             (Some(c), None) => Ok((c, true)),
             (None, Some(s)) => Ok((s, false)),
-            _ => Err(format!(
+            _ => Err(InvalidValue::whole(format!(
                 "add {:?}: give exactly one of \"in\" and \"on\"",
                 self.id
-            )),
+            ))),
         }
     }
 }
@@ -85,7 +86,7 @@ impl Task {
 
     /// Every number a task sets, within what a room and a mobile manipulator can mean: a
     /// robot of 1e20 m or a push of 1e30 m is a broken file, not a long job.
-    fn check_limits(&self) -> Result<(), String> {
+    fn check_limits(&self) -> Result<(), InvalidValue> {
         let r = self.robot;
         for (key, value, max) in [
             ("robot.radius", r.radius, MAX_ROBOT_RADIUS_M),
@@ -98,7 +99,10 @@ impl Task {
             ),
         ] {
             if !(value.is_finite() && value > 0.0 && value <= max) {
-                return Err(format!("{key}: {value} m is outside (0, {max}] m"));
+                return Err(InvalidValue::at(
+                    key,
+                    format!("{value} m is outside (0, {max}] m"),
+                ));
             }
         }
         if let Some(s) = self.start
@@ -108,46 +112,55 @@ impl Task {
                 .all(|x| x.is_finite() && x.abs() <= MAX_COORDINATE_M)
                 && s.yaw_deg.is_finite())
         {
-            return Err(format!(
-                "start: position and yaw_deg must be finite numbers, the position within {MAX_COORDINATE_M} m"
+            return Err(InvalidValue::at(
+                "start",
+                format!(
+                    "position and yaw_deg must be finite numbers, the position within {MAX_COORDINATE_M} m"
+                ),
             ));
         }
         if self.steps.len() > MAX_STEPS {
-            return Err(format!(
-                "steps: {} steps, more than {MAX_STEPS}",
-                self.steps.len()
+            return Err(InvalidValue::at(
+                "steps",
+                format!("{} steps, more than {MAX_STEPS}", self.steps.len()),
             ));
         }
         if self.goals.len() > MAX_GOALS {
-            return Err(format!(
-                "goals: {} goals, more than {MAX_GOALS}",
-                self.goals.len()
+            return Err(InvalidValue::at(
+                "goals",
+                format!("{} goals, more than {MAX_GOALS}", self.goals.len()),
             ));
         }
         if self.add.len() > MAX_ADDED {
-            return Err(format!(
-                "add: {} objects, more than {MAX_ADDED}",
-                self.add.len()
+            return Err(InvalidValue::at(
+                "add",
+                format!("{} objects, more than {MAX_ADDED}", self.add.len()),
             ));
         }
         for (i, added) in self.add.iter().enumerate() {
             for id in [&added.id, &added.model] {
-                crate::file_name::check_file_name(id).map_err(|e| format!("add[{i}]: {e}"))?;
+                crate::file_name::check_file_name(id)
+                    .map_err(|e| InvalidValue::at(format!("add[{i}]"), e.to_string()))?;
             }
-            let (host, _) = added.host().map_err(|e| format!("add[{i}]: {e}"))?;
-            crate::file_name::check_file_name(host).map_err(|e| format!("add[{i}]: {e}"))?;
+            let (host, _) = added.host().map_err(|e| e.under(&format!("add[{i}]")))?;
+            crate::file_name::check_file_name(host)
+                .map_err(|e| InvalidValue::at(format!("add[{i}]"), e.to_string()))?;
         }
         for (i, step) in self.steps.iter().enumerate() {
             let key = format!("steps[{i}]");
             for id in step.node_ids() {
-                crate::file_name::check_file_name(id).map_err(|e| format!("{key}: {e}"))?;
+                crate::file_name::check_file_name(id)
+                    .map_err(|e| InvalidValue::at(&key, e.to_string()))?;
             }
             match step {
                 Action::Open { value: Some(v), .. }
                     if !(v.is_finite() && v.abs() <= MAX_JOINT_VALUE) =>
                 {
-                    return Err(format!(
-                        "{key}.value: {v} is not a joint value within {MAX_JOINT_VALUE} (radians or metres)"
+                    return Err(InvalidValue::at(
+                        format!("{key}.value"),
+                        format!(
+                            "{v} is not a joint value within {MAX_JOINT_VALUE} (radians or metres)"
+                        ),
                     ));
                 }
                 Action::Push {
@@ -156,13 +169,17 @@ impl Task {
                     ..
                 } => {
                     if !(distance.is_finite() && *distance > 0.0 && *distance <= MAX_PUSH_M) {
-                        return Err(format!(
-                            "{key}.distance: {distance} m is outside (0, {MAX_PUSH_M}] m"
+                        return Err(InvalidValue::at(
+                            format!("{key}.distance"),
+                            format!("{distance} m is outside (0, {MAX_PUSH_M}] m"),
                         ));
                     }
                     let length = (direction[0] * direction[0] + direction[1] * direction[1]).sqrt();
                     if !(length.is_finite() && length > 1e-6) {
-                        return Err(format!("{key}.direction: {direction:?} is not a direction"));
+                        return Err(InvalidValue::at(
+                            format!("{key}.direction"),
+                            format!("{direction:?} is not a direction"),
+                        ));
                     }
                 }
                 _ => {}

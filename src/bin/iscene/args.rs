@@ -429,6 +429,6 @@ pub(crate) fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), Str
 }
 
 /// `A:B` seeds, B excluded and greater than A.
-fn parse_seeds(text: &str) -> Result<(u64, u64), String> {
+fn parse_seeds(text: &str) -> Result<(u64, u64), iscene::base::InvalidValue> {
     iscene::batch::manifest::parse_seed_range(text).map(|r| (r.start, r.end))
 }
