@@ -84,8 +84,18 @@ impl Reader {
     }
 }
 
+/// A thread's scratch folder, removed with the thread (a test run leaves nothing in the
+/// temporary folder).
+struct Scratch(PathBuf);
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 thread_local! {
-    static SCRATCH: RefCell<Option<PathBuf>> = const { RefCell::new(None) };
+    static SCRATCH: RefCell<Option<Scratch>> = const { RefCell::new(None) };
 }
 
 /// This thread's scratch folder, made empty.
@@ -96,8 +106,11 @@ fn scratch() -> PathBuf {
             .get_or_insert_with(|| {
                 let thread = format!("{:?}", std::thread::current().id());
                 let tag: String = thread.chars().filter(char::is_ascii_digit).collect();
-                std::env::temp_dir().join(format!("iscene-fuzz-{}-{tag}", std::process::id()))
+                Scratch(
+                    std::env::temp_dir().join(format!("iscene-fuzz-{}-{tag}", std::process::id())),
+                )
             })
+            .0
             .clone();
         let _ = std::fs::remove_dir_all(&dir);
         let _ = std::fs::create_dir_all(&dir);
