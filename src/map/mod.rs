@@ -1,5 +1,5 @@
 //! The volumetric map: a hashed TSDF of voxel blocks with a segment label per voxel, and the
-//! labelled marching cubes that turns it into meshes.
+//! labelled marching cubes that turns it into meshes, and the colours it saw on a surface.
 
 pub mod agreement;
 pub mod depth_precision;
@@ -7,6 +7,7 @@ pub mod frame_labels;
 pub mod free_space;
 pub mod memory_budget;
 pub mod mesh;
+pub mod seen_color;
 pub mod tsdf;
 
 pub use frame_labels::FrameLabels;

@@ -1,5 +1,6 @@
 //! The KinematicTree stage: every scene entity becomes a link (its `LinkBody`: mesh, collision
-//! pieces, mass properties), every moving part of its CAD model a child entity with its own joint,
+//! pieces, mass properties, the colour the camera saw on it), every moving part of its CAD model
+//! a child entity with its own joint,
 //! and the whole transform hierarchy is read off as the `SceneKinematicTree` the exports and the
 //! physics check use. Reading the tree from the ECS (not from the contact graph) means it can be
 //! read again after any simulated action.
@@ -22,6 +23,7 @@ use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
 use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneGravity;
+use crate::systems::link_colors::paint_links_as_seen;
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 use crate::systems::scene_nodes::read_contact_graph;
 use crate::systems::stages::record_failure;
@@ -52,6 +54,7 @@ fn kinematic_tree_stage(world: &mut World) -> Result<(), IsceneError> {
     let graph = read_contact_graph(world);
     let db = world.get_resource::<SceneModels>().map(|l| l.0.clone());
     spawn_node_links(world, &graph, db.as_deref());
+    paint_links_as_seen(world)?;
     let tree = read_kinematic_tree(world)
         .map_err(|problem| IsceneError::Internal(format!("kinematic tree: {problem}")))?;
     world.insert_resource(SceneKinematicTree(tree));

@@ -6,6 +6,7 @@ pub mod contact_graph;
 pub mod export;
 pub mod ingest;
 pub mod kinematic_tree;
+pub mod link_colors;
 pub mod motion_physics;
 pub mod panoptic_mapping;
 pub mod physics_validation;

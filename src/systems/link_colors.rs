@@ -1,0 +1,83 @@
+//! Part of the KinematicTree stage: every link takes the colour the camera saw on its surface
+//! (`map::seen_color`), so the exported twin (URDF, MJCF, glTF) and the viewer look like the
+//! room. A model's door takes the colour seen on that door, its carcass the colour seen on the
+//! carcass; a link the camera did not see enough of keeps its model's colour.
+
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use glam::{Affine3A, Mat4};
+use rayon::prelude::*;
+
+use crate::components::LinkBody;
+use crate::graph::build::surface_points;
+use crate::kinematics::link::LinkGeometry;
+use crate::map::SegmentLabel;
+use crate::map::seen_color::seen_color;
+use crate::systems::contact_graph::SceneGravity;
+use crate::systems::kinematic_tree::{ReadTreeError, read_kinematic_tree_entities};
+use crate::systems::panoptic_mapping::{PanopticMap, PanopticSurface};
+
+/// Surface samples per link lie this many voxels apart: finer adds nothing, as the map holds
+/// one colour per voxel.
+const SAMPLE_SPACING_VOXELS: f32 = 2.0;
+
+/// Gives the link bodies of `world`'s kinematic tree the colours the map saw on their surfaces.
+/// An object's links read only its own voxels (its entity's segment labels); an object the map
+/// did not extract (a counter found from geometry) reads any surface voxel at its links. Does
+/// nothing without a map (a scene read from a folder).
+pub fn paint_links_as_seen(world: &mut World) -> Result<(), ReadTreeError> {
+    if !world.contains_resource::<PanopticMap>() {
+        return Ok(());
+    }
+    let (tree, entities) = read_kinematic_tree_entities(world)?;
+    let (Some(map), Some(gravity)) = (
+        world.get_resource::<PanopticMap>(),
+        world.get_resource::<SceneGravity>(),
+    ) else {
+        return Ok(());
+    };
+    let tsdf = &map.0.tsdf;
+    let map_from_aligned =
+        Affine3A::from_mat4(Mat4::from_cols_array(&gravity.0.aligned_from_world)).inverse();
+    let labels: HashMap<&str, HashSet<SegmentLabel>> = world
+        .get_resource::<PanopticSurface>()
+        .map(|s| {
+            s.entities
+                .iter()
+                .map(|e| (e.id.as_str(), e.labels.iter().copied().collect()))
+                .collect()
+        })
+        .unwrap_or_default();
+    let poses = tree.world_from_links();
+    let spacing = SAMPLE_SPACING_VOXELS * tsdf.voxel_size;
+    let painted: Vec<Option<LinkGeometry>> = tree
+        .links
+        .par_iter()
+        .zip(&poses)
+        .map(|(link, pose)| {
+            let geometry = link.geometry.as_ref()?;
+            let own = link.node.as_deref().and_then(|id| labels.get(id));
+            let map_from_link = map_from_aligned * *pose;
+            let samples = surface_points(&geometry.visual, spacing).points;
+            let color = seen_color(
+                tsdf,
+                samples.iter().map(|p| map_from_link.transform_point3(*p)),
+                |label| own.is_none_or(|own| own.contains(&label)),
+            )?;
+            Some(LinkGeometry {
+                color,
+                ..(**geometry).clone()
+            })
+        })
+        .collect();
+    for (entity, geometry) in entities.into_iter().zip(painted) {
+        if let Some(geometry) = geometry {
+            world
+                .entity_mut(entity)
+                .insert(LinkBody(Arc::new(geometry)));
+        }
+    }
+    Ok(())
+}
