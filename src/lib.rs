@@ -22,6 +22,7 @@ pub mod io;
 pub mod kinematics;
 pub mod map;
 pub mod panoptic;
+pub mod perception;
 pub mod pipeline;
 pub mod progress;
 pub mod render;

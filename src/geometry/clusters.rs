@@ -1,5 +1,6 @@
 //! Euclidean clusters of points on a voxel grid: points whose cells touch (26-neighbourhood)
-//! belong together. Used to drop the stray pieces a noisy segmentation leaves on an entity.
+//! belong together. Used to drop the stray pieces a noisy segmentation leaves on an entity, and
+//! to tell a front's handles apart.
 
 use std::collections::HashMap;
 
@@ -8,6 +9,24 @@ use glam::{IVec3, Vec3};
 /// Per point, whether it belongs to the largest cluster (most points) at grid resolution `cell`
 /// metres; ties keep the cluster that starts first.
 pub fn in_largest_cluster(points: &[Vec3], cell: f32) -> Vec<bool> {
+    let roots = cluster_roots(points, cell);
+    let mut count: HashMap<usize, usize> = HashMap::new();
+    for r in roots.iter().flatten() {
+        *count.entry(*r).or_default() += 1;
+    }
+    let best = count
+        .iter()
+        .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+        .map(|(r, _)| *r);
+    roots
+        .into_iter()
+        .map(|r| r.is_some() && r == best)
+        .collect()
+}
+
+/// Per point, its cluster at grid resolution `cell` metres, named by the cluster's first cell in
+/// the order of the points (`None` for a point that is not finite).
+pub fn cluster_roots(points: &[Vec3], cell: f32) -> Vec<Option<usize>> {
     let key = |p: &Vec3| (*p / cell).floor().as_ivec3();
     let mut cells: HashMap<IVec3, usize> = HashMap::new();
     for p in points.iter().filter(|p| p.is_finite()) {
@@ -37,19 +56,9 @@ pub fn in_largest_cluster(points: &[Vec3], cell: f32) -> Vec<bool> {
             }
         }
     }
-    let mut count = vec![0usize; cells.len()];
-    let mut root_of_point = Vec::with_capacity(points.len());
-    for p in points {
-        let root = p.is_finite().then(|| find(&mut parent, cells[&key(p)]));
-        if let Some(r) = root {
-            count[r] += 1;
-        }
-        root_of_point.push(root);
-    }
-    let best = (0..count.len()).max_by(|a, b| count[*a].cmp(&count[*b]).then(b.cmp(a)));
-    root_of_point
-        .into_iter()
-        .map(|r| r.is_some() && r == best)
+    points
+        .iter()
+        .map(|p| p.is_finite().then(|| find(&mut parent, cells[&key(p)])))
         .collect()
 }
 
