@@ -253,6 +253,14 @@ mod tests {
             .collect()
     }
 
+    /// The handles found on the test front (3 mm of depth noise) with `extra` points added.
+    fn handles_with(extra: Vec<Vec3>) -> (Front, Vec<Handle>) {
+        let (front, mut points) = front_points(0.003);
+        points.extend(extra);
+        let handles = find_handles(&front, &points);
+        (front, handles)
+    }
+
     fn rect() -> FrontRect {
         FrontRect {
             right: (-0.3, 0.3),
@@ -262,13 +270,11 @@ mod tests {
 
     #[test]
     fn a_vertical_bar_near_the_right_edge_is_a_door_hinged_on_the_left() {
-        let (front, mut points) = front_points(0.003);
-        points.extend(bar(
+        let (front, handles) = handles_with(bar(
             Vec3::new(0.52, 0.0, 0.45),
             Vec3::new(0.52, 0.0, 0.65),
             0.035,
         ));
-        let handles = find_handles(&front, &points);
         assert_eq!(handles.len(), 1, "{handles:?}");
         let h = handles[0];
         assert_eq!(h.kind, HandleKind::Bar);
@@ -290,35 +296,32 @@ mod tests {
 
     #[test]
     fn a_centred_horizontal_bar_is_a_drawer_and_a_high_one_on_a_tall_part_a_flap() {
-        let (front, mut points) = front_points(0.003);
-        points.extend(bar(
+        let (front, handles) = handles_with(bar(
             Vec3::new(0.2, 0.0, 0.5),
             Vec3::new(0.4, 0.0, 0.5),
             0.03,
         ));
-        let h = find_handles(&front, &points)[0];
+        let h = handles[0];
         assert_eq!(h.kind, HandleKind::Bar);
         assert!(h.axis.x.abs() > 0.99, "{h:?}");
         assert_eq!(part_motion(&front, &rect(), &h), PartMotion::Drawer);
-        let (front, mut points) = front_points(0.003);
-        points.extend(bar(
+        let (front, handles) = handles_with(bar(
             Vec3::new(0.2, 0.0, 0.83),
             Vec3::new(0.4, 0.0, 0.83),
             0.03,
         ));
-        let h = find_handles(&front, &points)[0];
-        assert_eq!(part_motion(&front, &rect(), &h), PartMotion::Flap);
+        assert_eq!(part_motion(&front, &rect(), &handles[0]), PartMotion::Flap);
     }
 
     #[test]
     fn a_small_round_knob_is_a_knob_and_opens_a_door_when_off_centre() {
-        let (front, mut points) = front_points(0.003);
-        for i in 0..12 {
-            let a = i as f32 / 12.0 * std::f32::consts::TAU;
-            let p = Vec3::new(0.08 + 0.015 * a.cos(), -0.03, 0.5 + 0.015 * a.sin());
-            points.push(p);
-        }
-        let handles = find_handles(&front, &points);
+        let ring = (0..12)
+            .map(|i| {
+                let a = i as f32 / 12.0 * std::f32::consts::TAU;
+                Vec3::new(0.08 + 0.015 * a.cos(), -0.03, 0.5 + 0.015 * a.sin())
+            })
+            .collect();
+        let (front, handles) = handles_with(ring);
         assert_eq!(handles.len(), 1, "{handles:?}");
         assert_eq!(handles[0].kind, HandleKind::Knob);
         assert!(handles[0].length < MAX_KNOB_WIDTH_M);
