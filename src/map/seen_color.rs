@@ -4,6 +4,7 @@
 
 use glam::{IVec3, Vec3};
 
+use crate::base::srgb::srgb_to_linear;
 use crate::map::tsdf::{SegmentLabel, TsdfMap};
 
 /// Fewer seen points than this say nothing about a surface's colour: it keeps its own.
@@ -51,16 +52,6 @@ pub fn seen_color(
         }
     }
     (seen >= MIN_SEEN_POINTS).then(|| sum.map(|s| (s / seen as f64) as f32))
-}
-
-/// An 8-bit sRGB channel as linear light in 0..1 (the sRGB transfer curve).
-pub fn srgb_to_linear(c: u8) -> f32 {
-    let c = f32::from(c) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 #[cfg(test)]

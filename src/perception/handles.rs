@@ -10,6 +10,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::geometry::clusters::cluster_roots;
+use crate::map::median;
 
 /// How far out of the front plane a handle stands, metres: closer is the front's own relief (a
 /// groove, a frame), farther is something standing in front of the furniture.
@@ -82,11 +83,7 @@ pub fn front_plane_offset(front: &Front, points: &[Vec3]) -> Option<f32> {
         .map(|p| front.local(*p).z)
         .filter(|d| d.abs() <= 0.05)
         .collect();
-    if offsets.is_empty() {
-        return None;
-    }
-    let mid = offsets.len() / 2;
-    Some(*offsets.select_nth_unstable_by(mid, f32::total_cmp).1)
+    (!offsets.is_empty()).then(|| median(&mut offsets))
 }
 
 /// The handles on `front` among `points` (an object's observed surface, world frame): clusters

@@ -54,9 +54,9 @@ fn kinematic_tree_stage(world: &mut World) -> Result<(), IsceneError> {
     let graph = read_contact_graph(world);
     let db = world.get_resource::<SceneModels>().map(|l| l.0.clone());
     spawn_node_links(world, &graph, db.as_deref());
-    paint_links_as_seen(world)?;
-    let tree = read_kinematic_tree(world)
+    let (mut tree, entities) = read_kinematic_tree_entities(world)
         .map_err(|problem| IsceneError::Internal(format!("kinematic tree: {problem}")))?;
+    paint_links_as_seen(world, &mut tree, &entities);
     world.insert_resource(SceneKinematicTree(tree));
     Ok(())
 }

@@ -13,30 +13,27 @@ use rayon::prelude::*;
 use crate::components::LinkBody;
 use crate::graph::build::surface_points;
 use crate::kinematics::link::LinkGeometry;
+use crate::kinematics::tree::KinematicTree;
 use crate::map::SegmentLabel;
 use crate::map::seen_color::seen_color;
 use crate::systems::contact_graph::SceneGravity;
-use crate::systems::kinematic_tree::{ReadTreeError, read_kinematic_tree_entities};
 use crate::systems::panoptic_mapping::{PanopticMap, PanopticSurface};
 
 /// Surface samples per link lie this many voxels apart: finer adds nothing, as the map holds
 /// one colour per voxel.
 const SAMPLE_SPACING_VOXELS: f32 = 2.0;
 
-/// Gives the link bodies of `world`'s kinematic tree the colours the map saw on their surfaces.
-/// An object's links read only its own voxels (its entity's segment labels); an object the map
-/// did not extract (a counter found from geometry) reads any surface voxel at its links. Does
-/// nothing without a map (a scene read from a folder).
-pub fn paint_links_as_seen(world: &mut World) -> Result<(), ReadTreeError> {
-    if !world.contains_resource::<PanopticMap>() {
-        return Ok(());
-    }
-    let (tree, entities) = read_kinematic_tree_entities(world)?;
+/// Gives the links of `tree` (read off `world`, `entities[l]` holding link `l`) the colours the
+/// map saw on their surfaces, in the tree and on the entities' link bodies alike. An object's
+/// links read only its own voxels (its entity's segment labels); an object the map did not
+/// extract (a counter found from geometry) reads any surface voxel at its links. Does nothing
+/// without a map (a scene read from a folder).
+pub fn paint_links_as_seen(world: &mut World, tree: &mut KinematicTree, entities: &[Entity]) {
     let (Some(map), Some(gravity)) = (
         world.get_resource::<PanopticMap>(),
         world.get_resource::<SceneGravity>(),
     ) else {
-        return Ok(());
+        return;
     };
     let tsdf = &map.0.tsdf;
     let map_from_aligned =
@@ -52,7 +49,7 @@ pub fn paint_links_as_seen(world: &mut World) -> Result<(), ReadTreeError> {
         .unwrap_or_default();
     let poses = tree.world_from_links();
     let spacing = SAMPLE_SPACING_VOXELS * tsdf.voxel_size;
-    let painted: Vec<Option<LinkGeometry>> = tree
+    let painted: Vec<Option<Arc<LinkGeometry>>> = tree
         .links
         .par_iter()
         .zip(&poses)
@@ -66,18 +63,16 @@ pub fn paint_links_as_seen(world: &mut World) -> Result<(), ReadTreeError> {
                 samples.iter().map(|p| map_from_link.transform_point3(*p)),
                 |label| own.is_none_or(|own| own.contains(&label)),
             )?;
-            Some(LinkGeometry {
+            Some(Arc::new(LinkGeometry {
                 color,
                 ..(**geometry).clone()
-            })
+            }))
         })
         .collect();
-    for (entity, geometry) in entities.into_iter().zip(painted) {
+    for ((link, entity), geometry) in tree.links.iter_mut().zip(entities).zip(painted) {
         if let Some(geometry) = geometry {
-            world
-                .entity_mut(entity)
-                .insert(LinkBody(Arc::new(geometry)));
+            world.entity_mut(*entity).insert(LinkBody(geometry.clone()));
+            link.geometry = Some(geometry);
         }
     }
-    Ok(())
 }

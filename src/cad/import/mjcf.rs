@@ -26,6 +26,7 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 use roxmltree::Node;
 
 use crate::base::JointKind;
+use crate::base::srgb::srgb_to_linear;
 use crate::cad::import::body_tree::{Body, BodyJoint, BodyTree, ModelFileError, check_xml_depth};
 use crate::cad::import::mesh_files::read_mesh_file;
 use crate::cad::import::mjcf_include::{MAX_INCLUDED_BYTES, expanded_text};
@@ -602,20 +603,12 @@ fn mean_linear_color(file: &Path) -> Result<Vec3, String> {
     let image = image::open(file)
         .map_err(|e| format!("texture {}: {e}", file.display()))?
         .to_rgb8();
-    let to_linear = |c: u8| {
-        let c = f32::from(c) / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
     let mut sum = glam::DVec3::ZERO;
     for p in image.pixels() {
         sum += glam::DVec3::new(
-            f64::from(to_linear(p[0])),
-            f64::from(to_linear(p[1])),
-            f64::from(to_linear(p[2])),
+            f64::from(srgb_to_linear(p[0])),
+            f64::from(srgb_to_linear(p[1])),
+            f64::from(srgb_to_linear(p[2])),
         );
     }
     let n = (image.width() as f64 * image.height() as f64).max(1.0);
