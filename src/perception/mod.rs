@@ -1,4 +1,7 @@
 //! Perceiving how furniture opens from what the camera saw (issue 36): the handles and knobs on
-//! an object's front and the motion of the part each belongs to. Bevy-free; uses geometry and the map's median.
+//! an object's front, the motion of the part each belongs to, and how far a CAD model's handles
+//! agree with the perceived ones. Bevy-free; uses geometry, the map's median and the contact
+//! graph's surface sampling.
 
+pub mod fronts;
 pub mod handles;

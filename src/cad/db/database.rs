@@ -14,6 +14,8 @@ use crate::cad::library::{LibraryEntry, build_sized_model};
 use crate::cad::model::CadModel;
 use crate::error::InputError;
 use crate::geometry::{Plane, TriMesh, plane::dominant_planes};
+use crate::perception::fronts::model_handles;
+use crate::perception::handles::Handle;
 
 /// The folder of a scene's output that holds the models it uses from a `--cad` database.
 pub const SCENE_MODELS: &str = "cad";
@@ -49,6 +51,9 @@ pub struct DatabaseModel {
     /// The vertices of each connected piece of the mesh: the convex primitives (boards, legs,
     /// cylinders) the model is built from, for contact queries.
     pub pieces: Vec<Vec<Vec3>>,
+    /// The handles on an articulated model's front, model frame, as the perception would find
+    /// them on it (`perception::fronts::model_handles`); none on a rigid model.
+    pub handles: Vec<Handle>,
     shape: parry3d::shape::TriMesh,
 }
 
@@ -86,12 +91,18 @@ impl DatabaseModel {
             .into_iter()
             .map(|c| c.positions)
             .collect();
+        let handles = if model.is_articulated() {
+            model_handles(&model.merged_visual_mesh(&[]), model.size)
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             model,
             built: None,
             mesh,
             planes,
             pieces,
+            handles,
             shape,
         })
     }

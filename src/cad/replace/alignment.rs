@@ -16,6 +16,7 @@ use crate::cad::db::database::{CadDatabase, DatabaseModel, parry_mesh};
 use crate::cad::replace::matching::{Candidate, ObservedObject};
 use crate::cad::replace::orientation::axis_rotations;
 use crate::classes::ClassTable;
+use crate::perception::fronts::{layout_error, placed_handle};
 
 /// Object points the optimisation works with (a deterministic stride through the mesh).
 const FIT_POINTS: usize = 300;
@@ -55,6 +56,9 @@ pub struct Alignment {
     pub scale: Vec3,
     /// RMS distance from the object's points to the aligned model, metres.
     pub alignment_error: f32,
+    /// How far the placed model's handles disagree with the perceived ones, in [0, 1]
+    /// (`perception::fronts::layout_error`; 0 without a perceived front).
+    pub layout_error: f32,
 }
 
 /// Metres of alignment error that facing the wrong way (df = 1) or lying on a side (db = 1)
@@ -87,9 +91,35 @@ pub fn align_best(
     align_all(object, db, candidates).into_iter().next()
 }
 
-/// What candidates are chosen by: the alignment error plus the ranking's priors, metres.
+/// Metres of alignment error that a model whose handles disagree wholly with the perceived ones
+/// (layout error 1) weighs as: the handles tell a chest of drawers from a cabinet with doors
+/// where their boxes fit alike, and a noisy map may miss some handles.
+pub const LAYOUT_AE_WEIGHT: f32 = 0.03;
+
+/// What candidates are chosen by: the alignment error plus the ranking's priors and the
+/// disagreement of the model's handles with the perceived ones, metres.
 pub fn choice_score(a: &Alignment) -> f32 {
-    a.alignment_error + PRIOR_AE_WEIGHT * (a.candidate.facing_error + a.candidate.upright_error)
+    a.alignment_error
+        + PRIOR_AE_WEIGHT * (a.candidate.facing_error + a.candidate.upright_error)
+        + LAYOUT_AE_WEIGHT * a.layout_error
+}
+
+/// The layout error of `model` placed at `world_from_model` against the front perceived on
+/// `object` (0 when none was).
+pub fn placed_layout_error(
+    object: &ObservedObject,
+    model: &DatabaseModel,
+    world_from_model: &Affine3A,
+) -> f32 {
+    let Some(front) = &object.front else {
+        return 0.0;
+    };
+    let predicted: Vec<_> = model
+        .handles
+        .iter()
+        .map(|h| placed_handle(world_from_model, h))
+        .collect();
+    layout_error(&front.handles, &predicted)
 }
 
 /// Aligns one candidate; `None` when the object has no points or the fit breaks down numerically.
@@ -142,6 +172,7 @@ pub fn align_candidate(
         world_from_model,
         scale: pose.scale.as_vec3(),
         alignment_error,
+        layout_error: placed_layout_error(object, model, &world_from_model),
     })
 }
 
@@ -533,6 +564,7 @@ mod tests {
             planes: Vec::<Plane>::new(),
             points,
             facing: None,
+            front: None,
         }
     }
 

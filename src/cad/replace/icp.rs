@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use crate::cad::db::database::{CadDatabase, DatabaseModel};
 use crate::cad::replace::alignment::{
-    Alignment, PRIOR_AE_WEIGHT, alignment_error, choice_score, stride_sample,
+    Alignment, PRIOR_AE_WEIGHT, alignment_error, choice_score, placed_layout_error, stride_sample,
 };
 use crate::cad::replace::matching::{Candidate, KEEP_CANDIDATES, ObservedObject, class_models};
 use crate::classes::ClassTable;
@@ -155,6 +155,7 @@ fn align_candidate(
         world_from_model,
         scale: pose.scale,
         alignment_error,
+        layout_error: placed_layout_error(object, model, &world_from_model),
     })
 }
 
@@ -373,6 +374,7 @@ mod tests {
             planes: Vec::new(),
             points: &points,
             facing: None,
+            front: None,
         };
         let candidates = class_candidates(&object, &db);
         assert!(candidates.iter().any(|c| c.model == index));

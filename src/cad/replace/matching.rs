@@ -9,6 +9,7 @@ use crate::cad::db::database::{CadDatabase, DatabaseModel};
 use crate::cad::replace::orientation::axis_rotations;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
+use crate::perception::fronts::PerceivedFront;
 
 /// How many candidates go on to alignment (the paper's top 10).
 pub const KEEP_CANDIDATES: usize = 10;
@@ -37,6 +38,9 @@ pub struct ObservedObject<'a> {
     pub points: &'a [Vec3],
     /// The way it most likely faces; `None` when the class has no front.
     pub facing: Option<Facing>,
+    /// The front and its handles as the camera saw them, for an object of an articulated class
+    /// with a facing.
+    pub front: Option<PerceivedFront>,
 }
 
 /// A prior on the way an object faces.
@@ -273,6 +277,7 @@ mod tests {
             planes,
             points: &points,
             facing: None,
+            front: None,
         };
         let both = CadDatabase::from_models(vec![rigid.clone(), fridge]).expect("db");
         let ranked = rank_candidates(&object, &both, KEEP_CANDIDATES);
@@ -301,6 +306,7 @@ mod tests {
                 planes,
                 points: &points,
                 facing: None,
+                front: None,
             };
             let ranked = rank_candidates(&object, &db, KEEP_CANDIDATES);
             // Articulated models are tried in the four upright orientations only.

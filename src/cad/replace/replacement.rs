@@ -19,6 +19,7 @@ use crate::cad::replace::sizing::pose_scale;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
+use crate::perception::fronts::perceive_front;
 
 /// Objects with fewer segment points than this keep their segment mesh: too little was seen to
 /// align anything to.
@@ -78,25 +79,36 @@ pub fn observed_objects<'a>(
                     Some(top.map_or(z, |t| t.max(z)))
                 })
                 .unwrap_or(bbox.top_z());
-            (p.len() >= MIN_OBJECT_POINTS).then(|| ObservedObject {
+            if p.len() < MIN_OBJECT_POINTS {
+                return None;
+            }
+            let facing = if has_front {
+                facing_from_walls(&bbox, &walls).or_else(|| {
+                    let to_middle = room_middle? - bbox.center;
+                    Some(Facing {
+                        direction: to_middle.with_z(0.0).try_normalize()?,
+                        confidence: FACES_ROOM_CONFIDENCE,
+                        against_wall: false,
+                    })
+                })
+            } else {
+                None
+            };
+            let articulated = table
+                .get(&n.class)
+                .is_some_and(|c| c.kind == EntityKind::Articulated);
+            let front = facing
+                .filter(|_| articulated)
+                .and_then(|f| perceive_front(&bbox, f.direction, p));
+            Some(ObservedObject {
                 id: &n.id,
                 class: &n.class,
                 top_z,
                 bbox,
                 planes: n.planes.iter().map(|p| Plane::from_array(*p)).collect(),
                 points: p,
-                facing: if has_front {
-                    facing_from_walls(&bbox, &walls).or_else(|| {
-                        let to_middle = room_middle? - bbox.center;
-                        Some(Facing {
-                            direction: to_middle.with_z(0.0).try_normalize()?,
-                            confidence: FACES_ROOM_CONFIDENCE,
-                            against_wall: false,
-                        })
-                    })
-                } else {
-                    None
-                },
+                facing,
+                front,
             })
         })
         .collect()
@@ -412,6 +424,7 @@ mod tests {
             world_from_model: Affine3A::from_translation(centre.with_z(0.0)),
             scale: Vec3::ONE,
             alignment_error: 0.01,
+            layout_error: 0.0,
         }
     }
 

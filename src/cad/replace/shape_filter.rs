@@ -116,6 +116,7 @@ mod tests {
             planes: Vec::new(),
             points,
             facing: None,
+            front: None,
         }
     }
 

@@ -1,0 +1,202 @@
+//! The front of a piece of furniture and the handles on it, perceived in the map (issue 36,
+//! section 1) and predicted from a CAD model, and how far a model's handles disagree with the
+//! perceived ones: a chest of drawers shows three horizontal bars one above another, a
+//! two-door cabinet two vertical bars meeting in the middle, and a model whose handles are
+//! elsewhere has its doors and drawers elsewhere.
+
+use std::collections::BTreeMap;
+
+use glam::{Affine3A, Vec3};
+
+use crate::geometry::{GravityBox, TriMesh};
+use crate::graph::build::surface_points;
+use crate::perception::handles::{Front, Handle, HandleKind, find_handles};
+
+/// The front's points are those within its rectangle grown by this much sideways, metres (a
+/// handle near the edge, the box a little tight).
+const SIDE_MARGIN_M: f32 = 0.02;
+/// ... and not within this distance of the box's top: a worktop overhanging the front by a few
+/// centimetres stands out of it like a long bar.
+const TOP_MARGIN_M: f32 = 0.03;
+/// ... and from this far behind the box's face to this far in front of it, metres: the box may
+/// end at the handles' tips or at the front itself.
+const BEHIND_M: f32 = 0.08;
+const IN_FRONT_M: f32 = 0.1;
+
+/// A predicted handle stands for a perceived one of its kind when their centres are this close,
+/// metres ...
+pub const SAME_HANDLE_M: f32 = 0.1;
+/// ... and, for bars, their directions within this angle (cos of 30 degrees).
+const SAME_BAR_COS: f32 = 0.866;
+
+/// Where surface points are sampled on a model to find its handles, metres apart.
+const MODEL_SAMPLE_SPACING_M: f32 = 0.01;
+
+/// What the camera saw of an object's front: the plane facing the room and the handles on it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PerceivedFront {
+    pub front: Front,
+    pub handles: Vec<Handle>,
+}
+
+/// The vertical face of `bbox` that faces most nearly along `facing` (horizontal), as a
+/// [`Front`] through its centre, with the face's half width and half height.
+pub fn box_front(bbox: &GravityBox, facing: Vec3) -> Option<(Front, f32, f32)> {
+    let (sin, cos) = bbox.yaw.sin_cos();
+    let x = Vec3::new(cos, sin, 0.0);
+    let y = Vec3::new(-sin, cos, 0.0);
+    let half = 0.5 * bbox.size;
+    let (normal, depth, width) = [(x, half.x, half.y), (-x, half.x, half.y)]
+        .into_iter()
+        .chain([(y, half.y, half.x), (-y, half.y, half.x)])
+        .max_by(|a, b| a.0.dot(facing).total_cmp(&b.0.dot(facing)))?;
+    let front = Front::new(bbox.center + normal * depth, normal)?;
+    Some((front, width, half.z))
+}
+
+/// The front of `bbox` facing along `facing` and the handles on it among `points` (the object's
+/// observed surface, world frame).
+pub fn perceive_front(bbox: &GravityBox, facing: Vec3, points: &[Vec3]) -> Option<PerceivedFront> {
+    let (front, half_width, half_height) = box_front(bbox, facing)?;
+    let on_front: Vec<Vec3> = points
+        .iter()
+        .copied()
+        .filter(|p| {
+            let l = front.local(*p);
+            l.x.abs() <= half_width + SIDE_MARGIN_M
+                && l.y <= half_height - TOP_MARGIN_M
+                && (-BEHIND_M..=IN_FRONT_M).contains(&l.z)
+        })
+        .collect();
+    Some(PerceivedFront {
+        front,
+        handles: find_handles(&front, &on_front),
+    })
+}
+
+/// The handles on the front of a model in the canonical frame (front facing -y, the origin at
+/// the bottom centre of its box `size`), found as the perception finds them on what a camera
+/// straight in front of the model sees of `visual` (its look with doors and drawers closed):
+/// the frontmost surface point in each cell of a grid across the front.
+pub fn model_handles(visual: &TriMesh, size: Vec3) -> Vec<Handle> {
+    let bbox = GravityBox {
+        center: Vec3::new(0.0, 0.0, 0.5 * size.z),
+        yaw: 0.0,
+        size,
+    };
+    let facing = visual.filtered(|[a, b, c]| (b - a).cross(c - a).normalize_or_zero().y < 0.0);
+    let mut frontmost: BTreeMap<(i32, i32), Vec3> = BTreeMap::new();
+    for p in surface_points(&facing, MODEL_SAMPLE_SPACING_M).points {
+        let cell = (
+            (p.x / MODEL_SAMPLE_SPACING_M).floor() as i32,
+            (p.z / MODEL_SAMPLE_SPACING_M).floor() as i32,
+        );
+        frontmost
+            .entry(cell)
+            .and_modify(|q| {
+                if p.y < q.y {
+                    *q = p;
+                }
+            })
+            .or_insert(p);
+    }
+    let seen: Vec<Vec3> = frontmost.into_values().collect();
+    perceive_front(&bbox, Vec3::NEG_Y, &seen).map_or_else(Vec::new, |f| f.handles)
+}
+
+/// `handle` carried by `frame` (a placed model's world-from-model, scale included).
+pub fn placed_handle(frame: &Affine3A, handle: &Handle) -> Handle {
+    Handle {
+        center: frame.transform_point3(handle.center),
+        axis: frame
+            .transform_vector3(handle.axis)
+            .try_normalize()
+            .unwrap_or(handle.axis),
+        ..*handle
+    }
+}
+
+/// How far `predicted` handles (a placed model's) disagree with the `perceived` ones, in [0, 1]:
+/// one minus the share of both lists that pair up (a perceived and a predicted handle of the
+/// same kind, bars along the same direction, centres within [`SAME_HANDLE_M`]; closest pairs
+/// first). 0 when nothing was perceived: handles the camera did not make out say nothing.
+pub fn layout_error(perceived: &[Handle], predicted: &[Handle]) -> f32 {
+    if perceived.is_empty() {
+        return 0.0;
+    }
+    let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
+    for (i, p) in perceived.iter().enumerate() {
+        for (j, q) in predicted.iter().enumerate() {
+            let alike = p.kind == q.kind
+                && (p.kind == HandleKind::Knob || p.axis.dot(q.axis).abs() >= SAME_BAR_COS);
+            let distance = p.center.distance(q.center);
+            if alike && distance <= SAME_HANDLE_M {
+                pairs.push((distance, i, j));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let (mut used_p, mut used_q) = (vec![false; perceived.len()], vec![false; predicted.len()]);
+    let mut matched = 0;
+    for (_, i, j) in pairs {
+        if !used_p[i] && !used_q[j] {
+            used_p[i] = true;
+            used_q[j] = true;
+            matched += 1;
+        }
+    }
+    1.0 - 2.0 * matched as f32 / (perceived.len() + predicted.len()) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cad::library::storage::{cabinet_drawers, cabinet_two_doors};
+
+    fn size() -> Vec3 {
+        Vec3::new(0.6, 0.45, 0.8)
+    }
+
+    #[test]
+    fn the_front_is_the_box_face_along_the_facing() {
+        let bbox = GravityBox {
+            center: Vec3::new(1.0, 2.0, 0.4),
+            yaw: 0.3,
+            size: size(),
+        };
+        let facing = Vec3::new(-(0.3f32).sin(), 0.3f32.cos(), 0.0);
+        let (front, half_width, half_height) = box_front(&bbox, facing).expect("front");
+        assert!(front.normal.dot(facing) > 0.999);
+        assert!((front.origin.distance(bbox.center) - 0.225).abs() < 1e-5);
+        assert!((half_width - 0.3).abs() < 1e-6 && (half_height - 0.4).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_chest_shows_three_horizontal_bars_and_two_doors_two_vertical_ones() {
+        let drawers = cabinet_drawers("d", size());
+        let handles = model_handles(&drawers.merged_visual_mesh(&[]), drawers.size);
+        assert_eq!(handles.len(), 3, "{handles:?}");
+        assert!(
+            handles
+                .iter()
+                .all(|h| h.kind == HandleKind::Bar && h.axis.x.abs() > 0.99),
+            "{handles:?}"
+        );
+        let doors = cabinet_two_doors("t", size());
+        let door_handles = model_handles(&doors.merged_visual_mesh(&[]), doors.size);
+        assert_eq!(door_handles.len(), 2, "{door_handles:?}");
+        assert!(door_handles.iter().all(|h| h.axis.z.abs() > 0.99));
+        // The chest's handles say nothing like the doors' do, and agree with themselves.
+        assert_eq!(layout_error(&handles, &handles), 0.0);
+        assert_eq!(layout_error(&handles, &door_handles), 1.0);
+        assert_eq!(layout_error(&[], &door_handles), 0.0);
+        // A model carried into the world keeps its handles where they are on it.
+        let frame = Affine3A::from_rotation_translation(
+            glam::Quat::from_rotation_z(1.0),
+            Vec3::new(2.0, 1.0, 0.0),
+        );
+        let placed: Vec<Handle> = handles.iter().map(|h| placed_handle(&frame, h)).collect();
+        assert_eq!(layout_error(&placed, &placed), 0.0);
+        assert_eq!(layout_error(&placed, &handles), 1.0);
+    }
+}
