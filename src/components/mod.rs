@@ -3,7 +3,8 @@
 //! A scene entity (a piece of layout or an object) carries its `SceneEntity` id and `Panoptic`
 //! identity, its `OrientedBox`, `SurfacePlanes`, `SegmentMesh` from the panoptic map, the
 //! `SightedOutline` precise frames measured of it, the `ObservedSurface` the contact graph kept
-//! of it, the CAD stages' `CadCandidates`, `CadAlignments` or `ShapeRejection`, once replaced
+//! of it, the `PerceivedFront` of a door or drawer unit, the CAD stages' `CadCandidates`,
+//! `CadAlignments` or `ShapeRejection`, once replaced
 //! its `CadModel`, and in the kinematic tree its `LinkBody`; each moving
 //! part of its model is a child entity with a `ModelPart`, a `LinkBody` and a `Joint`. Support
 //! is Bevy's `ChildOf`: the parent supports the child, and the child's `Joint` says how it may
@@ -18,6 +19,7 @@ pub mod model_part;
 pub mod observed_surface;
 pub mod oriented_box;
 pub mod panoptic;
+pub mod perceived_front;
 pub mod proximal;
 pub mod segment_mesh;
 pub mod sighted_outline;
@@ -31,6 +33,7 @@ pub use model_part::ModelPart;
 pub use observed_surface::ObservedSurface;
 pub use oriented_box::OrientedBox;
 pub use panoptic::{Panoptic, SceneEntity};
+pub use perceived_front::PerceivedFront;
 pub use proximal::{
     ProximalEndA, ProximalEndB, ProximalPairQuery, ProximalPairsAsA, ProximalPairsAsB,
     proximal_partners,

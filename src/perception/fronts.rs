@@ -18,8 +18,7 @@ const SIDE_MARGIN_M: f32 = 0.02;
 /// ... and not within this distance of the box's top: a worktop overhanging the front by a few
 /// centimetres stands out of it like a long bar.
 const TOP_MARGIN_M: f32 = 0.03;
-/// ... and from this far behind the box's face to this far in front of it, metres: the box may
-/// end at the handles' tips or at the front itself.
+/// ... and from this far behind the front plane to this far in front of it, metres.
 const BEHIND_M: f32 = 0.08;
 const IN_FRONT_M: f32 = 0.1;
 
@@ -33,7 +32,7 @@ const SAME_BAR_COS: f32 = 0.866;
 const MODEL_SAMPLE_SPACING_M: f32 = 0.01;
 
 /// What the camera saw of an object's front: the plane facing the room and the handles on it.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PerceivedFront {
     pub front: Front,
     pub handles: Vec<Handle>,
@@ -55,23 +54,97 @@ pub fn box_front(bbox: &GravityBox, facing: Vec3) -> Option<(Front, f32, f32)> {
 }
 
 /// The front of `bbox` facing along `facing` and the handles on it among `points` (the object's
-/// observed surface, world frame).
+/// observed surface, world frame). The front plane is where most of the points across the
+/// face lie (the mode of their depth in the box, [`FRONT_BIN_M`] bins), not the box's face
+/// itself: a box also holds what stands out in front of the front (an open door, a chair's
+/// bleeding). The back, against a wall, is not seen.
 pub fn perceive_front(bbox: &GravityBox, facing: Vec3, points: &[Vec3]) -> Option<PerceivedFront> {
-    let (front, half_width, half_height) = box_front(bbox, facing)?;
-    let on_front: Vec<Vec3> = points
+    let (face, half_width, half_height) = box_front(bbox, facing)?;
+    let depth_of_box = 2.0 * face.origin.distance(bbox.center.with_z(face.origin.z));
+    let across: Vec<Vec3> = points
         .iter()
         .copied()
         .filter(|p| {
-            let l = front.local(*p);
-            l.x.abs() <= half_width + SIDE_MARGIN_M
-                && l.y <= half_height - TOP_MARGIN_M
-                && (-BEHIND_M..=IN_FRONT_M).contains(&l.z)
+            let l = face.local(*p);
+            l.x.abs() <= half_width + SIDE_MARGIN_M && l.y <= half_height - TOP_MARGIN_M
         })
+        .collect();
+    let depth = front_depth(&face, depth_of_box, &across).unwrap_or(0.0);
+    let front = Front::new(face.origin + face.normal * depth, face.normal)?;
+    let on_front: Vec<Vec3> = across
+        .into_iter()
+        .filter(|p| (-BEHIND_M..=IN_FRONT_M).contains(&front.local(*p).z))
         .collect();
     Some(PerceivedFront {
         front,
         handles: find_handles(&front, &on_front),
     })
+}
+
+/// Bins of the front plane's search, metres.
+const FRONT_BIN_M: f32 = 0.01;
+
+/// The offset along `face.normal` (from the face, negative inwards) where most of `points`
+/// lie, over the box's `depth`; each bin counts with its two neighbours, so a front a little
+/// rough or slanted stays one peak. `None` without points.
+fn front_depth(face: &Front, depth: f32, points: &[Vec3]) -> Option<f32> {
+    let bins = (depth / FRONT_BIN_M).ceil() as usize + 1;
+    let mut counts = vec![0u32; bins + 2];
+    for p in points {
+        let inward = -face.local(*p).z;
+        if (-0.5 * FRONT_BIN_M..depth + FRONT_BIN_M).contains(&inward) {
+            counts[1 + ((inward / FRONT_BIN_M).round() as usize).min(bins - 1)] += 1;
+        }
+    }
+    let (bin, count) = (1..=bins)
+        .map(|b| (b, counts[b - 1] + counts[b] + counts[b + 1]))
+        .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))?;
+    (count > 0).then(|| -((bin - 1) as f32) * FRONT_BIN_M)
+}
+
+/// Points standing out this far beyond the front plane's handles (metres) are no part of the
+/// closed object: an open door or drawer, or something in front of it.
+const BEYOND_HANDLES_M: f32 = 0.02;
+/// The box is cut back to the front only when that moves its face at least this far (metres) ...
+const MIN_CUT_M: f32 = 0.03;
+/// ... and leaves at least this share of its points: a front plane found deep inside the box
+/// (the back of an open cabinet's inside) must not cut off the real front.
+const MIN_KEPT_SHARE: f32 = 0.6;
+
+/// `bbox` cut back to the perceived `front` (the front plane, its handles and a margin in front
+/// of it), and the `points` left within it; `None` when there is nothing to cut, or too much.
+pub fn cut_to_front(
+    bbox: &GravityBox,
+    seen: &PerceivedFront,
+    points: &[Vec3],
+) -> Option<(GravityBox, Vec<Vec3>)> {
+    let handles_out = seen.handles.iter().map(|h| h.depth).fold(0.0, f32::max);
+    let limit = handles_out + BEYOND_HANDLES_M;
+    let face_out = bbox
+        .corners()
+        .iter()
+        .map(|c| seen.front.local(*c).z)
+        .fold(f32::MIN, f32::max);
+    if face_out - limit < MIN_CUT_M {
+        return None;
+    }
+    let kept: Vec<Vec3> = points
+        .iter()
+        .copied()
+        .filter(|p| seen.front.local(*p).z <= limit)
+        .collect();
+    if (kept.len() as f32) < MIN_KEPT_SHARE * points.len() as f32 {
+        return None;
+    }
+    let cut = face_out - limit;
+    let world_from_box = bbox.world_from_box();
+    let along = world_from_box
+        .inverse()
+        .transform_vector3(seen.front.normal);
+    let mut cut_box = *bbox;
+    cut_box.size -= (along * cut).abs();
+    cut_box.center -= seen.front.normal * (0.5 * cut);
+    Some((cut_box, kept))
 }
 
 /// The handles on the front of a model in the canonical frame (front facing -y, the origin at
@@ -169,6 +242,58 @@ mod tests {
         assert!(front.normal.dot(facing) > 0.999);
         assert!((front.origin.distance(bbox.center) - 0.225).abs() < 1e-5);
         assert!((half_width - 0.3).abs() < 1e-6 && (half_height - 0.4).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_front_plane_is_where_the_points_are_not_where_an_open_door_ends_the_box() {
+        // A front at y = 0 (facing -y), sampled every 2 cm over 0.6 x 0.8 m, with a panel
+        // standing 30 cm out of it at its right edge (an open door): the box reaches y = -0.3.
+        let mut points = Vec::new();
+        for i in 0..=30 {
+            for j in 0..=40 {
+                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.0, 0.02 * j as f32));
+            }
+        }
+        for i in 0..=15 {
+            for j in 0..=40 {
+                points.push(Vec3::new(0.3, -0.02 * i as f32, 0.02 * j as f32));
+            }
+        }
+        let bar = (0..=10).map(|i| Vec3::new(0.2, -0.025, 0.3 + 0.02 * i as f32));
+        points.extend(bar.clone().chain(bar.map(|p| p + Vec3::Y * 0.01)));
+        let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
+        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");
+        assert!(seen.front.origin.y.abs() < 0.011, "{:?}", seen.front);
+        assert_eq!(seen.handles.len(), 1, "{:?}", seen.handles);
+        assert!(seen.handles[0].axis.z.abs() > 0.99);
+    }
+
+    #[test]
+    fn a_box_reaching_over_an_open_door_is_cut_back_to_the_front() {
+        // The front of the test above, 0.45 m deep behind it, with the door open 30 cm out.
+        let mut points = Vec::new();
+        for i in 0..=30 {
+            for j in 0..=40 {
+                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.0, 0.02 * j as f32));
+                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.45, 0.02 * j as f32));
+            }
+        }
+        for i in 0..=15 {
+            for j in 0..=40 {
+                points.push(Vec3::new(0.3, -0.02 * i as f32, 0.02 * j as f32));
+            }
+        }
+        let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
+        assert!((bbox.size.y - 0.75).abs() < 1e-4);
+        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");
+        let (cut, kept) = cut_to_front(&bbox, &seen, &points).expect("a cut");
+        // Cut back to 2 cm in front of the front (no handles here).
+        assert!((cut.size.y - 0.47).abs() < 0.011, "{cut:?}");
+        assert!((cut.center.y - 0.215).abs() < 0.006, "{cut:?}");
+        assert!(kept.iter().all(|p| p.y >= -0.021));
+        assert!(kept.len() >= 2 * 31 * 41);
+        // Cut once, it needs no second cut.
+        assert!(cut_to_front(&cut, &seen, &kept).is_none());
     }
 
     #[test]

@@ -10,6 +10,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::geometry::clusters::cluster_roots;
+pub use crate::graph::parts::HandleKind;
 use crate::map::median;
 
 /// How far out of the front plane a handle stands, metres: closer is the front's own relief (a
@@ -25,13 +26,16 @@ const HANDLE_CELL_M: f32 = 0.025;
 const MIN_BAR_LENGTH_M: f32 = 0.06;
 const MIN_BAR_ELONGATION: f32 = 2.5;
 const MAX_KNOB_WIDTH_M: f32 = 0.06;
+/// A knob is at least this wide across the front (metres): points standing out in one spot
+/// are the edge of a side panel seen edge-on, not a knob (real knobs are 2 to 5 cm).
+const MIN_KNOB_WIDTH_M: f32 = 0.015;
 /// Anything wider than this across the front (metres) is not a handle (a towel, a cup).
 const MAX_HANDLE_LENGTH_M: f32 = 0.6;
 
 /// The front of an object: a vertical plane through `origin` whose `normal` (horizontal, unit)
 /// points out of the object into the room, with `right` (horizontal, unit) along it as seen
 /// from the room and +z up.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Front {
     pub origin: Vec3,
     pub normal: Vec3,
@@ -56,14 +60,8 @@ impl Front {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum HandleKind {
-    Bar,
-    Knob,
-}
-
 /// A handle found on a front, in the world frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Handle {
     pub kind: HandleKind,
     pub center: Vec3,
@@ -149,7 +147,7 @@ fn handle_of(front: &Front, plane: f32, members: &[Vec3]) -> Option<Handle> {
         return None;
     } else if length >= MIN_BAR_LENGTH_M && length >= MIN_BAR_ELONGATION * width {
         HandleKind::Bar
-    } else if length <= MAX_KNOB_WIDTH_M {
+    } else if (MIN_KNOB_WIDTH_M..=MAX_KNOB_WIDTH_M).contains(&length) {
         HandleKind::Knob
     } else {
         return None;

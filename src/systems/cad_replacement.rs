@@ -22,7 +22,8 @@ use crate::cad::replace::replacement::{
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
 use crate::components::{
-    CadAlignments, CadCandidates, CadModel, ObservedSurface, SceneEntity, ShapeRejection,
+    CadAlignments, CadCandidates, CadModel, ObservedSurface, PerceivedFront, SceneEntity,
+    ShapeRejection,
 };
 use crate::systems::contact_graph::SceneGravity;
 use crate::systems::scene_graph::hang_frames;
@@ -96,6 +97,16 @@ pub struct CadReport {
     pub conflicted: Vec<String>,
     /// Their placements as the check left them, with the conflicts.
     pub unplaced: Vec<ReplacementRecord>,
+    /// The fronts perceived on objects of articulated classes, with their handles.
+    pub fronts: Vec<FrontRecord>,
+}
+
+/// The front perceived on one object.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrontRecord {
+    pub id: String,
+    #[serde(flatten)]
+    pub front: crate::perception::fronts::PerceivedFront,
 }
 
 /// Each entity id's observed surface points.
@@ -135,6 +146,11 @@ fn cad_match_stage(
     let layout = layout_planes(&graph);
     let mut objects = Vec::new();
     for object in observed_objects(&graph, &points) {
+        if let Some(front) = &object.front {
+            commands
+                .entity(entity_of[object.id])
+                .insert(PerceivedFront(front.clone()));
+        }
         match rejection(&object, &layout) {
             Some(rejection) => {
                 commands
@@ -203,6 +219,7 @@ fn physical_check_stage(
     surfaces: Query<(&SceneEntity, &ObservedSurface)>,
     aligned: Query<&CadAlignments>,
     rejections: Query<&ShapeRejection>,
+    fronts: Query<&PerceivedFront>,
     library: Option<Res<CadLibrary>>,
     method: Res<CadAlignMethod>,
 ) {
@@ -224,6 +241,15 @@ fn physical_check_stage(
             Some(RejectedObject {
                 id: nodes.id(e)?.to_string(),
                 rejection: rejections.get(e).ok()?.0.clone(),
+            })
+        })
+        .collect();
+    let fronts: Vec<FrontRecord> = order
+        .iter()
+        .filter_map(|&e| {
+            Some(FrontRecord {
+                id: nodes.id(e)?.to_string(),
+                front: fronts.get(e).ok()?.0.clone(),
             })
         })
         .collect();
@@ -255,6 +281,7 @@ fn physical_check_stage(
         unplaced,
         replaced,
         mean_alignment_error_m,
+        fronts,
     });
 }
 

@@ -128,7 +128,7 @@ pub fn align_candidate(
     model: &DatabaseModel,
     candidate: Candidate,
 ) -> Option<Alignment> {
-    let fit_points: Vec<DVec3> = stride_sample(object.points, FIT_POINTS)
+    let fit_points: Vec<DVec3> = stride_sample(&object.points, FIT_POINTS)
         .map(|p| p.as_dvec3())
         .collect();
     if fit_points.is_empty() {
@@ -166,7 +166,7 @@ pub fn align_candidate(
     }
     let pose = frame.pose(&params);
     let world_from_model = pose.world_from_model().as_affine3a();
-    let alignment_error = alignment_error(object.points, model, &world_from_model)?;
+    let alignment_error = alignment_error(&object.points, model, &world_from_model)?;
     Some(Alignment {
         candidate,
         world_from_model,
@@ -562,7 +562,7 @@ mod tests {
             top_z: bbox.top_z(),
             bbox,
             planes: Vec::<Plane>::new(),
-            points,
+            points: points.into(),
             facing: None,
             front: None,
         }

@@ -127,8 +127,8 @@ fn align_candidate(
                 .extend(object.bbox.bottom_z() - lo.z * scale.z),
         }
     };
-    let coarse: Vec<Vec3> = stride_sample(object.points, COARSE_POINTS).collect();
-    let fine: Vec<Vec3> = stride_sample(object.points, FINE_POINTS).collect();
+    let coarse: Vec<Vec3> = stride_sample(&object.points, COARSE_POINTS).collect();
+    let fine: Vec<Vec3> = stride_sample(&object.points, FINE_POINTS).collect();
     let mut starts: Vec<(f32, UprightPose)> = (0..YAW_STARTS)
         .map(|k| {
             let pose = icp(model, &fit, &coarse, start(k), COARSE_ITERATIONS);
@@ -145,7 +145,7 @@ fn align_candidate(
         })
         .min_by(|a, b| a.0.total_cmp(&b.0))?;
     let world_from_model = pose.world_from_model();
-    let alignment_error = alignment_error(object.points, model, &world_from_model)?;
+    let alignment_error = alignment_error(&object.points, model, &world_from_model)?;
     Some(Alignment {
         candidate: Candidate {
             matching_error: alignment_error,
@@ -372,7 +372,7 @@ mod tests {
             },
             top_z: bbox.top_z(),
             planes: Vec::new(),
-            points: &points,
+            points: std::borrow::Cow::Borrowed(&points),
             facing: None,
             front: None,
         };

@@ -1,6 +1,8 @@
 //! Ranking-based matching (Han et al., Sect. 4.1): every model of the object's class in each of
 //! the 24 axis orientations, scored by the matching error ME = ds + dpi + 0.2 db, best first.
 
+use std::borrow::Cow;
+
 use glam::{Mat3, Vec3};
 use pathfinding::kuhn_munkres::kuhn_munkres_min;
 use pathfinding::matrix::Matrix;
@@ -34,8 +36,9 @@ pub struct ObservedObject<'a> {
     /// just under the box's top (a table's box reaches up into the bleeding of the cups on it).
     pub top_z: f32,
     pub planes: Vec<Plane>,
-    /// The surface points seen of it.
-    pub points: &'a [Vec3],
+    /// The surface points seen of it, less those standing out in front of a perceived front
+    /// (an open door, something in front of it).
+    pub points: Cow<'a, [Vec3]>,
     /// The way it most likely faces; `None` when the class has no front.
     pub facing: Option<Facing>,
     /// The front and its handles as the camera saw them, for an object of an articulated class
@@ -275,7 +278,7 @@ mod tests {
             top_z: bbox.top_z(),
             bbox,
             planes,
-            points: &points,
+            points: Cow::Borrowed(&points),
             facing: None,
             front: None,
         };
@@ -304,7 +307,7 @@ mod tests {
                 top_z: bbox.top_z(),
                 bbox,
                 planes,
-                points: &points,
+                points: Cow::Borrowed(&points),
                 facing: None,
                 front: None,
             };

@@ -2,6 +2,7 @@
 //! points, ranked against the database, aligned, checked together for physical plausibility, and
 //! written back into the graph's nodes.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::{Affine3A, Mat4, Vec3};
@@ -19,7 +20,7 @@ use crate::cad::replace::sizing::pose_scale;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
-use crate::perception::fronts::perceive_front;
+use crate::perception::fronts::{cut_to_front, perceive_front};
 
 /// Objects with fewer segment points than this keep their segment mesh: too little was seen to
 /// align anything to.
@@ -100,13 +101,19 @@ pub fn observed_objects<'a>(
             let front = facing
                 .filter(|_| articulated)
                 .and_then(|f| perceive_front(&bbox, f.direction, p));
+            // An open door or drawer (or what stands in front) is no part of the closed object
+            // the models are fitted as.
+            let (bbox, points) = match front.as_ref().and_then(|f| cut_to_front(&bbox, f, p)) {
+                Some((cut, kept)) => (cut, Cow::Owned(kept)),
+                None => (bbox, Cow::Borrowed(p.as_slice())),
+            };
             Some(ObservedObject {
                 id: &n.id,
                 class: &n.class,
                 top_z,
                 bbox,
                 planes: n.planes.iter().map(|p| Plane::from_array(*p)).collect(),
-                points: p,
+                points,
                 facing,
                 front,
             })

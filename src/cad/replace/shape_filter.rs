@@ -49,7 +49,7 @@ pub fn layout_planes(graph: &ContactGraph) -> Vec<(String, Plane)> {
 
 /// Why `object` is not an object, or `None` when it passes both filters.
 pub fn rejection(object: &ObservedObject, layout: &[(String, Plane)]) -> Option<Rejection> {
-    flat_on_layout(object.points, layout).or_else(|| oversized(object))
+    flat_on_layout(&object.points, layout).or_else(|| oversized(object))
 }
 
 fn flat_on_layout(points: &[Vec3], layout: &[(String, Plane)]) -> Option<Rejection> {
@@ -114,7 +114,7 @@ mod tests {
             top_z: bbox.top_z(),
             bbox,
             planes: Vec::new(),
-            points,
+            points: points.into(),
             facing: None,
             front: None,
         }
