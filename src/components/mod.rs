@@ -6,7 +6,8 @@
 //! of it, the `PerceivedFront` of a door or drawer unit, the CAD stages' `CadCandidates`,
 //! `CadAlignments` or `ShapeRejection`, once replaced
 //! its `CadModel`, and in the kinematic tree its `LinkBody`; each moving
-//! part of its model is a child entity with a `ModelPart`, a `LinkBody` and a `Joint`. Support
+//! part of its model is a child entity with a `ModelPart`, a `LinkBody`, a `Joint` and the
+//! `ListedPart` the contact graph lists it as. Support
 //! is Bevy's `ChildOf`: the parent supports the child, and the child's `Joint` says how it may
 //! move relative to it. A proximal pair is an entity of its own, related to both ends
 //! (`ProximalEndA`, `ProximalEndB`).
@@ -15,6 +16,7 @@ pub mod cad_candidates;
 pub mod cad_model;
 pub mod joint;
 pub mod link_body;
+pub mod listed_part;
 pub mod model_part;
 pub mod observed_surface;
 pub mod oriented_box;
@@ -29,6 +31,7 @@ pub use cad_candidates::{CadAlignments, CadCandidates, ShapeRejection};
 pub use cad_model::CadModel;
 pub use joint::Joint;
 pub use link_body::LinkBody;
+pub use listed_part::ListedPart;
 pub use model_part::ModelPart;
 pub use observed_surface::ObservedSurface;
 pub use oriented_box::OrientedBox;

@@ -69,7 +69,15 @@ pub fn perceive_front(bbox: &GravityBox, facing: Vec3, points: &[Vec3]) -> Optio
             l.x.abs() <= half_width + SIDE_MARGIN_M && l.y <= half_height - TOP_MARGIN_M
         })
         .collect();
-    let depth = front_depth(&face, depth_of_box, &across).unwrap_or(0.0);
+    let plane = front_depth(&face, depth_of_box, &across).unwrap_or(0.0);
+    // Behind an open door the inside's back is the largest plane facing the room, at the back
+    // of the box: the carcass's front is then where its top (or, above the eye, its bottom)
+    // ends. (A plane farther out is a front, an open drawer's included.)
+    let at_back = -plane > depth_of_box - BACK_BAND_M;
+    let depth = match carcass_edge_depth(&face, half_width, half_height, points) {
+        Some(edge) if at_back && edge - plane > OPEN_FRONT_M => edge,
+        _ => plane,
+    };
     let front = Front::new(face.origin + face.normal * depth, face.normal)?;
     let on_front: Vec<Vec3> = across
         .into_iter()
@@ -79,6 +87,71 @@ pub fn perceive_front(bbox: &GravityBox, facing: Vec3, points: &[Vec3]) -> Optio
         front,
         handles: find_handles(&front, &on_front),
     })
+}
+
+/// A carcass edge this far (metres) in front of the largest plane across the face means the
+/// plane is the back of an open inside, not the front: doors stand at most a board in front
+/// of the carcass's edge.
+const OPEN_FRONT_M: f32 = 0.05;
+/// A plane within this distance (metres) of the box's back is the back of its inside.
+const BACK_BAND_M: f32 = 0.1;
+/// The top and bottom bands are this high, metres ...
+const EDGE_BAND_M: f32 = 0.04;
+/// ... and tell where the carcass ends with at least this many points.
+const MIN_EDGE_POINTS: usize = 20;
+/// The edge is the outermost bin ([`FRONT_BIN_M`]) of a band holding at least this share of
+/// its fullest bin: a top surface fills its bins alike, while the top edge of an open door (a
+/// strip a board wide running out of the front) or the top rows of a front without a seen top
+/// fill theirs thinly.
+const EDGE_BIN_SHARE: f32 = 0.3;
+
+/// The offset along `face.normal` (negative inwards) where the carcass's top surface ends, seen
+/// in the band of points under the box's top, or its bottom where more of that was seen (a
+/// wall cabinet above the eye); `None` with too few points in both.
+fn carcass_edge_depth(
+    face: &Front,
+    half_width: f32,
+    half_height: f32,
+    points: &[Vec3],
+) -> Option<f32> {
+    let band = |top: bool| -> Vec<f32> {
+        points
+            .iter()
+            .map(|p| face.local(*p))
+            .filter(|l| l.x.abs() <= half_width)
+            .filter(|l| {
+                if top {
+                    l.y >= half_height - EDGE_BAND_M
+                } else {
+                    l.y <= EDGE_BAND_M - half_height
+                }
+            })
+            .map(|l| -l.z)
+            .collect()
+    };
+    let (top, bottom) = (band(true), band(false));
+    let inward = if top.len() >= bottom.len() {
+        top
+    } else {
+        bottom
+    };
+    if inward.len() < MIN_EDGE_POINTS {
+        return None;
+    }
+    let outermost = inward.iter().copied().fold(f32::MAX, f32::min);
+    let mut counts: Vec<u32> = Vec::new();
+    for d in &inward {
+        let bin = ((d - outermost) / FRONT_BIN_M) as usize;
+        if counts.len() <= bin {
+            counts.resize(bin + 1, 0);
+        }
+        counts[bin] += 1;
+    }
+    let full = counts.iter().copied().max()? as f32;
+    let edge = counts
+        .iter()
+        .position(|&c| c as f32 >= EDGE_BIN_SHARE * full)?;
+    Some(-(outermost + (edge as f32 + 0.5) * FRONT_BIN_M))
 }
 
 /// Bins of the front plane's search, metres.
@@ -266,6 +339,30 @@ mod tests {
         assert!(seen.front.origin.y.abs() < 0.011, "{:?}", seen.front);
         assert_eq!(seen.handles.len(), 1, "{:?}", seen.handles);
         assert!(seen.handles[0].axis.z.abs() > 0.99);
+    }
+
+    #[test]
+    fn behind_a_wide_open_door_the_front_is_where_the_top_ends() {
+        // A cabinet 0.6 wide, 0.45 deep and 0.8 high facing -y with its front at y = 0: its
+        // top, its back inside (at y = 0.43) seen through the open doorway, and its door open
+        // 90 degrees, standing out 0.6 m from the left edge.
+        let mut points = Vec::new();
+        for i in 0..=30 {
+            for j in 0..=40 {
+                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.43, 0.02 * j as f32));
+            }
+            for j in 0..=22 {
+                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.02 * j as f32, 0.8));
+            }
+        }
+        for i in 0..=30 {
+            for j in 0..=40 {
+                points.push(Vec3::new(-0.3, -0.02 * i as f32, 0.02 * j as f32));
+            }
+        }
+        let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
+        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");
+        assert!(seen.front.origin.y.abs() < 0.021, "{:?}", seen.front);
     }
 
     #[test]

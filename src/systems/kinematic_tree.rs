@@ -11,16 +11,22 @@ use std::sync::Arc;
 use bevy::ecs::system::SystemState;
 use bevy::prelude::*;
 use bevy::transform::helper::TransformHelper;
-use glam::Affine3A;
+use glam::{Affine3A, Mat4};
 use rayon::prelude::*;
 
 use crate::cad::db::database::CadDatabase;
-use crate::components::{CadModel, Joint, LinkBody, ModelPart, Panoptic, SceneEntity};
+use crate::cad::model_parts::{attach_handles, model_parts};
+use crate::components::{
+    CadModel, Joint, LinkBody, ListedPart, ModelPart, Panoptic, PerceivedFront, SceneEntity,
+};
 use crate::error::IsceneError;
 use crate::graph::ContactGraph;
+use crate::graph::parts::PartJson;
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
+use crate::perception::fronts::placed_handle;
+use crate::perception::handles::Handle;
 use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneGravity;
 use crate::systems::link_colors::paint_links_as_seen;
@@ -62,7 +68,8 @@ fn kinematic_tree_stage(world: &mut World) -> Result<(), IsceneError> {
 }
 
 /// Gives every scene entity the links of its contact-graph node in `graph` (its own link's body
-/// and the moving parts of its CAD model from `db`, spawned below it).
+/// and the moving parts of its CAD model from `db`, spawned below it, each listed with its
+/// handle: the one perceived on its front, else its model's).
 pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&CadDatabase>) {
     let mut entities: Vec<(Entity, String)> = world
         .query::<(Entity, &SceneEntity)>()
@@ -82,30 +89,56 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 .map_or(Affine3A::IDENTITY, |g| g.affine())
         })
         .collect();
-    let floor = graph.nodes.iter().find(|n| n.class == "floor");
-    let links: Vec<Vec<NodeLink>> = entities
-        .par_iter()
-        .zip(poses.par_iter())
-        .map(|((_, id), pose)| {
-            let Some(node) = graph.node(id) else {
-                return Vec::new();
-            };
-            let model = node
-                .cad
-                .as_ref()
-                .zip(db)
-                .and_then(|(c, db)| db.get(&c.model))
-                .map(|m| &m.model);
-            node_links(node, model, *pose, floor)
+    let perceived: Vec<Vec<Handle>> = entities
+        .iter()
+        .map(|(e, _)| {
+            world
+                .get::<PerceivedFront>(*e)
+                .map(|f| f.0.handles.clone())
+                .unwrap_or_default()
         })
         .collect();
-    for ((entity, id), links) in entities.iter().zip(links) {
-        spawn_links(world, *entity, id, links);
+    let floor = graph.nodes.iter().find(|n| n.class == "floor");
+    let links: Vec<(Vec<NodeLink>, Vec<PartJson>)> = entities
+        .par_iter()
+        .zip(poses.par_iter())
+        .zip(perceived.par_iter())
+        .map(|(((_, id), pose), perceived)| {
+            let Some(node) = graph.node(id) else {
+                return (Vec::new(), Vec::new());
+            };
+            let placed = node.cad.as_ref().zip(db).and_then(|(c, db)| {
+                let frame = Affine3A::from_mat4(Mat4::from_cols_array(&c.world_from_model));
+                Some((db.get(&c.model)?, frame))
+            });
+            let parts = placed.map_or_else(Vec::new, |(model, frame)| {
+                let mut parts = model_parts(&model.model, &frame);
+                let modelled: Vec<Handle> = model
+                    .handles
+                    .iter()
+                    .map(|h| placed_handle(&frame, h))
+                    .collect();
+                attach_handles(&mut parts, perceived, &modelled);
+                parts
+            });
+            let links = node_links(node, placed.map(|(m, _)| &m.model), *pose, floor);
+            (links, parts)
+        })
+        .collect();
+    for ((entity, id), (links, parts)) in entities.iter().zip(links) {
+        spawn_links(world, *entity, id, links, parts);
     }
 }
 
-/// Gives `entity` its own link's body and spawns the moving parts below it.
-fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>) {
+/// Gives `entity` its own link's body and spawns the moving parts below it, each with the
+/// listing of `parts` of its name.
+fn spawn_links(
+    world: &mut World,
+    entity: Entity,
+    id: &str,
+    links: Vec<NodeLink>,
+    mut parts: Vec<PartJson>,
+) {
     let mut part_entities: Vec<Entity> = Vec::with_capacity(links.len());
     for link in links {
         let body = LinkBody(Arc::new(link.geometry));
@@ -115,23 +148,28 @@ fn spawn_links(world: &mut World, entity: Entity, id: &str, links: Vec<NodeLink>
             continue;
         };
         let local = link.parent_from_link * link.joint.motion(link.value);
-        let e = world
-            .spawn((
-                Name::new(format!("{id}_{part}")),
-                ModelPart {
-                    object: entity,
-                    part,
-                },
-                body,
-                Joint {
-                    spec: link.joint,
-                    value: link.value,
-                },
-                transform_of(local),
-                ChildOf(part_entities[parent]),
-            ))
-            .id();
-        part_entities.push(e);
+        let listing = parts
+            .iter()
+            .position(|p| p.name == part)
+            .map(|k| ListedPart(parts.swap_remove(k)));
+        let mut e = world.spawn((
+            Name::new(format!("{id}_{part}")),
+            ModelPart {
+                object: entity,
+                part,
+            },
+            body,
+            Joint {
+                spec: link.joint,
+                value: link.value,
+            },
+            transform_of(local),
+            ChildOf(part_entities[parent]),
+        ));
+        if let Some(listing) = listing {
+            e.insert(listing);
+        }
+        part_entities.push(e.id());
     }
 }
 

@@ -12,10 +12,11 @@ use bevy::ecs::system::{SystemParam, SystemState};
 use bevy::prelude::*;
 
 use crate::components::{
-    CadModel, Joint, ModelPart, OrientedBox, Panoptic, ProximalPairQuery, SceneEntity,
+    CadModel, Joint, ListedPart, ModelPart, OrientedBox, Panoptic, ProximalPairQuery, SceneEntity,
     SurfacePlanes,
 };
 use crate::geometry::Plane;
+use crate::graph::parts::PartJson;
 use crate::graph::{CadPlacement, ContactGraph, GraphEdge, GraphNode};
 
 /// Where an entity's node stands in the contact graph: the order the entities were spawned in,
@@ -43,7 +44,15 @@ type NodeComponents = (
 #[derive(SystemParam)]
 pub struct SceneNodes<'w, 's> {
     nodes: Query<'w, 's, NodeComponents>,
-    parts: Query<'w, 's, (&'static ModelPart, &'static Joint)>,
+    parts: Query<
+        'w,
+        's,
+        (
+            &'static ModelPart,
+            &'static Joint,
+            Option<&'static ListedPart>,
+        ),
+    >,
     pairs: Query<'w, 's, ProximalPairQuery>,
 }
 
@@ -66,20 +75,30 @@ impl SceneNodes<'_, '_> {
     }
 
     /// The contact graph the entities hold. A joint value is listed where a part stands away
-    /// from its rest (a reconstruction's parts all rest, as its graph has them). `parts` stay
-    /// empty: the reconstruction perceives none yet (issue 36).
+    /// from its rest (a reconstruction's parts all rest, as its graph has them); the parts
+    /// listed are their entities' `ListedPart`s, by name.
     pub fn contact_graph(&self) -> ContactGraph {
         let order = self.entities();
         let position: HashMap<Entity, usize> =
             order.iter().enumerate().map(|(k, e)| (*e, k)).collect();
         let mut joints: HashMap<Entity, BTreeMap<String, f32>> = HashMap::new();
-        for (part, joint) in &self.parts {
+        let mut listed: HashMap<Entity, Vec<PartJson>> = HashMap::new();
+        for (part, joint, listing) in &self.parts {
             if joint.value != 0.0 {
                 joints
                     .entry(part.object)
                     .or_default()
                     .insert(part.part.clone(), joint.value);
             }
+            if let Some(listing) = listing {
+                listed
+                    .entry(part.object)
+                    .or_default()
+                    .push(listing.0.clone());
+            }
+        }
+        for parts in listed.values_mut() {
+            parts.sort_by(|a, b| a.name.cmp(&b.name));
         }
         let rows: Vec<_> = order
             .iter()
@@ -95,7 +114,7 @@ impl SceneNodes<'_, '_> {
                 planes: planes.0.iter().map(Plane::to_array).collect(),
                 cad: cad.map(CadPlacement::from),
                 joints: joints.remove(e).unwrap_or_default(),
-                parts: Vec::new(),
+                parts: listed.remove(e).unwrap_or_default(),
             })
             .collect();
         // Support edges in the order of their children, then each proximal pair once, in the
@@ -148,13 +167,31 @@ mod tests {
         let mut world = World::new();
         spawn_contact_graph(&mut world, &graph).expect("spawn");
         spawn_node_links(&mut world, &graph, Some(&CadDatabase::parametric()));
-        let read = read_contact_graph(&mut world);
-        // The ground truth lists its models' parts, which the world holds as part entities with
-        // their joints, not as a list.
+        let mut read = read_contact_graph(&mut world);
+        // The world lists the models' parts as the ground truth does, each with its model's
+        // handle, which the ground truth leaves out.
         let mut expected = graph.clone();
         for node in &mut expected.nodes {
-            node.parts.clear();
             node.joints.retain(|_, v| *v != 0.0);
+            node.parts.sort_by(|a, b| a.name.cmp(&b.name));
+        }
+        let parts: usize = read.nodes.iter().map(|n| n.parts.len()).sum();
+        assert!(parts >= 5, "{parts} parts");
+        for node in &mut read.nodes {
+            for part in &mut node.parts {
+                // Doors and drawers have handles; a dishwasher's rack has none.
+                let opened_by_hand = ["door", "drawer", "freezer"]
+                    .iter()
+                    .any(|p| part.name.starts_with(p));
+                assert_eq!(
+                    part.handle.is_some(),
+                    opened_by_hand,
+                    "{}/{}",
+                    node.id,
+                    part.name
+                );
+                part.handle = None;
+            }
         }
         assert_eq!(read, expected);
     }
