@@ -57,7 +57,8 @@ pub fn box_front(bbox: &GravityBox, facing: Vec3) -> Option<(Front, f32, f32)> {
 /// observed surface, world frame). The front plane is where most of the points across the
 /// face lie (the mode of their depth in the box, [`FRONT_BIN_M`] bins), not the box's face
 /// itself: a box also holds what stands out in front of the front (an open door, a chair's
-/// bleeding). The back, against a wall, is not seen.
+/// bleeding). The back, against a wall, is not seen; the inside's back, seen through a wide-open
+/// door, is told by where the carcass's top ends.
 pub fn perceive_front(bbox: &GravityBox, facing: Vec3, points: &[Vec3]) -> Option<PerceivedFront> {
     let (face, half_width, half_height) = box_front(bbox, facing)?;
     let depth_of_box = 2.0 * face.origin.distance(bbox.center.with_z(face.origin.z));
@@ -99,11 +100,14 @@ const BACK_BAND_M: f32 = 0.1;
 const EDGE_BAND_M: f32 = 0.04;
 /// ... and tell where the carcass ends with at least this many points.
 const MIN_EDGE_POINTS: usize = 20;
-/// The edge is the outermost bin ([`FRONT_BIN_M`]) of a band holding at least this share of
-/// its fullest bin: a top surface fills its bins alike, while the top edge of an open door (a
-/// strip a board wide running out of the front) or the top rows of a front without a seen top
-/// fill theirs thinly.
-const EDGE_BIN_SHARE: f32 = 0.3;
+/// The edge is the outermost bin ([`EDGE_BIN_M`]) of a band holding at least this share of
+/// its fullest bin: a top surface fills its bins alike (a row of points across the whole width
+/// in each), the rows of a vertical face in the band (the inside's back, a front) fill one bin
+/// a few times over, and the top edge of an open door (a strip a board wide running out of the
+/// front) fills its bins with a point or two.
+const EDGE_BIN_SHARE: f32 = 0.2;
+/// Bins of the edge's search, metres: the map's surface points are about 2 cm apart.
+const EDGE_BIN_M: f32 = 0.02;
 
 /// The offset along `face.normal` (negative inwards) where the carcass's top surface ends, seen
 /// in the band of points under the box's top, or its bottom where more of that was seen (a
@@ -141,7 +145,7 @@ fn carcass_edge_depth(
     let outermost = inward.iter().copied().fold(f32::MAX, f32::min);
     let mut counts: Vec<u32> = Vec::new();
     for d in &inward {
-        let bin = ((d - outermost) / FRONT_BIN_M) as usize;
+        let bin = ((d - outermost) / EDGE_BIN_M) as usize;
         if counts.len() <= bin {
             counts.resize(bin + 1, 0);
         }
@@ -151,7 +155,7 @@ fn carcass_edge_depth(
     let edge = counts
         .iter()
         .position(|&c| c as f32 >= EDGE_BIN_SHARE * full)?;
-    Some(-(outermost + (edge as f32 + 0.5) * FRONT_BIN_M))
+    Some(-(outermost + (edge as f32 + 0.5) * EDGE_BIN_M))
 }
 
 /// Bins of the front plane's search, metres.
