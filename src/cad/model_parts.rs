@@ -122,8 +122,8 @@ mod tests {
             .find(|p| p.name == "door_right")
             .expect("right");
         let (hl, hr) = (
-            left.handle.as_ref().unwrap(),
-            right.handle.as_ref().unwrap(),
+            left.handle.as_ref().expect("a handle on the left door"),
+            right.handle.as_ref().expect("a handle on the right door"),
         );
         // Each near the middle, on its own door's side, and standing out of the front (-y).
         assert!(hl.center[0] < 1.0 && hr.center[0] > 1.0, "{hl:?} {hr:?}");
@@ -135,6 +135,7 @@ mod tests {
         };
         attach_handles(&mut parts, &[seen], &modelled);
         let left = parts.iter().find(|p| p.name == "door_left").expect("left");
-        assert_eq!(left.handle.as_ref().unwrap().center, [0.9, 1.7, 0.5]);
+        let handle = left.handle.as_ref().expect("a handle");
+        assert_eq!(handle.center, [0.9, 1.7, 0.5]);
     }
 }

@@ -218,8 +218,7 @@ fn physical_check_stage(
     nodes: SceneNodes,
     surfaces: Query<(&SceneEntity, &ObservedSurface)>,
     aligned: Query<&CadAlignments>,
-    rejections: Query<&ShapeRejection>,
-    fronts: Query<&PerceivedFront>,
+    findings: Query<(Option<&ShapeRejection>, Option<&PerceivedFront>)>,
     library: Option<Res<CadLibrary>>,
     method: Res<CadAlignMethod>,
 ) {
@@ -240,7 +239,7 @@ fn physical_check_stage(
         .filter_map(|&e| {
             Some(RejectedObject {
                 id: nodes.id(e)?.to_string(),
-                rejection: rejections.get(e).ok()?.0.clone(),
+                rejection: findings.get(e).ok()?.0?.0.clone(),
             })
         })
         .collect();
@@ -249,7 +248,7 @@ fn physical_check_stage(
         .filter_map(|&e| {
             Some(FrontRecord {
                 id: nodes.id(e)?.to_string(),
-                front: fronts.get(e).ok()?.0.clone(),
+                front: findings.get(e).ok()?.1?.0.clone(),
             })
         })
         .collect();
