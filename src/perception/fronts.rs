@@ -398,6 +398,20 @@ mod tests {
     }
 
     #[test]
+    fn a_single_door_fridge_shows_the_bar_of_its_door() {
+        let db = crate::cad::db::database::CadDatabase::parametric();
+        let fridge = db.get("fridge_01").expect("fridge");
+        assert_eq!(fridge.handles.len(), 1, "{:?}", fridge.handles);
+        let bar = fridge.handles[0];
+        assert!(
+            bar.kind == HandleKind::Bar && bar.axis.z.abs() > 0.99,
+            "{bar:?}"
+        );
+        // Hinged on the right (seen from the room, +x is right): the bar is on the left.
+        assert!(bar.center.x < 0.0, "{bar:?}");
+    }
+
+    #[test]
     fn a_chest_shows_three_horizontal_bars_and_two_doors_two_vertical_ones() {
         let drawers = cabinet_drawers("d", size());
         let handles = model_handles(&drawers.merged_visual_mesh(&[]), drawers.size);

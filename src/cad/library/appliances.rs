@@ -42,10 +42,11 @@ pub fn fridge_single(id: &str, s: Vec3) -> CadModel {
     let mut b = PartsBuilder::new(WHITE);
     let door = 0.05;
     let front = shell(&mut b, s, door);
+    // The shelves stand clear of the door's liner (it reaches `door - BOARD` into the body).
     for k in 1..3 {
         let z = k as f32 * s.z / 3.0;
         b.slab(
-            Vec3::new(-0.5 * s.x + SHELL, front + 0.02, z),
+            Vec3::new(-0.5 * s.x + SHELL, front + door - BOARD + 0.01, z),
             Vec3::new(0.5 * s.x - SHELL, 0.5 * s.y - SHELL, z + 0.01),
         );
     }
@@ -59,12 +60,13 @@ pub fn fridge_single(id: &str, s: Vec3) -> CadModel {
         WHITE,
         STEEL,
     );
-    // A thicker door: a liner behind the front board.
+    // A thicker door: a liner behind the front board, inside the body's opening (+y in the
+    // door's frame; in front of the board it buried the handle, and no camera saw one).
     b.add(
         d,
         TriMesh::cuboid(
-            Vec3::new(-s.x + 0.04, BOARD - door, 0.04),
-            Vec3::new(-0.04, 0.0, s.z - 0.04),
+            Vec3::new(-s.x + 0.04, BOARD, 0.04),
+            Vec3::new(-0.04, door, s.z - 0.04),
         ),
     );
     b.finish(id, "fridge")
