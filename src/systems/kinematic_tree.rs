@@ -1,6 +1,7 @@
 //! The KinematicTree stage: every scene entity becomes a link (its `LinkBody`: mesh, collision
 //! pieces, mass properties, the colour the camera saw on it), every moving part of its CAD model
-//! a child entity with its own joint,
+//! a child entity with its own joint and its `ListedPart` (the part as contact_graph.json lists
+//! it, with the handle perceived on its front or its model's),
 //! and the whole transform hierarchy is read off as the `SceneKinematicTree` the exports and the
 //! physics check use. Reading the tree from the ECS (not from the contact graph) means it can be
 //! read again after any simulated action.
