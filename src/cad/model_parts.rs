@@ -104,16 +104,11 @@ mod tests {
     #[test]
     fn each_door_of_a_two_door_cabinet_gets_the_handle_on_its_front() {
         use crate::cad::db::database::CadDatabase;
-        use crate::perception::fronts::placed_handle;
         let db = CadDatabase::parametric();
         let model = db.get("cabinet_01").expect("model");
         let frame = Affine3A::from_translation(Vec3::new(1.0, 2.0, 0.0));
         let mut parts = model_parts(&model.model, &frame);
-        let modelled: Vec<Handle> = model
-            .handles
-            .iter()
-            .map(|h| placed_handle(&frame, h))
-            .collect();
+        let modelled = model.placed_handles(&frame);
         assert_eq!(modelled.len(), 2);
         attach_handles(&mut parts, &[], &modelled);
         let left = parts.iter().find(|p| p.name == "door_left").expect("left");

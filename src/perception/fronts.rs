@@ -307,6 +307,14 @@ mod tests {
         Vec3::new(0.6, 0.45, 0.8)
     }
 
+    /// A flat panel sampled every 2 cm: `corner + 0.02 (i u + j v)` for i up to `n_u` and j up
+    /// to `n_v`.
+    fn panel(corner: Vec3, u: Vec3, n_u: usize, v: Vec3, n_v: usize) -> Vec<Vec3> {
+        (0..=n_u)
+            .flat_map(|i| (0..=n_v).map(move |j| corner + 0.02 * (i as f32 * u + j as f32 * v)))
+            .collect()
+    }
+
     #[test]
     fn the_front_is_the_box_face_along_the_facing() {
         let bbox = GravityBox {
@@ -321,21 +329,25 @@ mod tests {
         assert!((half_width - 0.3).abs() < 1e-6 && (half_height - 0.4).abs() < 1e-6);
     }
 
+    /// A front at y = 0 (facing -y), 0.6 x 0.8 m, with a door standing 30 cm out of it at its
+    /// right edge.
+    fn front_with_open_door() -> Vec<Vec3> {
+        let mut points = panel(Vec3::new(-0.3, 0.0, 0.0), Vec3::X, 30, Vec3::Z, 40);
+        points.extend(panel(
+            Vec3::new(0.3, 0.0, 0.0),
+            Vec3::NEG_Y,
+            15,
+            Vec3::Z,
+            40,
+        ));
+        points
+    }
+
     #[test]
     fn the_front_plane_is_where_the_points_are_not_where_an_open_door_ends_the_box() {
         // A front at y = 0 (facing -y), sampled every 2 cm over 0.6 x 0.8 m, with a panel
         // standing 30 cm out of it at its right edge (an open door): the box reaches y = -0.3.
-        let mut points = Vec::new();
-        for i in 0..=30 {
-            for j in 0..=40 {
-                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.0, 0.02 * j as f32));
-            }
-        }
-        for i in 0..=15 {
-            for j in 0..=40 {
-                points.push(Vec3::new(0.3, -0.02 * i as f32, 0.02 * j as f32));
-            }
-        }
+        let mut points = front_with_open_door();
         let bar = (0..=10).map(|i| Vec3::new(0.2, -0.025, 0.3 + 0.02 * i as f32));
         points.extend(bar.clone().chain(bar.map(|p| p + Vec3::Y * 0.01)));
         let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
@@ -350,20 +362,15 @@ mod tests {
         // A cabinet 0.6 wide, 0.45 deep and 0.8 high facing -y with its front at y = 0: its
         // top, its back inside (at y = 0.43) seen through the open doorway, and its door open
         // 90 degrees, standing out 0.6 m from the left edge.
-        let mut points = Vec::new();
-        for i in 0..=30 {
-            for j in 0..=40 {
-                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.43, 0.02 * j as f32));
-            }
-            for j in 0..=22 {
-                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.02 * j as f32, 0.8));
-            }
-        }
-        for i in 0..=30 {
-            for j in 0..=40 {
-                points.push(Vec3::new(-0.3, -0.02 * i as f32, 0.02 * j as f32));
-            }
-        }
+        let mut points = panel(Vec3::new(-0.3, 0.43, 0.0), Vec3::X, 30, Vec3::Z, 40);
+        points.extend(panel(Vec3::new(-0.3, 0.0, 0.8), Vec3::X, 30, Vec3::Y, 22));
+        points.extend(panel(
+            Vec3::new(-0.3, 0.0, 0.0),
+            Vec3::NEG_Y,
+            30,
+            Vec3::Z,
+            40,
+        ));
         let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
         let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");
         assert!(seen.front.origin.y.abs() < 0.021, "{:?}", seen.front);
@@ -371,19 +378,9 @@ mod tests {
 
     #[test]
     fn a_box_reaching_over_an_open_door_is_cut_back_to_the_front() {
-        // The front of the test above, 0.45 m deep behind it, with the door open 30 cm out.
-        let mut points = Vec::new();
-        for i in 0..=30 {
-            for j in 0..=40 {
-                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.0, 0.02 * j as f32));
-                points.push(Vec3::new(-0.3 + 0.02 * i as f32, 0.45, 0.02 * j as f32));
-            }
-        }
-        for i in 0..=15 {
-            for j in 0..=40 {
-                points.push(Vec3::new(0.3, -0.02 * i as f32, 0.02 * j as f32));
-            }
-        }
+        // The front with its door open 30 cm out, and its back 0.45 m behind it.
+        let mut points = front_with_open_door();
+        points.extend(panel(Vec3::new(-0.3, 0.45, 0.0), Vec3::X, 30, Vec3::Z, 40));
         let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
         assert!((bbox.size.y - 0.75).abs() < 1e-4);
         let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");

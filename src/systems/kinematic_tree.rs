@@ -26,7 +26,6 @@ use crate::graph::parts::PartJson;
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
-use crate::perception::fronts::placed_handle;
 use crate::perception::handles::Handle;
 use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneGravity;
@@ -114,12 +113,7 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
             });
             let parts = placed.map_or_else(Vec::new, |(model, frame)| {
                 let mut parts = model_parts(&model.model, &frame);
-                let modelled: Vec<Handle> = model
-                    .handles
-                    .iter()
-                    .map(|h| placed_handle(&frame, h))
-                    .collect();
-                attach_handles(&mut parts, perceived, &modelled);
+                attach_handles(&mut parts, perceived, &model.placed_handles(&frame));
                 parts
             });
             let links = node_links(node, placed.map(|(m, _)| &m.model), *pose, floor);

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use parry3d::query::PointQueryWithLocation;
 use parry3d::shape::TrianglePointLocation;
 use rayon::prelude::*;
@@ -14,7 +14,7 @@ use crate::cad::library::{LibraryEntry, build_sized_model};
 use crate::cad::model::CadModel;
 use crate::error::InputError;
 use crate::geometry::{Plane, TriMesh, plane::dominant_planes};
-use crate::perception::fronts::model_handles;
+use crate::perception::fronts::{model_handles, placed_handle};
 use crate::perception::handles::Handle;
 
 /// The folder of a scene's output that holds the models it uses from a `--cad` database.
@@ -105,6 +105,14 @@ impl DatabaseModel {
             handles,
             shape,
         })
+    }
+
+    /// Its handles carried into the world by `world_from_model` (scale included).
+    pub fn placed_handles(&self, world_from_model: &Affine3A) -> Vec<Handle> {
+        self.handles
+            .iter()
+            .map(|h| placed_handle(world_from_model, h))
+            .collect()
     }
 
     /// The closest point of the surface to `point` (model frame).

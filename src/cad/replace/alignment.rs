@@ -16,7 +16,7 @@ use crate::cad::db::database::{CadDatabase, DatabaseModel, parry_mesh};
 use crate::cad::replace::matching::{Candidate, ObservedObject};
 use crate::cad::replace::orientation::axis_rotations;
 use crate::classes::ClassTable;
-use crate::perception::fronts::{layout_error, placed_handle};
+use crate::perception::fronts::layout_error;
 
 /// Object points the optimisation works with (a deterministic stride through the mesh).
 const FIT_POINTS: usize = 300;
@@ -114,12 +114,7 @@ pub fn placed_layout_error(
     let Some(front) = &object.front else {
         return 0.0;
     };
-    let predicted: Vec<_> = model
-        .handles
-        .iter()
-        .map(|h| placed_handle(world_from_model, h))
-        .collect();
-    layout_error(&front.handles, &predicted)
+    layout_error(&front.handles, &model.placed_handles(world_from_model))
 }
 
 /// Aligns one candidate; `None` when the object has no points or the fit breaks down numerically.
