@@ -4,6 +4,7 @@ use glam::{Affine3A, Vec3};
 
 use crate::base::JointKind;
 use crate::cad::CadModel;
+use crate::cad::library::perceived::is_perceived_model;
 use crate::graph::parts::{PartFront, PartHandle, PartJoint, PartJointType, PartJson, PartSource};
 use crate::perception::handles::Handle;
 
@@ -11,9 +12,15 @@ use crate::perception::handles::Handle;
 /// it stands a few centimetres out of the front.
 const HANDLE_REACH_M: f32 = 0.05;
 
-/// The moving parts of `model` placed by `world_from_model`, listed from the model (`Cad`).
+/// The moving parts of `model` placed by `world_from_model`: `Perceived` for a model built from
+/// an object's perceived parts (`cad::library::perceived`), else listed from the CAD model.
 pub fn model_parts(model: &CadModel, world_from_model: &Affine3A) -> Vec<PartJson> {
     let poses = model.model_from_parts(&[]);
+    let source = if is_perceived_model(&model.id) {
+        PartSource::Perceived
+    } else {
+        PartSource::Cad
+    };
     model
         .parts
         .iter()
@@ -44,7 +51,7 @@ pub fn model_parts(model: &CadModel, world_from_model: &Affine3A) -> Vec<PartJso
                     size: (hi - lo).to_array(),
                 },
                 handle: None,
-                source: PartSource::Cad,
+                source,
             })
         })
         .collect()

@@ -11,6 +11,7 @@ use glam::{Affine3A, Vec3};
 use crate::geometry::{GravityBox, TriMesh};
 use crate::graph::build::surface_points;
 use crate::perception::handles::{Front, Handle, HandleKind, find_handles};
+use crate::perception::parts::{FrontExtent, PerceivedPart, front_extent, lay_out_parts};
 
 /// The front's points are those within its rectangle grown by this much sideways, metres (a
 /// handle near the edge, the box a little tight).
@@ -31,11 +32,18 @@ const SAME_BAR_COS: f32 = 0.866;
 /// Where surface points are sampled on a model to find its handles, metres apart.
 const MODEL_SAMPLE_SPACING_M: f32 = 0.01;
 
-/// What the camera saw of an object's front: the plane facing the room and the handles on it.
+/// What the camera saw of an object's front: the plane facing the room, the handles on it, the
+/// rectangle its doors and drawers cover and the parts the handles open there.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PerceivedFront {
     pub front: Front,
     pub handles: Vec<Handle>,
+    pub extent: FrontExtent,
+    pub parts: Vec<PerceivedPart>,
+    /// Nothing stands out in front of it beyond its handles: no door or drawer is open, nothing
+    /// stands before it. An open part hides what is behind it and shows its own edges, so
+    /// handles and parts are then less sure.
+    pub clear: bool,
 }
 
 /// The vertical face of `bbox` that faces most nearly along `facing` (horizontal), as a
@@ -58,8 +66,14 @@ pub fn box_front(bbox: &GravityBox, facing: Vec3) -> Option<(Front, f32, f32)> {
 /// face lie (the mode of their depth in the box, [`FRONT_BIN_M`] bins), not the box's face
 /// itself: a box also holds what stands out in front of the front (an open door, a chair's
 /// bleeding). The back, against a wall, is not seen; the inside's back, seen through a wide-open
-/// door, is told by where the carcass's top ends.
-pub fn perceive_front(bbox: &GravityBox, facing: Vec3, points: &[Vec3]) -> Option<PerceivedFront> {
+/// door, is told by where the carcass's top ends. The parts are laid out from the handles
+/// (`perception::parts`), pulled ones as flaps where `flaps`.
+pub fn perceive_front(
+    bbox: &GravityBox,
+    facing: Vec3,
+    points: &[Vec3],
+    flaps: bool,
+) -> Option<PerceivedFront> {
     let (face, half_width, half_height) = box_front(bbox, facing)?;
     let depth_of_box = 2.0 * face.origin.distance(bbox.center.with_z(face.origin.z));
     let across: Vec<Vec3> = points
@@ -81,14 +95,35 @@ pub fn perceive_front(bbox: &GravityBox, facing: Vec3, points: &[Vec3]) -> Optio
     };
     let front = Front::new(face.origin + face.normal * depth, face.normal)?;
     let on_front: Vec<Vec3> = across
-        .into_iter()
+        .iter()
+        .copied()
         .filter(|p| (-BEHIND_M..=IN_FRONT_M).contains(&front.local(*p).z))
         .collect();
+    let handles = find_handles(&front, &on_front);
+    let beyond = handles.iter().map(|h| h.depth).fold(0.0, f32::max) + BEYOND_HANDLES_M;
+    let in_front = across
+        .iter()
+        .filter(|p| front.local(**p).z > beyond)
+        .count();
+    let clear = in_front as f32 <= MAX_IN_FRONT_SHARE * across.len() as f32;
+    let face = FrontExtent {
+        right: [-half_width, half_width],
+        z: [bbox.bottom_z(), bbox.top_z()],
+    };
+    let extent = front_extent(&front, face, &on_front);
+    let parts = lay_out_parts(&front, extent, &handles, flaps);
     Some(PerceivedFront {
         front,
-        handles: find_handles(&front, &on_front),
+        handles,
+        extent,
+        parts,
+        clear,
     })
 }
+
+/// A front is clear when at most this share of the points across it stand out beyond its
+/// handles.
+const MAX_IN_FRONT_SHARE: f32 = 0.03;
 
 /// A carcass edge this far (metres) in front of the largest plane across the face means the
 /// plane is the back of an open inside, not the front: doors stand at most a board in front
@@ -251,7 +286,7 @@ pub fn model_handles(visual: &TriMesh, size: Vec3) -> Vec<Handle> {
             .or_insert(p);
     }
     let seen: Vec<Vec3> = frontmost.into_values().collect();
-    perceive_front(&bbox, Vec3::NEG_Y, &seen).map_or_else(Vec::new, |f| f.handles)
+    perceive_front(&bbox, Vec3::NEG_Y, &seen, false).map_or_else(Vec::new, |f| f.handles)
 }
 
 /// `handle` carried by `frame` (a placed model's world-from-model, scale included).
@@ -351,7 +386,7 @@ mod tests {
         let bar = (0..=10).map(|i| Vec3::new(0.2, -0.025, 0.3 + 0.02 * i as f32));
         points.extend(bar.clone().chain(bar.map(|p| p + Vec3::Y * 0.01)));
         let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
-        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");
+        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points, false).expect("front");
         assert!(seen.front.origin.y.abs() < 0.011, "{:?}", seen.front);
         assert_eq!(seen.handles.len(), 1, "{:?}", seen.handles);
         assert!(seen.handles[0].axis.z.abs() > 0.99);
@@ -372,7 +407,7 @@ mod tests {
             40,
         ));
         let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
-        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");
+        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points, false).expect("front");
         assert!(seen.front.origin.y.abs() < 0.021, "{:?}", seen.front);
     }
 
@@ -383,7 +418,7 @@ mod tests {
         points.extend(panel(Vec3::new(-0.3, 0.45, 0.0), Vec3::X, 30, Vec3::Z, 40));
         let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
         assert!((bbox.size.y - 0.75).abs() < 1e-4);
-        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points).expect("front");
+        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points, false).expect("front");
         let (cut, kept) = cut_to_front(&bbox, &seen, &points).expect("a cut");
         // Cut back to 2 cm in front of the front (no handles here).
         assert!((cut.size.y - 0.47).abs() < 0.011, "{cut:?}");

@@ -2,8 +2,7 @@
 //! open (after Rusu et al. 2008, "Towards 3D Point Cloud Based Object Maps for Household
 //! Environments", Sect. V): the front is a plane; a handle is a cluster of points standing 1 to
 //! 8 cm out of it; a cluster long and thin across the front is a bar (a line fitted to it), a
-//! small round one a knob. A part with a vertical bar is a door hinged on the edge away from
-//! the handle; a horizontal bar or a knob in the middle of a part pulls out a drawer.
+//! small round one a knob. What each opens is `perception::parts`'s.
 //!
 //! Bevy-free: the pipeline gives it an object's observed surface points and the front's frame.
 
@@ -165,61 +164,10 @@ fn handle_of(front: &Front, plane: f32, members: &[Vec3]) -> Option<Handle> {
     })
 }
 
-/// A rectangle of a front (a door's or drawer's face), in the front's frame: `right` and `up`
-/// ranges, metres.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrontRect {
-    pub right: (f32, f32),
-    pub up: (f32, f32),
-}
-
-/// Which vertical edge of a door its hinge is on, as seen from the room.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum HingeSide {
-    Left,
-    Right,
-}
-
-/// How a part of a front opens, from its handle.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PartMotion {
-    /// Pulled straight out along the front's normal.
-    Drawer,
-    /// Turned about a vertical axis on one edge.
-    Door(HingeSide),
-    /// Turned down about its bottom edge (an oven's door, a flap).
-    Flap,
-}
-
-/// How the part `rect` of `front` opens, judged by its `handle` (Rusu et al.'s rules): a
-/// vertical bar or an off-centre knob makes a door hinged on the edge away from it; a
-/// horizontal bar near the top of a tall part a flap; a horizontal bar or a knob across the
-/// middle a drawer.
-pub fn part_motion(front: &Front, rect: &FrontRect, handle: &Handle) -> PartMotion {
-    let at = front.local(handle.center);
-    let width = rect.right.1 - rect.right.0;
-    let height = rect.up.1 - rect.up.0;
-    let mid = 0.5 * (rect.right.0 + rect.right.1);
-    let hinge_away = if at.x >= mid {
-        HingeSide::Left
-    } else {
-        HingeSide::Right
-    };
-    let off_centre = (at.x - mid).abs() > 0.25 * width;
-    match handle.kind {
-        HandleKind::Bar if handle.axis.z.abs() > std::f32::consts::FRAC_1_SQRT_2 => {
-            PartMotion::Door(hinge_away)
-        }
-        HandleKind::Bar if height > width && at.y > rect.up.1 - 0.25 * height => PartMotion::Flap,
-        HandleKind::Bar => PartMotion::Drawer,
-        HandleKind::Knob if off_centre => PartMotion::Door(hinge_away),
-        HandleKind::Knob => PartMotion::Drawer,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::perception::parts::{FrontExtent, PartKind, Side, lay_out_parts};
 
     /// A cabinet front facing -y at y = 0 (so the room is at y < 0), 0.6 m wide from x = 0 and
     /// 0.8 m high from z = 0.1, sampled every 2 cm with `noise` metres of depth noise.
@@ -256,11 +204,13 @@ mod tests {
         (front, handles)
     }
 
-    fn rect() -> FrontRect {
-        FrontRect {
-            right: (-0.3, 0.3),
-            up: (-0.4, 0.4),
-        }
+    /// How the part covering the whole test front opens, by `handle` (`perception::parts`).
+    fn motion(front: &Front, handle: &Handle) -> PartKind {
+        let extent = FrontExtent {
+            right: [-0.3, 0.3],
+            z: [0.1, 0.9],
+        };
+        lay_out_parts(front, extent, &[*handle], false)[0].kind
     }
 
     #[test]
@@ -283,10 +233,7 @@ mod tests {
         // Seen from the room (looking along +y), +x is on the right: the handle is at the
         // right edge, the hinge at the left.
         assert!(front.right.x > 0.99);
-        assert_eq!(
-            part_motion(&front, &rect(), &h),
-            PartMotion::Door(HingeSide::Left)
-        );
+        assert_eq!(motion(&front, &h), PartKind::Door { hinge: Side::Left });
     }
 
     #[test]
@@ -299,13 +246,13 @@ mod tests {
         let h = handles[0];
         assert_eq!(h.kind, HandleKind::Bar);
         assert!(h.axis.x.abs() > 0.99, "{h:?}");
-        assert_eq!(part_motion(&front, &rect(), &h), PartMotion::Drawer);
+        assert_eq!(motion(&front, &h), PartKind::Drawer);
         let (front, handles) = handles_with(bar(
             Vec3::new(0.2, 0.0, 0.83),
             Vec3::new(0.4, 0.0, 0.83),
             0.03,
         ));
-        assert_eq!(part_motion(&front, &rect(), &handles[0]), PartMotion::Flap);
+        assert_eq!(motion(&front, &handles[0]), PartKind::Flap);
     }
 
     #[test]
@@ -322,8 +269,8 @@ mod tests {
         assert!(handles[0].length < MAX_KNOB_WIDTH_M);
         // x = 0.08 is at the left as seen from the room: hinged on the right.
         assert_eq!(
-            part_motion(&front, &rect(), &handles[0]),
-            PartMotion::Door(HingeSide::Right)
+            motion(&front, &handles[0]),
+            PartKind::Door { hinge: Side::Right }
         );
     }
 

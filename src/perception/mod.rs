@@ -5,3 +5,4 @@
 
 pub mod fronts;
 pub mod handles;
+pub mod parts;

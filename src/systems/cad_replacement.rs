@@ -14,6 +14,7 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::cad::db::database::CadDatabase;
+use crate::cad::library::perceived::is_perceived_model;
 use crate::cad::replace::alignment::Alignment;
 use crate::cad::replace::matching::Candidate;
 use crate::cad::replace::replacement::{
@@ -21,6 +22,7 @@ use crate::cad::replace::replacement::{
     rank_scene,
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
+use crate::cad::replace::synthesis::add_perceived_models;
 use crate::components::{
     CadAlignments, CadCandidates, CadModel, ObservedSurface, PerceivedFront, SceneEntity,
     ShapeRejection,
@@ -32,6 +34,11 @@ use crate::systems::scene_nodes::SceneNodes;
 /// The database replacement chooses from (the parametric library unless one is given).
 #[derive(Resource, Clone)]
 pub struct CadLibrary(pub Arc<CadDatabase>);
+
+/// The models CadAlign's alignments refer to: the database replacement chooses from and, after
+/// its models, those built from perceived parts where no model agreed with them.
+#[derive(Resource, Clone)]
+pub struct AlignedModels(pub Arc<CadDatabase>);
 
 /// The models the placements of the scene's contact graph refer to: the database replacement
 /// chose from, and the library models the physical check built to an object's size.
@@ -169,7 +176,8 @@ fn cad_match_stage(
 }
 
 /// CadAlign: every object's candidates aligned to its observed surface (a rejected object gets
-/// none), reusing a live session's earlier alignments of objects that have not changed.
+/// none), reusing a live session's earlier alignments of objects that have not changed, and a
+/// model built from the perceived parts of each object no candidate agrees with.
 fn cad_align_stage(
     mut commands: Commands,
     nodes: SceneNodes,
@@ -192,7 +200,7 @@ fn cad_align_stage(
                 .unwrap_or_default()
         })
         .collect();
-    let aligned = align_scene_reusing(&objects, &library.0, &ranked, method.0, |o| {
+    let mut aligned = align_scene_reusing(&objects, &library.0, &ranked, method.0, |o| {
         cache.as_ref().and_then(|c| c.reuse(o))
     });
     if let Some(mut cache) = cache {
@@ -202,6 +210,15 @@ fn cad_align_stage(
             .map(|(o, a)| (o.id.to_string(), (o.class.to_string(), o.bbox, a.clone())))
             .collect();
     }
+    // After the cache took the database's alignments: the built models' indices hold for this
+    // pass only.
+    let perceived = add_perceived_models(&objects, &library.0, &mut aligned);
+    let models = if perceived.is_empty() {
+        library.0.clone()
+    } else {
+        Arc::new(library.0.with_models(perceived))
+    };
+    commands.insert_resource(AlignedModels(models));
     for (object, alignments) in objects.iter().zip(aligned) {
         commands
             .entity(entity_of[object.id])
@@ -219,7 +236,7 @@ fn physical_check_stage(
     surfaces: Query<(&SceneEntity, &ObservedSurface)>,
     aligned: Query<&CadAlignments>,
     findings: Query<(Option<&ShapeRejection>, Option<&PerceivedFront>)>,
-    library: Option<Res<CadLibrary>>,
+    library: Option<Res<AlignedModels>>,
     method: Res<CadAlignMethod>,
 ) {
     let Some(db) = library.map(|l| l.0.clone()) else {
@@ -272,7 +289,11 @@ fn physical_check_stage(
         .then(|| replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32);
     commands.insert_resource(CadReport {
         align_method: method.0,
-        database_models: db.len(),
+        database_models: db
+            .models()
+            .iter()
+            .filter(|m| !is_perceived_model(&m.model.id))
+            .count(),
         rejected,
         objects: object_count,
         swapped: replaced.iter().filter(|r| r.check.chosen > 0).count(),

@@ -22,6 +22,7 @@ mod live;
 mod model_import;
 mod onnx;
 mod panoptic;
+mod perceived_parts;
 mod pipeline;
 mod readers;
 mod render_ground_truth;

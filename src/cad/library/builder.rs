@@ -314,6 +314,30 @@ impl PartsBuilder {
         drawer
     }
 
+    /// Gives the handle of `part` (the `<name>_handle` part a door or drawer helper added) the
+    /// geometry `mesh`, given in the body's frame: a handle where it was seen instead of where
+    /// the helper puts one.
+    pub fn reshape_handle(&mut self, part: usize, mesh: &TriMesh) -> &mut Self {
+        let Some(name) = self.parts.get(part).map(|p| format!("{}_handle", p.name)) else {
+            return self;
+        };
+        let mut body_from_part = Affine3A::IDENTITY;
+        let mut at = Some(part);
+        while let Some(k) = at.filter(|&k| k != Self::BODY) {
+            body_from_part = self.parts[k].parent_from_part * body_from_part;
+            at = self.parts[k].parent;
+        }
+        let part_from_body = body_from_part.inverse();
+        if let Some(handle) = self
+            .parts
+            .iter_mut()
+            .find(|p| p.parent == Some(part) && p.name == name)
+        {
+            handle.mesh = mesh.transformed(&part_from_body);
+        }
+        self
+    }
+
     /// The finished model, moved so that the bottom centre of its closed bounding box is the origin.
     pub fn finish(mut self, id: &str, class: &str) -> CadModel {
         let provisional = CadModel {

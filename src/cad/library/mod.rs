@@ -2,6 +2,7 @@
 
 pub mod appliances;
 pub mod builder;
+pub mod perceived;
 pub mod seating;
 pub mod storage;
 pub mod tables;

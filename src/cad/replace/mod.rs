@@ -11,3 +11,4 @@ pub mod replacement;
 pub mod separation;
 pub mod shape_filter;
 pub mod sizing;
+pub mod synthesis;

@@ -21,6 +21,7 @@ use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
 use crate::perception::fronts::{cut_to_front, perceive_front};
+use crate::perception::parts::opens_as_flap;
 
 /// Objects with fewer segment points than this keep their segment mesh: too little was seen to
 /// align anything to.
@@ -100,7 +101,7 @@ pub fn observed_objects<'a>(
                 .is_some_and(|c| c.kind == EntityKind::Articulated);
             let front = facing
                 .filter(|_| articulated)
-                .and_then(|f| perceive_front(&bbox, f.direction, p));
+                .and_then(|f| perceive_front(&bbox, f.direction, p, opens_as_flap(&n.class)));
             // An open door or drawer (or what stands in front) is no part of the closed object
             // the models are fitted as.
             let (bbox, points) = match front.as_ref().and_then(|f| cut_to_front(&bbox, f, p)) {
