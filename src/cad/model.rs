@@ -94,4 +94,89 @@ impl CadModel {
     pub fn is_articulated(&self) -> bool {
         self.movable_parts().next().is_some()
     }
+
+    /// Whether a door of it turns about a vertical hinge at one side: mirroring it moves the
+    /// hinge to the other side.
+    pub fn has_side_hinges(&self) -> bool {
+        self.parts
+            .iter()
+            .any(|p| p.joint.kind == crate::base::JointKind::Revolute && p.joint.axis.z.abs() > 0.9)
+    }
+
+    /// The model mirrored across its x = 0 plane (left and right swapped, seen from the front),
+    /// as `id`: the same box, its side hinges on the other sides. Every frame is conjugated by
+    /// the mirror `M` (`M A M`), meshes mirrored with their triangles turned back outwards; a
+    /// hinge axis `a` becomes `-M a` (a mirror turns a right-handed rotation into a left-handed
+    /// one), a slide axis `M a`.
+    pub fn mirrored(&self, id: String) -> CadModel {
+        let m = Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        let mirror_mesh = |mesh: &TriMesh| TriMesh {
+            positions: mesh
+                .positions
+                .iter()
+                .map(|p| p * Vec3::new(-1.0, 1.0, 1.0))
+                .collect(),
+            triangles: mesh
+                .triangles
+                .iter()
+                .map(|[a, b, c]| [*a, *c, *b])
+                .collect(),
+        };
+        let parts = self
+            .parts
+            .iter()
+            .map(|p| {
+                let axis = m.transform_vector3(p.joint.axis);
+                let axis = match p.joint.kind {
+                    crate::base::JointKind::Revolute => -axis,
+                    _ => axis,
+                };
+                CadPart {
+                    name: p.name.clone(),
+                    parent: p.parent,
+                    parent_from_part: m * p.parent_from_part * m,
+                    joint: JointSpec { axis, ..p.joint },
+                    mesh: mirror_mesh(&p.mesh),
+                    visual: p.visual.as_ref().map(mirror_mesh),
+                    color: p.color,
+                }
+            })
+            .collect();
+        CadModel {
+            id,
+            class: self.class.clone(),
+            size: self.size,
+            parts,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cad::ParametricLibrary;
+
+    #[test]
+    fn a_mirrored_model_opens_as_the_mirror_image_of_the_model() {
+        for id in ["fridge_01", "cabinet_03", "microwave_02"] {
+            let model = ParametricLibrary::get(id).expect("model").model();
+            assert!(model.has_side_hinges(), "{id}");
+            let mirrored = model.mirrored(format!("{id}.mirrored"));
+            // Every joint half open.
+            let values: Vec<(String, f32)> = model
+                .parts
+                .iter()
+                .filter_map(|p| Some((p.name.clone(), 0.5 * p.joint.limits?.1)))
+                .collect();
+            let (a, b) = (model.merged_mesh(&values), mirrored.merged_mesh(&values));
+            assert_eq!(a.positions.len(), b.positions.len());
+            for (p, q) in a.positions.iter().zip(&b.positions) {
+                assert!(
+                    (*p * Vec3::new(-1.0, 1.0, 1.0) - *q).length() < 1e-5,
+                    "{id}: {p} {q}"
+                );
+            }
+            assert_eq!(mirrored.size, model.size);
+        }
+    }
 }

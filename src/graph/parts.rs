@@ -77,15 +77,23 @@ impl PartJson {
         Vec3::from_array(self.front.center)
     }
 
-    /// The way the front's centre starts to move when the part opens (unit).
+    /// The way the front's centre starts to move when the part opens (unit): towards the end of
+    /// its range farther from zero, which is the negative end for some imported models (LIBERO's
+    /// drawers slide along +y from -0.5 to 0.03).
     pub fn opening_direction(&self) -> Vec3 {
-        match self.joint.kind {
+        let sign = if self.joint.upper.abs() >= self.joint.lower.abs() {
+            1.0
+        } else {
+            -1.0
+        };
+        let direction = match self.joint.kind {
             PartJointType::Prismatic => self.axis(),
             PartJointType::Revolute => self
                 .axis()
                 .cross(self.front_center() - Vec3::from_array(self.joint.origin))
                 .normalize_or_zero(),
-        }
+        };
+        sign * direction
     }
 
     /// The same part seen from another frame (`to_from_this` may scale; axes stay unit).
@@ -121,5 +129,45 @@ impl PartJson {
             }),
             source: self.source,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn part(kind: PartJointType, axis: [f32; 3], lower: f32, upper: f32) -> PartJson {
+        PartJson {
+            name: "p".into(),
+            joint: PartJoint {
+                kind,
+                axis,
+                origin: [0.0, 0.0, 0.0],
+                lower,
+                upper,
+            },
+            front: PartFront {
+                center: [0.3, 0.0, 0.4],
+                size: [0.6, 0.02, 0.8],
+            },
+            handle: None,
+            source: PartSource::Cad,
+        }
+    }
+
+    #[test]
+    fn a_part_opens_towards_the_end_of_its_range_farther_from_zero() {
+        // The library's drawer slides along -y from 0 to 0.3; LIBERO's along +y from -0.5 to
+        // 0.03: both come out towards -y.
+        let library = part(PartJointType::Prismatic, [0.0, -1.0, 0.0], 0.0, 0.3);
+        let libero = part(PartJointType::Prismatic, [0.0, 1.0, 0.0], -0.5, 0.03);
+        assert!(library.opening_direction().dot(Vec3::NEG_Y) > 0.99);
+        assert!(libero.opening_direction().dot(Vec3::NEG_Y) > 0.99);
+        // A door hinged at x = 0 with its front towards +x: turning about -z swings it out to -y;
+        // about +z to a negative limit as well.
+        let door = part(PartJointType::Revolute, [0.0, 0.0, -1.0], 0.0, 1.8);
+        let negative = part(PartJointType::Revolute, [0.0, 0.0, 1.0], -1.8, 0.0);
+        assert!(door.opening_direction().dot(Vec3::NEG_Y) > 0.99);
+        assert!(negative.opening_direction().dot(Vec3::NEG_Y) > 0.99);
     }
 }

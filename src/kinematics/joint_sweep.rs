@@ -155,7 +155,7 @@ pub fn sweep_joints(tree: &KinematicTree) -> Vec<JointSweep> {
 }
 
 /// The open end of a joint's range: the limit farther from zero.
-fn open_value(tree: &KinematicTree, link: usize) -> f32 {
+pub fn open_value(tree: &KinematicTree, link: usize) -> f32 {
     let (lo, hi) = tree.links[link].joint.limits.unwrap_or((0.0, 0.0));
     if hi.abs() >= lo.abs() { hi } else { lo }
 }

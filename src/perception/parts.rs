@@ -127,6 +127,11 @@ const FLAP_TOP_SHARE: f32 = 0.25;
 /// handles' band, 8 cm) is more likely the edge of an open door or drawer crossing the band, and
 /// lays out no part.
 const MAX_PART_HANDLE_OUT_M: f32 = 0.06;
+/// Handles sit on their parts, a few centimetres in from the edges: one centred within this
+/// distance (metres) of the extent's edge, or beyond it, is more likely the edge of the carcass
+/// or of a worktop (a wall unit seen from below shows its top edge as a knob) and lays out
+/// nothing.
+const EDGE_MARGIN_M: f32 = 0.02;
 
 struct Placed {
     handle: Handle,
@@ -160,6 +165,13 @@ pub fn lay_out_parts(
     let mut placed: Vec<Placed> = handles
         .iter()
         .filter(|h| h.depth <= MAX_PART_HANDLE_OUT_M)
+        .filter(|h| {
+            let (right, z) = (front.local(h.center).x, h.center.z);
+            right >= extent.right[0] + EDGE_MARGIN_M
+                && right <= extent.right[1] - EDGE_MARGIN_M
+                && z >= extent.z[0] + EDGE_MARGIN_M
+                && z <= extent.z[1] - EDGE_MARGIN_M
+        })
         .map(|h| {
             let right = front.local(h.center).x;
             let role = match h.kind {

@@ -317,11 +317,7 @@ pub fn open_fraction(tree: &KinematicTree, link: usize) -> f32 {
     (l.value / open).clamp(0.0, 1.0)
 }
 
-/// The open end of a joint's range: the limit farther from zero.
-pub fn open_value(tree: &KinematicTree, link: usize) -> f32 {
-    let (lo, hi) = tree.links[link].joint.limits.unwrap_or((0.0, 0.0));
-    if hi.abs() >= lo.abs() { hi } else { lo }
-}
+pub use crate::kinematics::joint_sweep::open_value;
 
 /// The closed end of a joint's range: the limit nearer zero.
 pub fn closed_value(tree: &KinematicTree, link: usize) -> f32 {

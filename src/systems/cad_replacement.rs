@@ -22,7 +22,7 @@ use crate::cad::replace::replacement::{
     rank_scene,
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
-use crate::cad::replace::synthesis::add_perceived_models;
+use crate::cad::replace::synthesis::add_perceived_candidates;
 use crate::components::{
     CadAlignments, CadCandidates, CadModel, ObservedSurface, PerceivedFront, SceneEntity,
     ShapeRejection,
@@ -36,7 +36,7 @@ use crate::systems::scene_nodes::SceneNodes;
 pub struct CadLibrary(pub Arc<CadDatabase>);
 
 /// The models CadAlign's alignments refer to: the database replacement chooses from and, after
-/// its models, those built from perceived parts where no model agreed with them.
+/// its models, the mirrored and built ones the perceived parts asked for.
 #[derive(Resource, Clone)]
 pub struct AlignedModels(pub Arc<CadDatabase>);
 
@@ -176,8 +176,8 @@ fn cad_match_stage(
 }
 
 /// CadAlign: every object's candidates aligned to its observed surface (a rejected object gets
-/// none), reusing a live session's earlier alignments of objects that have not changed, and a
-/// model built from the perceived parts of each object no candidate agrees with.
+/// none), reusing a live session's earlier alignments of objects that have not changed, and the
+/// candidates the perceived parts ask for (mirrored models, a model built from the parts).
 fn cad_align_stage(
     mut commands: Commands,
     nodes: SceneNodes,
@@ -212,7 +212,7 @@ fn cad_align_stage(
     }
     // After the cache took the database's alignments: the built models' indices hold for this
     // pass only.
-    let perceived = add_perceived_models(&objects, &library.0, &mut aligned);
+    let perceived = add_perceived_candidates(&objects, &library.0, &mut aligned);
     let models = if perceived.is_empty() {
         library.0.clone()
     } else {

@@ -37,6 +37,9 @@ const BAR_THICKNESS_M: f32 = 0.016;
 const HANDLE_OUT_M: (f32, f32) = (0.015, 0.06);
 /// Parts narrower or lower than this (metres) are not built: a handle seen at the very edge.
 const MIN_PART_M: f32 = 0.08;
+/// A box shallower than this (metres) holds no carcass with doors and drawers: a segment of
+/// a front alone.
+const MIN_DEPTH_M: f32 = 0.15;
 
 /// The model of `class` for object `object_id`, whose closed box is `bbox` (world frame), built
 /// from the parts perceived on its front `seen`, and the placement of its frame in the world
@@ -60,6 +63,9 @@ pub fn perceived_model(
         extent_along(front.normal),
         bbox.size.z,
     );
+    if depth < MIN_DEPTH_M {
+        return None;
+    }
     let bottom = bbox.bottom_z();
     // The builder's frame: x along the front's right, y into the object, z up from the floor,
     // the origin under the box's centre.
@@ -310,8 +316,13 @@ mod tests {
     }
 
     #[test]
-    fn a_front_without_parts_builds_nothing() {
+    fn a_front_without_parts_or_a_box_too_shallow_for_a_carcass_builds_nothing() {
         let (bbox, mut front) = seen();
+        let shallow = GravityBox {
+            size: Vec3::new(0.8, 0.047, 0.9),
+            ..bbox
+        };
+        assert!(perceived_model("cabinet_3", "cabinet", &shallow, &front).is_none());
         front.parts.clear();
         assert!(perceived_model("cabinet_3", "cabinet", &bbox, &front).is_none());
     }

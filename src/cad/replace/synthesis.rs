@@ -1,7 +1,8 @@
-//! Objects no model of the database fits (issue 36, section 2): an object of an articulated
-//! class whose clear front shows doors and drawers where no aligned candidate has a single handle
-//! gets a model built from its box and those parts (`cad::library::perceived`) as one more
-//! candidate, chosen by the same score as the database's.
+//! Candidates the perceived parts ask for (issue 36, section 2): a database model mirrored where
+//! its doors hinge on the other side of the perceived ones, and, for an object of an
+//! articulated class whose clear front shows doors and drawers where no aligned candidate has a
+//! single handle, a model built from its box and those parts (`cad::library::perceived`). Both
+//! are chosen by the same score as the database's.
 //!
 //! Only then: on held-out rooms (`iscene benchmark`) a model built whenever no candidate agreed
 //! with half of the perceived handles lost to the library's true model in 3 of 20 rooms, where a
@@ -20,42 +21,97 @@ use crate::cad::replace::matching::{Candidate, ObservedObject};
 
 /// A candidate's layout error below this pairs at least one handle with a perceived one.
 const SOME_HANDLE_PAIRED: f32 = 1.0 - 1e-4;
+/// The best this many alignments of an object are tried mirrored.
+const MIRRORED_CANDIDATES: usize = 3;
+/// A mirrored model's id is its model's with this suffix.
+pub const MIRRORED_SUFFIX: &str = ".mirrored";
 
-/// For every object (in `objects`' order) with a clear front (`PerceivedFront::clear`) where
-/// none of its `alignments` pairs a handle with a perceived one, the model built from its
-/// perceived parts, aligned and sorted in among its alignments by
-/// [`choice_score`]; the candidates of such models index past `db`'s models, in the order of the
-/// returned models (`db.with_models(returned)` holds them all).
-pub fn add_perceived_models(
+/// Adds to each object's `alignments` (in `objects`' order) the candidates its perceived parts
+/// ask for, sorted in by [`choice_score`]:
+/// - the best candidates with side-hinged doors, mirrored (hinges on the other sides), where
+///   that pairs more of their handles with the perceived ones on a clear front
+///   (`PerceivedFront::clear`);
+/// - where the front is clear and none of the alignments pairs a single handle with a perceived
+///   one, the model built from the perceived parts.
+///
+/// Returns the models they use; their candidates index past `db`'s models in the order returned
+/// (`db.with_models(returned)` holds them all).
+pub fn add_perceived_candidates(
     objects: &[ObservedObject],
     db: &CadDatabase,
     alignments: &mut [Vec<Alignment>],
 ) -> Vec<DatabaseModel> {
-    let built: Vec<Option<(DatabaseModel, Alignment)>> = objects
+    let added: Vec<Vec<(DatabaseModel, Alignment)>> = objects
         .par_iter()
         .zip(alignments.par_iter())
         .map(|(object, aligned)| {
-            let clear = object.front.as_ref().is_some_and(|f| f.clear);
-            let some_fit = aligned.iter().any(|a| a.layout_error < SOME_HANDLE_PAIRED);
-            if !clear || some_fit {
-                return None;
+            if !object.front.as_ref().is_some_and(|f| f.clear) {
+                return Vec::new();
             }
-            perceived_alignment(object)
+            let mut added = mirrored_alignments(object, db, aligned);
+            let some_fit = aligned.iter().any(|a| a.layout_error < SOME_HANDLE_PAIRED);
+            if !some_fit {
+                added.extend(perceived_alignment(object));
+            }
+            added
         })
         .collect();
-    let mut models = Vec::new();
-    for ((model, mut alignment), aligned) in built
-        .into_iter()
-        .zip(alignments.iter_mut())
-        .filter_map(|(b, a)| Some((b?, a)))
-    {
-        alignment.candidate.model = db.len() + models.len();
-        models.push(model);
-        aligned.push(alignment);
+    let mut models: Vec<DatabaseModel> = Vec::new();
+    for (found, aligned) in added.into_iter().zip(alignments.iter_mut()) {
+        if found.is_empty() {
+            continue;
+        }
+        for (model, mut alignment) in found {
+            // Two objects may mirror the same model: one copy serves both.
+            let index = match models.iter().position(|m| m.model.id == model.model.id) {
+                Some(k) => k,
+                None => {
+                    models.push(model);
+                    models.len() - 1
+                }
+            };
+            alignment.candidate.model = db.len() + index;
+            aligned.push(alignment);
+        }
         // A stable sort: equal scores keep the database's candidates first.
         aligned.sort_by(|a, b| choice_score(a).total_cmp(&choice_score(b)));
     }
     models
+}
+
+/// The best [`MIRRORED_CANDIDATES`] of `aligned` whose models have side hinges, mirrored in
+/// place, where that pairs more handles with the perceived ones.
+fn mirrored_alignments(
+    object: &ObservedObject,
+    db: &CadDatabase,
+    aligned: &[Alignment],
+) -> Vec<(DatabaseModel, Alignment)> {
+    aligned
+        .iter()
+        .take(MIRRORED_CANDIDATES)
+        .filter(|a| a.layout_error > 0.0)
+        .filter_map(|a| {
+            let model = &db.models().get(a.candidate.model)?.model;
+            if !model.has_side_hinges() || model.id.ends_with(MIRRORED_SUFFIX) {
+                return None;
+            }
+            let mirrored = model.mirrored(format!("{}{MIRRORED_SUFFIX}", model.id));
+            let mirrored = DatabaseModel::new(mirrored).ok()?;
+            let layout_error = placed_layout_error(object, &mirrored, &a.world_from_model);
+            if layout_error >= a.layout_error {
+                return None;
+            }
+            let alignment_error = alignment_error(&object.points, &mirrored, &a.world_from_model)?;
+            let alignment = Alignment {
+                candidate: a.candidate,
+                world_from_model: a.world_from_model,
+                scale: a.scale,
+                alignment_error,
+                layout_error,
+            };
+            Some((mirrored, alignment))
+        })
+        .collect()
 }
 
 /// The model built from `object`'s perceived parts, placed on its box, with its alignment
