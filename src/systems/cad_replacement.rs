@@ -14,7 +14,6 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::cad::db::database::CadDatabase;
-use crate::cad::library::perceived::is_perceived_model;
 use crate::cad::replace::alignment::Alignment;
 use crate::cad::replace::matching::Candidate;
 use crate::cad::replace::replacement::{
@@ -236,10 +235,11 @@ fn physical_check_stage(
     surfaces: Query<(&SceneEntity, &ObservedSurface)>,
     aligned: Query<&CadAlignments>,
     findings: Query<(Option<&ShapeRejection>, Option<&PerceivedFront>)>,
-    library: Option<Res<AlignedModels>>,
+    aligned_models: Option<Res<AlignedModels>>,
+    library: Option<Res<CadLibrary>>,
     method: Res<CadAlignMethod>,
 ) {
-    let Some(db) = library.map(|l| l.0.clone()) else {
+    let Some(db) = aligned_models.map(|l| l.0.clone()) else {
         return;
     };
     let graph = nodes.contact_graph();
@@ -289,11 +289,7 @@ fn physical_check_stage(
         .then(|| replaced.iter().map(|r| r.alignment_error_m).sum::<f32>() / replaced.len() as f32);
     commands.insert_resource(CadReport {
         align_method: method.0,
-        database_models: db
-            .models()
-            .iter()
-            .filter(|m| !is_perceived_model(&m.model.id))
-            .count(),
+        database_models: library.map_or(db.len(), |l| l.0.len()),
         rejected,
         objects: object_count,
         swapped: replaced.iter().filter(|r| r.check.chosen > 0).count(),

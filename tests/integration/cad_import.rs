@@ -11,6 +11,7 @@ use crate::common;
 use iscene::cad::db::database::{CadDatabase, SCENE_MODELS};
 use iscene::cad::db::load::{read_database, read_model};
 use iscene::eval::evaluate_reconstruction;
+use iscene::classes::EntityKind;
 use iscene::graph::ContactGraph;
 
 /// Sweet Home 3D's shared folder as scripts/setup-sh3d.sh unpacks it.
@@ -222,13 +223,20 @@ fn with_only_sweet_home_3d_models_objects_get_models_of_their_class_and_true_siz
             Some(d) if d <= 0.01 => {}
             other => failures.push(format!("{name}: models interpenetrate by {other:?} m")),
         }
-        // Only imported models, each copied beside the scene.
+        // Only imported models, each copied beside the scene; the catalogues' cabinets and
+        // appliances are rigid, so an object that shows doors and drawers gets an articulated
+        // model built from them instead (issue 36), copied beside the scene as well.
         let graph = ContactGraph::load(&out.join("contact_graph.json")).expect("graph");
         let scene_db = CadDatabase::for_scene(&out).expect("the scene's models");
         for node in &graph.nodes {
             let Some(c) = &node.cad else { continue };
             let copied = out.join(SCENE_MODELS).join(format!("{}.glb", c.model));
-            if !c.model.starts_with("sh3d_")
+            let built = c.model.starts_with("perceived_")
+                && node.kind == EntityKind::Articulated
+                && scene_db
+                    .get(&c.model)
+                    .is_some_and(|m| m.model.is_articulated());
+            if !(c.model.starts_with("sh3d_") || built)
                 || !copied.is_file()
                 || scene_db.get(&c.model).is_none()
             {

@@ -111,7 +111,8 @@ fn issue_bar(name: &str, seq: &Path, out: &Path) -> Vec<String> {
     let mut placed = BTreeMap::new();
     for node in &graph.nodes {
         let Some(c) = &node.cad else { continue };
-        let entry = ParametricLibrary::get(library_model_id(&c.model)).expect("a library model");
+        let entry = ParametricLibrary::get(library_model_id(&c.model))
+            .unwrap_or_else(|| panic!("{name}: {} got {}, not a library model", node.id, c.model));
         assert_eq!(
             entry.class, node.class,
             "{name}: {} got {}",

@@ -32,7 +32,8 @@ pub const MIRRORED_SUFFIX: &str = ".mirrored";
 ///   that pairs more of their handles with the perceived ones on a clear front
 ///   (`PerceivedFront::clear`);
 /// - where the front is clear and none of the alignments pairs a single handle with a perceived
-///   one, the model built from the perceived parts.
+///   one (an articulated model with no handle found on it counts as pairing: it is not known to
+///   disagree), the model built from the perceived parts.
 ///
 /// Returns the models they use; their candidates index past `db`'s models in the order returned
 /// (`db.with_models(returned)` holds them all).
@@ -49,7 +50,14 @@ pub fn add_perceived_candidates(
                 return Vec::new();
             }
             let mut added = mirrored_alignments(object, db, aligned);
-            let some_fit = aligned.iter().any(|a| a.layout_error < SOME_HANDLE_PAIRED);
+            // An articulated model on which no handle is found (LIBERO's, whose handles the
+            // perception misses) may fit for all the handles say: it is not outvoted.
+            let some_fit = aligned.iter().any(|a| {
+                a.layout_error < SOME_HANDLE_PAIRED
+                    || db.models().get(a.candidate.model).is_some_and(|m| {
+                        m.model.is_articulated() && m.handles.is_empty()
+                    })
+            });
             if !some_fit {
                 added.extend(perceived_alignment(object));
             }
@@ -62,6 +70,11 @@ pub fn add_perceived_candidates(
             continue;
         }
         for (model, mut alignment) in found {
+            // A database holding a model of that id already (an earlier output's `cad` folder
+            // given as `--cad`) keeps its own: `with_models` would leave the new one out.
+            if db.get(&model.model.id).is_some() {
+                continue;
+            }
             // Two objects may mirror the same model: one copy serves both.
             let index = match models.iter().position(|m| m.model.id == model.model.id) {
                 Some(k) => k,
