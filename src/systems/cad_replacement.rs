@@ -235,8 +235,8 @@ fn physical_check_stage(
     surfaces: Query<(&SceneEntity, &ObservedSurface)>,
     aligned: Query<&CadAlignments>,
     findings: Query<(Option<&ShapeRejection>, Option<&PerceivedFront>)>,
-    aligned_models: Option<Res<AlignedModels>>,
-    library: Option<Res<CadLibrary>>,
+    // What the alignments refer to, and the database searched (for the report's count).
+    (aligned_models, library): (Option<Res<AlignedModels>>, Option<Res<CadLibrary>>),
     method: Res<CadAlignMethod>,
 ) {
     let Some(db) = aligned_models.map(|l| l.0.clone()) else {

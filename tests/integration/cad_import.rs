@@ -10,8 +10,8 @@ use crate::common;
 
 use iscene::cad::db::database::{CadDatabase, SCENE_MODELS};
 use iscene::cad::db::load::{read_database, read_model};
-use iscene::eval::evaluate_reconstruction;
 use iscene::classes::EntityKind;
+use iscene::eval::evaluate_reconstruction;
 use iscene::graph::ContactGraph;
 
 /// Sweet Home 3D's shared folder as scripts/setup-sh3d.sh unpacks it.

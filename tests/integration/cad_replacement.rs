@@ -111,6 +111,15 @@ fn issue_bar(name: &str, seq: &Path, out: &Path) -> Vec<String> {
     let mut placed = BTreeMap::new();
     for node in &graph.nodes {
         let Some(c) = &node.cad else { continue };
+        // A door or drawer unit no library model's handles agree with gets a model built from
+        // its perceived parts (issue 36): articulated, of its class.
+        if c.model.starts_with("perceived_") {
+            if node.kind != EntityKind::Articulated || node.parts.is_empty() {
+                failures.push(format!("{name}: {} got {} without parts", node.id, c.model));
+            }
+            placed.insert(node.id.clone(), c.model.clone());
+            continue;
+        }
         let entry = ParametricLibrary::get(library_model_id(&c.model))
             .unwrap_or_else(|| panic!("{name}: {} got {}, not a library model", node.id, c.model));
         assert_eq!(

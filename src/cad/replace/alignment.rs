@@ -15,7 +15,6 @@ use rayon::prelude::*;
 use crate::cad::db::database::{CadDatabase, DatabaseModel, parry_mesh};
 use crate::cad::replace::matching::{Candidate, ObservedObject};
 use crate::cad::replace::orientation::axis_rotations;
-use crate::cad::replace::sizing::handles_built_to_fit;
 use crate::classes::ClassTable;
 use crate::perception::fronts::layout_error;
 
@@ -106,8 +105,9 @@ pub fn choice_score(a: &Alignment) -> f32 {
 }
 
 /// The layout error of `model` placed at `world_from_model` against the front perceived on
-/// `object` (0 when none was): a library model's handles as built to the placed size
-/// (`sizing::handles_built_to_fit`), an imported model's stretched.
+/// `object` (0 when none was). A library model's handles are the stretched nominal model's,
+/// not those of the model built to the placed size (`cad::replace::sizing`): measured on the
+/// built one, seeds 0-9 lost two rooms (a dishwasher and a cabinet chose another model).
 pub fn placed_layout_error(
     object: &ObservedObject,
     model: &DatabaseModel,
@@ -116,9 +116,7 @@ pub fn placed_layout_error(
     let Some(front) = &object.front else {
         return 0.0;
     };
-    let placed = handles_built_to_fit(model, world_from_model)
-        .unwrap_or_else(|| model.placed_handles(world_from_model));
-    layout_error(&front.handles, &placed)
+    layout_error(&front.handles, &model.placed_handles(world_from_model))
 }
 
 /// Aligns one candidate; `None` when the object has no points or the fit breaks down numerically.

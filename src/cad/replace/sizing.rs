@@ -11,7 +11,6 @@
 use glam::{Affine3A, Mat3A, Vec3};
 
 use crate::cad::db::database::{DatabaseModel, LibraryBuild};
-use crate::perception::fronts::{model_handles, placed_handle};
 
 /// Sizes are built to the millimetre, the resolution of a sized model's id: one id, one mesh.
 const SIZE_STEP_M: f32 = 1e-3;
@@ -54,36 +53,6 @@ pub fn built_to_fit(
         size,
     });
     Some((built, pose))
-}
-
-/// The handles (world frame) of `model` placed by `world_from_model` as the physical check
-/// will place it: a library model built to the stretched size has its handles where the builder
-/// puts them at that size (a tall door's at a third of its height, where the stretched nominal
-/// door's would be at half); `None` where the model stays stretched.
-pub fn handles_built_to_fit(
-    model: &DatabaseModel,
-    world_from_model: &Affine3A,
-) -> Option<Vec<crate::perception::handles::Handle>> {
-    let build = model.built?;
-    if model.handles.is_empty() {
-        return None;
-    }
-    let scale = pose_scale(world_from_model);
-    if scale.min_element() <= 0.0 || !scale.is_finite() {
-        return None;
-    }
-    let size = (build.size * scale / SIZE_STEP_M).round() * SIZE_STEP_M;
-    if (size - build.size).abs().max_element() < 0.5 * SIZE_STEP_M {
-        return None;
-    }
-    let m = world_from_model.matrix3;
-    let pose = Affine3A {
-        matrix3: Mat3A::from_cols(m.x_axis / scale.x, m.y_axis / scale.y, m.z_axis / scale.z),
-        translation: world_from_model.translation,
-    };
-    let sized = build.entry.model_sized(size);
-    let handles = model_handles(&sized.merged_visual_mesh(&[]), sized.size);
-    Some(handles.iter().map(|h| placed_handle(&pose, h)).collect())
 }
 
 #[cfg(test)]

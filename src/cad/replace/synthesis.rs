@@ -23,14 +23,18 @@ use crate::cad::replace::matching::{Candidate, ObservedObject};
 const SOME_HANDLE_PAIRED: f32 = 1.0 - 1e-4;
 /// The best this many alignments of an object are tried mirrored.
 const MIRRORED_CANDIDATES: usize = 3;
+/// A mirror is a candidate only when the model pairs none of its handles with the perceived ones
+/// and the mirror at least half: a looser rule (any mirror pairing more) mirrored seed 5's
+/// cabinet, whose one mislocated handle the mirror happened to pair, and put its hinge 46 cm off.
+const MIRROR_AGREES: f32 = 0.5;
 /// A mirrored model's id is its model's with this suffix.
 pub const MIRRORED_SUFFIX: &str = ".mirrored";
 
 /// Adds to each object's `alignments` (in `objects`' order) the candidates its perceived parts
 /// ask for, sorted in by [`choice_score`]:
-/// - the best candidates with side-hinged doors, mirrored (hinges on the other sides), where
-///   that pairs more of their handles with the perceived ones on a clear front
-///   (`PerceivedFront::clear`);
+/// - the best candidates with side-hinged doors that pair no handle with the perceived ones on a
+///   clear front (`PerceivedFront::clear`), mirrored (hinges on the other sides), where the
+///   mirror pairs at least half of them;
 /// - where the front is clear and none of the alignments pairs a single handle with a perceived
 ///   one (an articulated model with no handle found on it counts as pairing: it is not known to
 ///   disagree), the model built from the perceived parts.
@@ -54,9 +58,10 @@ pub fn add_perceived_candidates(
             // perception misses) may fit for all the handles say: it is not outvoted.
             let some_fit = aligned.iter().any(|a| {
                 a.layout_error < SOME_HANDLE_PAIRED
-                    || db.models().get(a.candidate.model).is_some_and(|m| {
-                        m.model.is_articulated() && m.handles.is_empty()
-                    })
+                    || db
+                        .models()
+                        .get(a.candidate.model)
+                        .is_some_and(|m| m.model.is_articulated() && m.handles.is_empty())
             });
             if !some_fit {
                 added.extend(perceived_alignment(object));
@@ -92,8 +97,9 @@ pub fn add_perceived_candidates(
     models
 }
 
-/// The best [`MIRRORED_CANDIDATES`] of `aligned` whose models have side hinges, mirrored in
-/// place, where that pairs more handles with the perceived ones.
+/// The best [`MIRRORED_CANDIDATES`] of `aligned` whose models have side hinges and pair no
+/// handle with the perceived ones, mirrored in place, where the mirror agrees with them
+/// ([`MIRROR_AGREES`]).
 fn mirrored_alignments(
     object: &ObservedObject,
     db: &CadDatabase,
@@ -102,7 +108,7 @@ fn mirrored_alignments(
     aligned
         .iter()
         .take(MIRRORED_CANDIDATES)
-        .filter(|a| a.layout_error > 0.0)
+        .filter(|a| a.layout_error >= SOME_HANDLE_PAIRED)
         .filter_map(|a| {
             let model = &db.models().get(a.candidate.model)?.model;
             if !model.has_side_hinges() || model.id.ends_with(MIRRORED_SUFFIX) {
@@ -111,7 +117,7 @@ fn mirrored_alignments(
             let mirrored = model.mirrored(format!("{}{MIRRORED_SUFFIX}", model.id));
             let mirrored = DatabaseModel::new(mirrored).ok()?;
             let layout_error = placed_layout_error(object, &mirrored, &a.world_from_model);
-            if layout_error >= a.layout_error {
+            if layout_error >= MIRROR_AGREES {
                 return None;
             }
             let alignment_error = alignment_error(&object.points, &mirrored, &a.world_from_model)?;
