@@ -73,7 +73,8 @@ pub fn perceived_model(
         Mat3::from_cols(front.right, -front.normal, Vec3::Z),
         bbox.center.with_z(bottom),
     );
-    let to_builder = |p: Vec3| builder_to_world.inverse().transform_point3(p);
+    let builder_from_world = builder_to_world.inverse();
+    let to_builder = |p: Vec3| builder_from_world.transform_point3(p);
     // The fronts' outer faces, at most a board behind the box's face.
     let face_y = to_builder(front.origin)
         .y
