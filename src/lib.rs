@@ -4,6 +4,7 @@
 //! `kinematics`) hold the algorithms as plain data and functions; `components` and `systems` make
 //! them an ECS world whose transform hierarchy is the kinematic tree.
 
+pub mod arm;
 pub mod base;
 pub mod batch;
 pub mod bench;

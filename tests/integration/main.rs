@@ -6,6 +6,7 @@
 
 mod common;
 
+mod arm;
 mod bad_input;
 mod batch;
 mod cad_import;

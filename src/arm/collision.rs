@@ -1,0 +1,222 @@
+//! Collision checking of the arm against the scene and against itself, with a clearance margin:
+//! each link's convex collision pieces against convex obstacles (parry's GJK distance), after a
+//! bounding-box test.
+//!
+//! Which pairs of the arm's own links are checked follows MoveIt's setup assistant: not links
+//! that no joint or a single joint separates (their meshes meet at the joint by design), and not
+//! pairs that touch in most random configurations (meshes drawn overlapping); every other pair is.
+
+use glam::{Affine3A, Vec3};
+use parry3d::math::Pose;
+use parry3d::shape::ConvexPolyhedron;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::arm::{Arm, LinkMotion};
+use crate::geometry::TriMesh;
+
+/// Random configurations drawn to find the pairs of links that always touch.
+const SELF_SAMPLES: usize = 200;
+/// A pair touching in at least this fraction of them is never checked.
+const ALWAYS_TOUCHING: f32 = 0.5;
+
+/// A convex piece of something the arm must not touch, in the world.
+#[derive(Clone)]
+pub struct Obstacle {
+    /// What it belongs to (a link of the scene's kinematic tree), for the reasons a plan fails.
+    pub name: String,
+    hull: ConvexPolyhedron,
+    pose: Pose,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+/// The obstacles of a scene.
+#[derive(Clone, Default)]
+pub struct Obstacles {
+    pub items: Vec<Obstacle>,
+}
+
+impl Obstacles {
+    /// Adds `piece` (a convex mesh in its own frame) placed at `world_from_piece`; a piece that
+    /// spans no volume is skipped.
+    pub fn add(&mut self, name: &str, piece: &TriMesh, world_from_piece: &Affine3A) {
+        let Some(hull) = ConvexPolyhedron::from_convex_hull(&piece.positions) else {
+            return;
+        };
+        let pose = rigid_pose(world_from_piece);
+        let Some((lo, hi)) = piece.transformed(world_from_piece).bounds() else {
+            return;
+        };
+        self.items.push(Obstacle {
+            name: name.to_string(),
+            hull,
+            pose,
+            lo,
+            hi,
+        });
+    }
+}
+
+/// What a link of the arm touches.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Touching {
+    /// An obstacle, by its index.
+    Obstacle(usize),
+    /// Another link of the arm.
+    Link(usize),
+}
+
+/// The arm's collision pieces and the pairs of its links worth checking.
+pub struct ArmCollider {
+    /// Per link: its convex pieces and their bounds, in the link's frame.
+    pieces: Vec<Vec<(ConvexPolyhedron, Vec3, Vec3)>>,
+    /// Pairs of links checked against each other.
+    pub self_pairs: Vec<(usize, usize)>,
+}
+
+impl ArmCollider {
+    pub fn new(arm: &Arm) -> Self {
+        let pieces: Vec<Vec<(ConvexPolyhedron, Vec3, Vec3)>> = arm
+            .links
+            .iter()
+            .map(|link| {
+                link.pieces
+                    .iter()
+                    .filter_map(|p| {
+                        let (lo, hi) = p.bounds()?;
+                        Some((ConvexPolyhedron::from_convex_hull(&p.positions)?, lo, hi))
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut collider = Self {
+            pieces,
+            self_pairs: Vec::new(),
+        };
+        let candidates: Vec<(usize, usize)> = (0..arm.links.len())
+            .flat_map(|a| (a + 1..arm.links.len()).map(move |b| (a, b)))
+            .filter(|&(a, b)| {
+                !collider.pieces[a].is_empty()
+                    && !collider.pieces[b].is_empty()
+                    && joints_between(arm, a, b) > 1
+            })
+            .collect();
+        let mut touching = vec![0usize; candidates.len()];
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        let limits = arm.limits();
+        for _ in 0..SELF_SAMPLES {
+            let q: Vec<f32> = limits
+                .iter()
+                .map(|&(lo, hi)| {
+                    if hi > lo {
+                        rng.random_range(lo..hi)
+                    } else {
+                        lo
+                    }
+                })
+                .collect();
+            let poses = arm.link_poses(&Affine3A::IDENTITY, &q, 0.5);
+            for (count, &(a, b)) in touching.iter_mut().zip(&candidates) {
+                *count += usize::from(collider.links_within(a, &poses[a], b, &poses[b], 0.0));
+            }
+        }
+        collider.self_pairs = candidates
+            .into_iter()
+            .zip(touching)
+            .filter(|&(_, n)| (n as f32) < ALWAYS_TOUCHING * SELF_SAMPLES as f32)
+            .map(|(pair, _)| pair)
+            .collect();
+        collider
+    }
+
+    /// The first thing a link of the arm (at `poses`) comes within `margin` of: an obstacle, or
+    /// a link of a checked pair; `None` when the configuration is free.
+    pub fn touching(
+        &self,
+        poses: &[Affine3A],
+        obstacles: &Obstacles,
+        margin: f32,
+    ) -> Option<(usize, Touching)> {
+        for (l, pieces) in self.pieces.iter().enumerate() {
+            for (hull, lo, hi) in pieces {
+                let (wlo, whi) = world_bounds(&poses[l], *lo, *hi);
+                let pose = rigid_pose(&poses[l]);
+                for (o, obstacle) in obstacles.items.iter().enumerate() {
+                    if !boxes_within(wlo, whi, obstacle.lo, obstacle.hi, margin) {
+                        continue;
+                    }
+                    if within(&pose, hull, &obstacle.pose, &obstacle.hull, margin) {
+                        return Some((l, Touching::Obstacle(o)));
+                    }
+                }
+            }
+        }
+        self.self_pairs
+            .iter()
+            .find(|&&(a, b)| self.links_within(a, &poses[a], b, &poses[b], margin))
+            .map(|&(a, b)| (a, Touching::Link(b)))
+    }
+
+    fn links_within(&self, a: usize, pa: &Affine3A, b: usize, pb: &Affine3A, margin: f32) -> bool {
+        let (ra, rb) = (rigid_pose(pa), rigid_pose(pb));
+        self.pieces[a].iter().any(|(ha, alo, ahi)| {
+            let (wlo_a, whi_a) = world_bounds(pa, *alo, *ahi);
+            self.pieces[b].iter().any(|(hb, blo, bhi)| {
+                let (wlo_b, whi_b) = world_bounds(pb, *blo, *bhi);
+                boxes_within(wlo_a, whi_a, wlo_b, whi_b, margin) && within(&ra, ha, &rb, hb, margin)
+            })
+        })
+    }
+}
+
+/// How many moving joints lie on the tree path between links `a` and `b`.
+fn joints_between(arm: &Arm, a: usize, b: usize) -> usize {
+    let ancestors = |mut l: usize| {
+        let mut path = vec![l];
+        while let Some(p) = arm.links[l].parent {
+            path.push(p);
+            l = p;
+        }
+        path
+    };
+    let (pa, pb) = (ancestors(a), ancestors(b));
+    let common = pa.iter().find(|l| pb.contains(l)).copied();
+    let moving = |path: &[usize]| {
+        path.iter()
+            .take_while(|&&l| Some(l) != common)
+            .filter(|&&l| arm.motion[l] != LinkMotion::Welded)
+            .count()
+    };
+    moving(&pa) + moving(&pb)
+}
+
+/// Whether two convex pieces come within `margin` of each other.
+fn within(pa: &Pose, a: &ConvexPolyhedron, pb: &Pose, b: &ConvexPolyhedron, margin: f32) -> bool {
+    if margin <= 0.0 {
+        return parry3d::query::intersection_test(pa, a, pb, b).unwrap_or(true);
+    }
+    parry3d::query::distance(pa, a, pb, b).map_or(true, |d| d < margin)
+}
+
+fn boxes_within(alo: Vec3, ahi: Vec3, blo: Vec3, bhi: Vec3, margin: f32) -> bool {
+    (alo - margin).cmple(bhi).all() && (blo - margin).cmple(ahi).all()
+}
+
+/// The world box around a local box at `pose`.
+fn world_bounds(pose: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+    let centre = pose.transform_point3(0.5 * (lo + hi));
+    let half = 0.5 * (hi - lo);
+    let m = pose.matrix3;
+    let extent = Vec3::new(
+        m.row(0).abs().dot(half.into()),
+        m.row(1).abs().dot(half.into()),
+        m.row(2).abs().dot(half.into()),
+    );
+    (centre - extent, centre + extent)
+}
+
+fn rigid_pose(a: &Affine3A) -> Pose {
+    let (_, rotation, translation) = a.to_scale_rotation_translation();
+    Pose::from_parts(translation, rotation.normalize())
+}

@@ -1,0 +1,278 @@
+//! A robot arm read from its URDF file: the chain of joints from its root link to its tool, the
+//! fingers beside it, and each link's convex collision pieces; forward kinematics, inverse
+//! kinematics, collision checking against a scene and motion planning in joint space.
+//!
+//! Bevy-free. The URDF is read by the CAD importer's reader (urdf-rs, meshes as their convex
+//! hulls, `package://` paths beside the file), so a robot file and a furniture file are one
+//! format to this program. A link's frame is its joint's origin in the parent link's frame,
+//! turned or slid by the joint's value about or along its axis, as URDF defines it.
+
+pub mod collision;
+pub mod ik;
+pub mod rrt;
+
+use std::path::Path;
+
+use glam::{Affine3A, Quat, Vec3};
+
+use crate::base::JointKind;
+use crate::cad::import::body_tree::{BodyJoint, BodyTree, ModelFileError};
+use crate::geometry::TriMesh;
+
+/// Names a tool link is looked for by when none is given, in this order (the Panda of the
+/// PyBullet package has `panda_grasptarget` between its fingertips).
+const TOOL_LINK_WORDS: [&str; 5] = ["grasptarget", "tcp", "tool", "ee_link", "hand"];
+
+/// One link of the arm.
+#[derive(Clone, Debug)]
+pub struct ArmLink {
+    pub name: String,
+    /// Index of the parent link; `None` for the root (index 0), which the base carries.
+    pub parent: Option<usize>,
+    /// The link's frame in its parent's at joint value zero.
+    pub parent_from_link: Affine3A,
+    /// The joint that moves it relative to its parent; `None` when welded to it.
+    pub joint: Option<BodyJoint>,
+    /// Convex collision pieces in the link's frame.
+    pub pieces: Vec<TriMesh>,
+}
+
+/// What moves a link: a joint of the chain (an index into the configuration), a finger joint
+/// (set by the gripper's opening), or nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkMotion {
+    Welded,
+    Chain(usize),
+    Finger,
+}
+
+/// A serial arm with a gripper: the links parent first, the chain's joints root to tool.
+#[derive(Clone, Debug)]
+pub struct Arm {
+    pub name: String,
+    pub links: Vec<ArmLink>,
+    /// Link index of each joint of the chain, root to tool: configuration value `i` moves
+    /// `links[chain[i]]`.
+    pub chain: Vec<usize>,
+    /// The tool link: where a grasp puts the object.
+    pub tool: usize,
+    /// How each link moves.
+    pub motion: Vec<LinkMotion>,
+}
+
+/// An arm file that cannot be used, with what is wrong (the caller names the file).
+#[derive(Debug, thiserror::Error)]
+pub enum ArmError {
+    #[error(transparent)]
+    File(#[from] ModelFileError),
+    #[error("{0}")]
+    Structure(String),
+}
+
+impl Arm {
+    /// Reads the URDF file at `path`; the tool link is `tool` or, when `None`, the first link
+    /// named like one (`TOOL_LINK_WORDS`).
+    pub fn read_urdf(path: &Path, tool: Option<&str>) -> Result<Self, ArmError> {
+        let tree = crate::cad::import::urdf::read_urdf(path)?;
+        tree.check_size()?;
+        Self::from_body_tree(tree, tool)
+    }
+
+    /// The arm of a body tree (a parent before its children): the joints from the root to
+    /// the tool are the chain; every other moving joint is a finger.
+    pub fn from_body_tree(tree: BodyTree, tool: Option<&str>) -> Result<Self, ArmError> {
+        let tool = match tool {
+            Some(name) => tree
+                .bodies
+                .iter()
+                .position(|b| b.name == name)
+                .ok_or_else(|| ArmError::Structure(format!("no link named {name:?}")))?,
+            None => TOOL_LINK_WORDS
+                .iter()
+                .find_map(|word| tree.bodies.iter().position(|b| b.name.contains(word)))
+                .ok_or_else(|| {
+                    ArmError::Structure(format!(
+                        "no link is named like a tool ({}); name one",
+                        TOOL_LINK_WORDS.join(", ")
+                    ))
+                })?,
+        };
+        let links: Vec<ArmLink> = tree
+            .bodies
+            .into_iter()
+            .map(|b| ArmLink {
+                name: b.name,
+                parent: b.parent,
+                parent_from_link: b.parent_from_body,
+                joint: b.joint,
+                pieces: b.pieces,
+            })
+            .collect();
+        let mut path = vec![tool];
+        while let Some(parent) = links[*path.last().expect("not empty")].parent {
+            path.push(parent);
+        }
+        path.reverse();
+        let chain: Vec<usize> = path
+            .iter()
+            .copied()
+            .filter(|&l| links[l].joint.is_some())
+            .collect();
+        if chain.is_empty() {
+            return Err(ArmError::Structure(format!(
+                "no joint moves the tool link {:?}",
+                links[tool].name
+            )));
+        }
+        let motion = (0..links.len())
+            .map(|l| match chain.iter().position(|&c| c == l) {
+                Some(i) => LinkMotion::Chain(i),
+                None if links[l].joint.is_some() => LinkMotion::Finger,
+                None => LinkMotion::Welded,
+            })
+            .collect();
+        Ok(Self {
+            name: tree.name,
+            links,
+            chain,
+            tool,
+            motion,
+        })
+    }
+
+    /// Number of joints in the chain.
+    pub fn dof(&self) -> usize {
+        self.chain.len()
+    }
+
+    /// The chain's joint limits, root to tool.
+    pub fn limits(&self) -> Vec<(f32, f32)> {
+        self.chain
+            .iter()
+            .map(|&l| self.links[l].joint.as_ref().expect("chain joint").limits)
+            .collect()
+    }
+
+    /// The middle of every joint's range: a configuration inside the limits.
+    pub fn middle(&self) -> Vec<f32> {
+        self.limits()
+            .iter()
+            .map(|&(lo, hi)| 0.5 * (lo + hi))
+            .collect()
+    }
+
+    /// Whether `q` is a configuration of this arm: one finite value per joint, within limits.
+    pub fn within_limits(&self, q: &[f32]) -> bool {
+        q.len() == self.dof()
+            && q.iter()
+                .zip(self.limits())
+                .all(|(&v, (lo, hi))| v.is_finite() && v >= lo - 1e-6 && v <= hi + 1e-6)
+    }
+
+    /// `q` moved into the limits.
+    pub fn clamped(&self, q: &[f32]) -> Vec<f32> {
+        q.iter()
+            .zip(self.limits())
+            .map(|(&v, (lo, hi))| v.clamp(lo, hi))
+            .collect()
+    }
+
+    /// Every link's world pose with the root at `world_from_root`, the chain at `q` and the
+    /// fingers at `opening` (0 closed .. 1 open, along their joints' ranges).
+    pub fn link_poses(&self, world_from_root: &Affine3A, q: &[f32], opening: f32) -> Vec<Affine3A> {
+        let mut poses: Vec<Affine3A> = Vec::with_capacity(self.links.len());
+        for (l, link) in self.links.iter().enumerate() {
+            let parent = link.parent.map_or(*world_from_root, |p| poses[p]);
+            let moved = match (self.motion[l], &link.joint) {
+                (LinkMotion::Chain(i), Some(joint)) => joint_motion(joint, q[i]),
+                (LinkMotion::Finger, Some(joint)) => {
+                    let (lo, hi) = joint.limits;
+                    joint_motion(joint, lo + opening.clamp(0.0, 1.0) * (hi - lo))
+                }
+                _ => Affine3A::IDENTITY,
+            };
+            poses.push(parent * link.parent_from_link * moved);
+        }
+        poses
+    }
+
+    /// The tool's world pose.
+    pub fn tool_pose(&self, world_from_root: &Affine3A, q: &[f32]) -> Affine3A {
+        // Only the chain leads to the tool; the fingers do not move it.
+        self.link_poses(world_from_root, q, 0.0)[self.tool]
+    }
+}
+
+/// A joint's motion in its link's frame at value `v`: a turn about its axis through its origin,
+/// or a slide along its axis.
+pub fn joint_motion(joint: &BodyJoint, v: f32) -> Affine3A {
+    match joint.kind {
+        JointKind::Revolute => {
+            Affine3A::from_translation(joint.origin)
+                * Affine3A::from_quat(Quat::from_axis_angle(joint.axis, v))
+                * Affine3A::from_translation(-joint.origin)
+        }
+        JointKind::Prismatic => Affine3A::from_translation(joint.axis * v),
+        // A body tree's joints are revolute or prismatic.
+        JointKind::Fixed | JointKind::Floating => Affine3A::IDENTITY,
+    }
+}
+
+/// Where the chain's joint `i` turns or slides, in the world, from the link poses: the axis's
+/// direction and a point on it.
+pub fn joint_axis(arm: &Arm, poses: &[Affine3A], i: usize) -> (Vec3, Vec3) {
+    let link = arm.chain[i];
+    let joint = arm.links[link].joint.as_ref().expect("chain joint");
+    let pose = poses[link];
+    (
+        pose.transform_vector3(joint.axis).normalize(),
+        pose.transform_point3(joint.origin),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cad::import::body_tree::Body;
+
+    /// A planar arm of two revolute joints about z with 1 m links and a tool at the end.
+    pub(crate) fn two_link_arm() -> Arm {
+        let body = |name: &str, parent: Option<usize>, x: f32, joint: bool| Body {
+            name: name.to_string(),
+            parent,
+            parent_from_body: Affine3A::from_translation(Vec3::new(x, 0.0, 0.0)),
+            joint: joint.then(|| BodyJoint {
+                name: format!("{name}_joint"),
+                kind: JointKind::Revolute,
+                origin: Vec3::ZERO,
+                axis: Vec3::Z,
+                limits: (-3.0, 3.0),
+            }),
+            pieces: Vec::new(),
+            visual_pieces: Vec::new(),
+            visual_meshes: Vec::new(),
+            colors: Vec::new(),
+        };
+        let tree = BodyTree {
+            name: "planar".into(),
+            bodies: vec![
+                body("base", None, 0.0, false),
+                body("upper", Some(0), 0.0, true),
+                body("fore", Some(1), 1.0, true),
+                body("tool", Some(2), 1.0, false),
+            ],
+        };
+        Arm::from_body_tree(tree, None).expect("arm")
+    }
+
+    #[test]
+    fn forward_kinematics_of_a_planar_arm() {
+        let arm = two_link_arm();
+        assert_eq!(arm.dof(), 2);
+        let tool = |q: &[f32]| arm.tool_pose(&Affine3A::IDENTITY, q).translation;
+        assert!((tool(&[0.0, 0.0]) - glam::Vec3A::new(2.0, 0.0, 0.0)).length() < 1e-6);
+        let half = std::f32::consts::FRAC_PI_2;
+        assert!((tool(&[half, 0.0]) - glam::Vec3A::new(0.0, 2.0, 0.0)).length() < 1e-6);
+        assert!((tool(&[0.0, half]) - glam::Vec3A::new(1.0, 1.0, 0.0)).length() < 1e-6);
+    }
+}

@@ -1,0 +1,218 @@
+//! The Franka Emika Panda of the PyBullet package as the arm (issue 37): its forward kinematics
+//! against PyBullet's, inverse kinematics to poses it can reach, and collision-free motions
+//! planned around a table.
+
+use std::path::PathBuf;
+
+use glam::{Affine3A, Quat, Vec3};
+use iscene::arm::collision::{ArmCollider, Obstacles};
+use iscene::arm::ik::{IkSettings, pose_error, solve};
+use iscene::arm::rrt::{PlanSettings, densify, plan, segment_free};
+use iscene::arm::{Arm, LinkMotion};
+use iscene::geometry::TriMesh;
+use rand::{Rng, SeedableRng};
+
+use crate::common;
+
+/// The Panda that scripts/setup-validators.sh installs with PyBullet.
+fn panda_urdf() -> PathBuf {
+    let lib = common::validator(".venv-validators/lib");
+    let urdf = std::fs::read_dir(&lib)
+        .expect("the validators' lib folder")
+        .filter_map(Result::ok)
+        .map(|e| {
+            e.path()
+                .join("site-packages/pybullet_data/franka_panda/panda.urdf")
+        })
+        .find(|p| p.is_file());
+    urdf.unwrap_or_else(|| {
+        panic!(
+            "no pybullet_data/franka_panda/panda.urdf under {}: run scripts/setup-validators.sh",
+            lib.display()
+        )
+    })
+}
+
+fn random_configuration(arm: &Arm, rng: &mut rand_chacha::ChaCha8Rng) -> Vec<f32> {
+    arm.limits()
+        .iter()
+        .map(|&(lo, hi)| rng.random_range(lo..hi))
+        .collect()
+}
+
+/// Every link frame of the Panda in 20 random configurations, fingers half open, matches
+/// PyBullet's within 0.1 mm and 0.001 rad.
+#[test]
+fn panda_forward_kinematics_match_pybullet() {
+    let urdf = panda_urdf();
+    let arm = Arm::read_urdf(&urdf, None).expect("the Panda reads");
+    assert_eq!(arm.dof(), 7, "the Panda's seven joints");
+    assert_eq!(arm.links[arm.tool].name, "panda_grasptarget");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let configurations: Vec<Vec<f32>> = (0..20)
+        .map(|_| random_configuration(&arm, &mut rng))
+        .collect();
+    let opening = 0.5;
+    let named: Vec<serde_json::Value> = configurations
+        .iter()
+        .map(|q| {
+            let mut values = serde_json::Map::new();
+            for (l, link) in arm.links.iter().enumerate() {
+                let Some(joint) = &link.joint else { continue };
+                let value = match arm.motion[l] {
+                    LinkMotion::Chain(i) => q[i],
+                    _ => joint.limits.0 + opening * (joint.limits.1 - joint.limits.0),
+                };
+                values.insert(joint.name.clone(), serde_json::json!(value));
+            }
+            serde_json::Value::Object(values)
+        })
+        .collect();
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let file = tmp.path().join("configurations.json");
+    std::fs::write(
+        &file,
+        serde_json::json!({ "configurations": named }).to_string(),
+    )
+    .expect("write");
+    let python = common::validator(".venv-validators/bin/python");
+    let script = common::root().join("tests/external/pybullet_fk.py");
+    let (code, stdout, stderr) = common::run_tool(&python, &[&script, &urdf, &file]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let truth = common::json_line(&stdout);
+    let (mut compared, mut worst_m, mut worst_rad) = (0, 0.0f32, 0.0f32);
+    for (q, poses) in configurations
+        .iter()
+        .zip(truth["poses"].as_array().expect("poses"))
+    {
+        let ours = arm.link_poses(&Affine3A::IDENTITY, q, opening);
+        for (l, link) in arm.links.iter().enumerate().skip(1) {
+            let v: Vec<f32> = poses[&link.name]
+                .as_array()
+                .unwrap_or_else(|| panic!("PyBullet has no link {}", link.name))
+                .iter()
+                .map(|x| x.as_f64().expect("number") as f32)
+                .collect();
+            let theirs = Affine3A::from_rotation_translation(
+                Quat::from_xyzw(v[3], v[4], v[5], v[6]).normalize(),
+                Vec3::new(v[0], v[1], v[2]),
+            );
+            let (dp, dr) = pose_error(&ours[l], &theirs);
+            worst_m = worst_m.max(dp.length());
+            worst_rad = worst_rad.max(dr.length());
+            compared += 1;
+        }
+    }
+    eprintln!("{compared} link poses: worst {worst_m:.2e} m, {worst_rad:.2e} rad");
+    assert!(compared >= 20 * 10, "{compared} link poses compared");
+    assert!(worst_m < 1e-4, "positions differ by {worst_m} m");
+    assert!(worst_rad < 1e-3, "rotations differ by {worst_rad} rad");
+}
+
+/// Tool poses of random configurations are reached again from the middle of the joint ranges,
+/// within 1 mm and 0.01 rad and the limits; a pose 2 m away is not.
+#[test]
+fn panda_inverse_kinematics_reach_what_it_can_reach() {
+    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let settings = IkSettings::default();
+    let base = Affine3A::IDENTITY;
+    let mut solved = 0;
+    let trials = 30;
+    for t in 0..trials {
+        let target = arm.tool_pose(&base, &random_configuration(&arm, &mut rng));
+        let Some(q) = solve(
+            &arm,
+            &base,
+            &target,
+            &arm.middle(),
+            &IkSettings {
+                seed: t,
+                ..settings
+            },
+            &|_| true,
+        ) else {
+            continue;
+        };
+        assert!(arm.within_limits(&q), "{q:?} outside the limits");
+        let (dp, dr) = pose_error(&arm.tool_pose(&base, &q), &target);
+        assert!(dp.length() <= 1e-3 && dr.length() <= 1e-2, "{dp} {dr}");
+        solved += 1;
+    }
+    eprintln!("{solved} of {trials} reachable poses solved");
+    assert!(solved * 10 >= trials * 9, "{solved} of {trials}");
+    let far = Affine3A::from_translation(Vec3::new(2.0, 0.0, 0.5));
+    assert!(solve(&arm, &base, &far, &arm.middle(), &settings, &|_| true).is_none());
+}
+
+/// The Panda on a table's edge moves its hand from one side of a post to the other: the
+/// straight joint-space motion hits the post; the motion planned with a 2 cm margin, checked
+/// every 0.01 rad, keeps 5 mm from everything at every 0.0025 rad step, its own links included.
+#[test]
+fn panda_plans_around_a_post() {
+    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
+    let collider = ArmCollider::new(&arm);
+    assert!(
+        collider.self_pairs.len() >= 10,
+        "{} self pairs",
+        collider.self_pairs.len()
+    );
+    let base = Affine3A::IDENTITY;
+    let mut obstacles = Obstacles::default();
+    // The table the arm stands beside (its top 2 cm under the arm's base) and a post on it.
+    obstacles.add(
+        "table",
+        &TriMesh::cuboid(Vec3::new(0.25, -0.6, -0.75), Vec3::new(1.0, 0.6, -0.02)),
+        &Affine3A::IDENTITY,
+    );
+    obstacles.add(
+        "post",
+        &TriMesh::cuboid(Vec3::new(0.45, -0.05, -0.02), Vec3::new(0.55, 0.05, 0.9)),
+        &Affine3A::IDENTITY,
+    );
+    let free_by = |q: &[f32], margin: f32| {
+        arm.within_limits(q)
+            && collider
+                .touching(&arm.link_poses(&base, q, 1.0), &obstacles, margin)
+                .is_none()
+    };
+    let free = |q: &[f32]| free_by(q, 0.02);
+    // Hand down, 30 cm above the table, left and right of the post.
+    let down = Quat::from_rotation_x(std::f32::consts::PI);
+    let pose = |y: f32| Affine3A::from_rotation_translation(down, Vec3::new(0.5, y, 0.3));
+    let ik = |target: &Affine3A| {
+        solve(
+            &arm,
+            &base,
+            target,
+            &arm.middle(),
+            &IkSettings::default(),
+            &free,
+        )
+        .expect("a free configuration")
+    };
+    let (start, goal) = (ik(&pose(-0.3)), ik(&pose(0.3)));
+    assert!(
+        !segment_free(&start, &goal, &free, 0.01),
+        "the straight motion should hit the post"
+    );
+    let settings = PlanSettings {
+        resolution: 0.01,
+        ..PlanSettings::default()
+    };
+    let started = std::time::Instant::now();
+    let path = plan(&start, &goal, &arm.limits(), &free, &settings).expect("a path");
+    let seconds = started.elapsed().as_secs_f32();
+    let steps = densify(&path, 0.0025);
+    for q in &steps {
+        assert!(free_by(q, 0.005), "{q:?} comes within 5 mm of something");
+    }
+    let again = plan(&start, &goal, &arm.limits(), &free, &settings).expect("a path");
+    assert_eq!(path, again, "the same seed plans the same path");
+    eprintln!(
+        "{} waypoints, {:.2} rad, {} checked steps, planned in {seconds:.2} s",
+        path.len(),
+        iscene::arm::rrt::path_length(&path),
+        steps.len()
+    );
+}
