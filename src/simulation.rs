@@ -10,6 +10,8 @@ use bevy::prelude::*;
 use glam::Affine3A;
 use serde::Serialize;
 
+use crate::arm::Arm;
+use crate::arm::reach::ArmRig;
 use crate::base::InvalidValue;
 use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
@@ -32,8 +34,8 @@ use crate::systems::kinematic_tree::{read_kinematic_tree, spawn_node_links};
 use crate::systems::physics_validation::scene_rest_physics;
 use crate::systems::scene_graph::spawn_contact_graph;
 use crate::systems::simulation::{
-    ActionRequest, SimulationPlugin, SimulationTrace, StepPhysics, StepRecord, robot_state,
-    spawn_robot, step_physics,
+    ActionRequest, RobotArm, SimulationPlugin, SimulationTrace, StepPhysics, StepRecord,
+    robot_state, spawn_robot, step_physics,
 };
 
 /// States the planner may expand before it gives up: 6 s and 130 MB to prove 7 kitchen goals
@@ -48,6 +50,9 @@ pub struct SimulateOptions {
     pub out: PathBuf,
     /// Replace an earlier output of another iscene command at `out` (`--force`).
     pub force: bool,
+    /// The URDF of an arm on the base (`--robot`): picks and places become its planned
+    /// motions. `None`: the base's gripper takes what it reaches.
+    pub robot: Option<PathBuf>,
 }
 
 /// What `simulate` did, as trace.json holds it.
@@ -74,6 +79,7 @@ pub fn simulation_app(
     graph: &ContactGraph,
     task: &Task,
     db: &CadDatabase,
+    arm: Option<&Arm>,
 ) -> Result<App, IsceneError> {
     let mut app = App::new();
     app.add_plugins(SimulationPlugin);
@@ -92,7 +98,12 @@ pub fn simulation_app(
             })?
         }
     };
-    spawn_robot(world, task.robot, pose)?;
+    let spec = task.robot_spec(arm.is_some());
+    spawn_robot(world, spec, pose)?;
+    if let Some(arm) = arm {
+        let rig = ArmRig::new(arm.clone(), spec.height);
+        app.insert_resource(RobotArm(std::sync::Arc::new(rig)));
+    }
     Ok(app)
 }
 
@@ -123,14 +134,18 @@ struct PreparedTask {
 }
 
 /// The task on the scene in `dir`, and the world built to read its start state (ready to run).
-fn prepare(dir: &Path, task_path: &Path) -> Result<(PreparedTask, App), IsceneError> {
+fn prepare(
+    dir: &Path,
+    task_path: &Path,
+    arm: Option<&Arm>,
+) -> Result<(PreparedTask, App), IsceneError> {
     let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
     let task = Task::load(task_path)?;
     let db = CadDatabase::for_scene(dir)?;
     let graph =
         add_unseen_objects(graph, &task.add, &db).map_err(|p| InputError::invalid(task_path, p))?;
     check_steps_name_movable_nodes(&task, &graph).map_err(|p| InputError::invalid(task_path, p))?;
-    let mut app = simulation_app(&graph, &task, &db)?;
+    let mut app = simulation_app(&graph, &task, &db, arm)?;
     let before = read_kinematic_tree(app.world_mut())?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
     let scene = symbolic_scene(&SceneView::new(&before), &place, holding.as_deref());
@@ -312,7 +327,7 @@ fn check_steps_name_movable_nodes(task: &Task, graph: &ContactGraph) -> Result<(
 /// The world of the scene in `dir` with the task's robot at its start, and the actions to run
 /// (the task's own steps, or the planner's plan for its goals): what the viewer plays.
 pub fn task_world(dir: &Path, task_path: &Path) -> Result<(Vec<Action>, App), IsceneError> {
-    let (prepared, app) = prepare(dir, task_path)?;
+    let (prepared, app) = prepare(dir, task_path, None)?;
     Ok((prepared.actions, app))
 }
 
@@ -342,6 +357,8 @@ fn run_actions(app: &mut App, actions: &[Action]) -> Vec<f64> {
 
 /// Runs `options.task` on the scene in `options.dir` and writes `options.out`.
 pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneError> {
+    // A robot file that is no arm is refused before anything is written.
+    let arm = options.robot.as_deref().map(read_arm).transpose()?;
     let target = OutputTarget::claim(
         "--out",
         &options.out,
@@ -349,7 +366,7 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
         &[&options.dir, &options.task],
         options.force,
     )?;
-    let (prepared, mut app) = prepare(&options.dir, &options.task)?;
+    let (prepared, mut app) = prepare(&options.dir, &options.task, arm.as_ref())?;
     let before = read_kinematic_tree(app.world_mut())?;
     let physics_before = step_physics(scene_rest_physics(app.world_mut())?);
     run_actions(&mut app, &prepared.actions);
@@ -371,6 +388,14 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
     };
     write_outputs(&target, &prepared, &before, &after, &summary)?;
     Ok(summary)
+}
+
+/// The arm of the URDF file `urdf`; a file that is no arm is bad input naming it.
+pub fn read_arm(urdf: &Path) -> Result<Arm, IsceneError> {
+    if !urdf.is_file() {
+        return Err(InputError::missing(urdf, "the robot's URDF file").into());
+    }
+    Ok(Arm::read_urdf(urdf, None).map_err(|e| InputError::invalid(urdf, e))?)
 }
 
 /// Figures of `iscene bench simulation`.
@@ -409,15 +434,17 @@ fn median(mut values: Vec<f64>) -> f64 {
 pub fn bench_simulation(
     dir: &Path,
     task: &Path,
+    robot: Option<&Path>,
     runs: usize,
 ) -> Result<SimulationBenchReport, IsceneError> {
-    let (prepared, first) = prepare(dir, task)?;
+    let arm = robot.map(read_arm).transpose()?;
+    let (prepared, first) = prepare(dir, task, arm.as_ref())?;
     let mut first = Some(first);
     let mut per_run: Vec<(Vec<StepRecord>, Vec<f64>)> = Vec::with_capacity(runs);
     for _ in 0..runs {
         let mut app = match first.take() {
             Some(app) => app,
-            None => simulation_app(&prepared.graph, &prepared.task, &prepared.db)?,
+            None => simulation_app(&prepared.graph, &prepared.task, &prepared.db, arm.as_ref())?,
         };
         let update_ms = run_actions(&mut app, &prepared.actions);
         let steps = app.world().resource::<SimulationTrace>().0.clone();

@@ -14,6 +14,8 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::arm::{Arm, LinkMotion};
 use crate::geometry::TriMesh;
+use crate::geometry::convex_depth::rigid_pose;
+use crate::kinematics::joint_sweep::world_bounds;
 
 /// Random configurations drawn to find the pairs of links that always touch.
 const SELF_SAMPLES: usize = 200;
@@ -65,6 +67,8 @@ pub enum Touching {
     Obstacle(usize),
     /// Another link of the arm.
     Link(usize),
+    /// The object in the hand touches an obstacle, by its index.
+    Held(usize),
 }
 
 /// The arm's collision pieces and the pairs of its links worth checking.
@@ -158,6 +162,34 @@ impl ArmCollider {
             .map(|&(a, b)| (a, Touching::Link(b)))
     }
 
+    /// [`Self::touching`] with an object in the hand: its convex pieces `held`, in the frame of
+    /// link `tool`, checked against the obstacles too.
+    pub fn touching_holding(
+        &self,
+        poses: &[Affine3A],
+        tool: usize,
+        held: &[ConvexPolyhedron],
+        obstacles: &Obstacles,
+        margin: f32,
+    ) -> Option<(usize, Touching)> {
+        if let Some(touch) = self.touching(poses, obstacles, margin) {
+            return Some(touch);
+        }
+        let pose = rigid_pose(&poses[tool]);
+        for hull in held {
+            let (lo, hi) = hull_bounds(hull);
+            let (wlo, whi) = world_bounds(&poses[tool], lo, hi);
+            for (o, obstacle) in obstacles.items.iter().enumerate() {
+                if boxes_within(wlo, whi, obstacle.lo, obstacle.hi, margin)
+                    && within(&pose, hull, &obstacle.pose, &obstacle.hull, margin)
+                {
+                    return Some((tool, Touching::Held(o)));
+                }
+            }
+        }
+        None
+    }
+
     fn links_within(&self, a: usize, pa: &Affine3A, b: usize, pb: &Affine3A, margin: f32) -> bool {
         let (ra, rb) = (rigid_pose(pa), rigid_pose(pb));
         self.pieces[a].iter().any(|(ha, alo, ahi)| {
@@ -203,20 +235,9 @@ fn boxes_within(alo: Vec3, ahi: Vec3, blo: Vec3, bhi: Vec3, margin: f32) -> bool
     (alo - margin).cmple(bhi).all() && (blo - margin).cmple(ahi).all()
 }
 
-/// The world box around a local box at `pose`.
-fn world_bounds(pose: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
-    let centre = pose.transform_point3(0.5 * (lo + hi));
-    let half = 0.5 * (hi - lo);
-    let m = pose.matrix3;
-    let extent = Vec3::new(
-        m.row(0).abs().dot(half.into()),
-        m.row(1).abs().dot(half.into()),
-        m.row(2).abs().dot(half.into()),
-    );
-    (centre - extent, centre + extent)
-}
-
-fn rigid_pose(a: &Affine3A) -> Pose {
-    let (_, rotation, translation) = a.to_scale_rotation_translation();
-    Pose::from_parts(translation, rotation.normalize())
+fn hull_bounds(hull: &ConvexPolyhedron) -> (Vec3, Vec3) {
+    hull.points().iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
 }

@@ -8,7 +8,9 @@
 //! turned or slid by the joint's value about or along its axis, as URDF defines it.
 
 pub mod collision;
+pub mod grasp;
 pub mod ik;
+pub mod reach;
 pub mod rrt;
 
 use std::path::Path;

@@ -121,7 +121,8 @@ fn separating_axis_depth(
 }
 
 /// A parry pose of the rigid part of `a`.
-fn rigid_pose(a: &Affine3A) -> Pose {
+/// parry's pose of a rigid affine transform (any scale dropped).
+pub fn rigid_pose(a: &Affine3A) -> Pose {
     let (_, rotation, translation) = a.to_scale_rotation_translation();
     Pose::from_parts(translation, rotation.normalize())
 }

@@ -82,7 +82,7 @@ impl LinkSolids {
 }
 
 /// World-frame bounds of a local box under `pose`.
-fn world_bounds(pose: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+pub fn world_bounds(pose: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
     let center = pose.transform_point3((lo + hi) / 2.0);
     let half = (hi - lo) / 2.0;
     let m = pose.matrix3;

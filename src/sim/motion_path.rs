@@ -80,7 +80,7 @@ pub fn motion_seconds(tree: &KinematicTree, change: &Change) -> Option<f32> {
             let joint = tree.links.iter().find(|l| &l.name == link)?.joint;
             Some(joint_seconds(joint.kind, *from, *to))
         }
-        Change::Attach { .. } => None,
+        Change::Attach { .. } | Change::ArmMotion { .. } => None,
     }
 }
 
@@ -127,7 +127,7 @@ pub fn link_motion(tree: &KinematicTree, change: &Change, step_s: f32) -> Option
                 .collect();
             (link, moving)
         }
-        Change::Attach { .. } => return None,
+        Change::Attach { .. } | Change::ArmMotion { .. } => return None,
     };
     Some(LinkMotion {
         link,
@@ -152,7 +152,7 @@ pub fn apply_motion(tree: &mut KinematicTree, change: &Change) -> bool {
             }
             true
         }
-        Change::Attach { .. } => false,
+        Change::Attach { .. } | Change::ArmMotion { .. } => false,
     }
 }
 

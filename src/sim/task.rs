@@ -24,8 +24,9 @@ pub struct Start {
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Task {
+    /// The base (default: [`RobotSpec::default`], or [`RobotSpec::ARM_BASE`] under an arm).
     #[serde(default)]
-    pub robot: RobotSpec,
+    pub robot: Option<RobotSpec>,
     /// Default: the most open spot of the floor.
     #[serde(default)]
     pub start: Option<Start>,
@@ -84,10 +85,20 @@ impl Task {
         Ok(task)
     }
 
+    /// The base the task runs: its own, else the default one for a robot with or without an
+    /// arm.
+    pub fn robot_spec(&self, arm: bool) -> RobotSpec {
+        self.robot.unwrap_or(if arm {
+            RobotSpec::ARM_BASE
+        } else {
+            RobotSpec::default()
+        })
+    }
+
     /// Every number a task sets, within what a room and a mobile manipulator can mean: a
     /// robot of 1e20 m or a push of 1e30 m is a broken file, not a long job.
     fn check_limits(&self) -> Result<(), InvalidValue> {
-        let r = self.robot;
+        let r = self.robot.unwrap_or_default();
         for (key, value, max) in [
             ("robot.radius", r.radius, MAX_ROBOT_RADIUS_M),
             ("robot.height", r.height, MAX_ROBOT_HEIGHT_M),

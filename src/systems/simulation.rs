@@ -147,7 +147,9 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
         .map_err(|e| e.to_string())
         .and_then(|(tree, entities)| {
             let spec = robot_spec(world).ok_or("the scene has no robot")?;
-            let changes = attempt(&tree, &spec, action).map_err(|e| e.to_string())?;
+            let arm = world.get_resource::<RobotArm>().map(|a| a.0.clone());
+            let changes =
+                attempt(&tree, &spec, arm.as_deref(), action).map_err(|e| e.to_string())?;
             motion = simulate_motions(world, &tree, &entities, &changes);
             if let Some(why) = knocked_reason(&motion) {
                 return Err(why);
@@ -337,6 +339,8 @@ pub fn apply_change(world: &mut World, change: &Change) {
                 },
             ));
         }
+        // The arm's links are not entities of the world yet: its motions are the trace's.
+        Change::ArmMotion { .. } => {}
     }
 }
 
@@ -363,6 +367,10 @@ fn perform_requested_actions(world: &mut World) {
         perform(world, &action);
     }
 }
+
+/// The robot's arm, when it has one: picks and places are its planned motions.
+#[derive(Resource, Clone)]
+pub struct RobotArm(pub std::sync::Arc<crate::arm::reach::ArmRig>);
 
 /// Adds the action messages, the trace and the system that performs actions.
 pub struct SimulationPlugin;

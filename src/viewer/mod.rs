@@ -133,7 +133,7 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
                 ContactGraph::load(&options.dir.join("contact_graph.json"))?
             };
             let db = CadDatabase::for_scene(&options.dir)?;
-            let app = simulation_app(&graph, &Task::default(), &db)?;
+            let app = simulation_app(&graph, &Task::default(), &db, None)?;
             (Vec::new(), app)
         }
     };

@@ -169,7 +169,7 @@ fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
                     Some((entity, tween, seconds))
                 })
             }
-            Change::Attach { .. } => None,
+            Change::Attach { .. } | Change::ArmMotion { .. } => None,
         };
         if let Some((entity, tween, duration_s)) = leg {
             legs.push(Leg {

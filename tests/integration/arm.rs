@@ -216,3 +216,113 @@ fn panda_plans_around_a_post() {
         steps.len()
     );
 }
+
+/// On the rendered kitchen's ground truth the Panda on its base picks a cup, a bowl and a
+/// bottle and sets each down elsewhere (`iscene simulate --robot`): every step succeeds, the
+/// trace holds each motion's joint values within the limits, and the first pick's reach, replayed
+/// against the scene as it stood, never touches anything but the cup between its fingers. A
+/// robot file that is no URDF is refused, naming it, before anything is written.
+#[test]
+fn panda_picks_and_places_in_the_kitchen() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let seq = tmp.path().join("seq");
+    common::render_scene("kitchen", &seq, 2, true);
+    let gt = seq.join("gt");
+    let task = tmp.path().join("task.json");
+    std::fs::write(
+        &task,
+        serde_json::json!({"steps": [
+            {"action": "pick", "object": "cup_2"},
+            {"action": "place_on", "object": "cup_2", "surface": "cabinet_2"},
+            {"action": "pick", "object": "bowl_1"},
+            {"action": "place_on", "object": "bowl_1", "surface": "table_1"},
+            {"action": "pick", "object": "bottle_1"},
+            {"action": "place_on", "object": "bottle_1", "surface": "table_1"},
+        ]})
+        .to_string(),
+    )
+    .expect("task");
+    let urdf = panda_urdf();
+    let out = tmp.path().join("sim");
+    let args = [
+        "simulate",
+        gt.to_str().expect("utf8"),
+        "--task",
+        task.to_str().expect("utf8"),
+        "--out",
+        out.to_str().expect("utf8"),
+        "--robot",
+        urdf.to_str().expect("utf8"),
+    ];
+    let (code, stdout, stderr) = common::iscene(&args, tmp.path());
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let trace: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
+            .expect("JSON");
+    let arm = Arm::read_urdf(&urdf, None).expect("the Panda reads");
+    let rig = iscene::arm::reach::ArmRig::new(arm, iscene::sim::robot::RobotSpec::ARM_BASE.height);
+    let mut motions = 0;
+    for step in trace["steps"].as_array().expect("steps") {
+        let changes = step["changes"].as_array().expect("changes");
+        let motion = changes
+            .iter()
+            .find(|c| c["change"] == "arm_motion")
+            .unwrap_or_else(|| panic!("no arm motion in {step}"));
+        for part in ["reach", "retreat"] {
+            let path = motion[part].as_array().expect("configurations");
+            assert!(path.len() > 2, "{part} of {step}");
+            for q in path {
+                let q: Vec<f32> = serde_json::from_value(q.clone()).expect("joint values");
+                assert!(rig.arm.within_limits(&q), "{q:?} outside the limits");
+            }
+        }
+        motions += 1;
+    }
+    assert_eq!(motions, 6);
+    // The first pick's reach against the scene before it, the cup left out.
+    let first = &trace["steps"][0]["changes"];
+    let base: iscene::sim::robot::BasePose = first
+        .as_array()
+        .expect("changes")
+        .iter()
+        .find(|c| c["change"] == "move_base")
+        .map_or_else(
+            || panic!("the base drives to the cup first: {first}"),
+            |c| serde_json::from_value(c["to"].clone()).expect("base pose"),
+        );
+    let reach: Vec<Vec<f32>> = first
+        .as_array()
+        .expect("changes")
+        .iter()
+        .find(|c| c["change"] == "arm_motion")
+        .map(|c| serde_json::from_value(c["reach"].clone()).expect("reach"))
+        .expect("arm motion");
+    let (_, mut app) = iscene::simulation::task_world(&gt, &task).expect("the task's world");
+    let tree = iscene::systems::kinematic_tree::read_kinematic_tree(app.world_mut()).expect("tree");
+    let view = iscene::sim::scene_view::SceneView::new(&tree);
+    let cup = view.node_link("cup_2").expect("cup_2");
+    let obstacles = iscene::sim::actions::scene_obstacles(&view, &[cup]);
+    let root = base.world_from_base() * rig.base_from_root;
+    assert!(
+        iscene::arm::reach::path_clear(
+            &rig,
+            &root,
+            &reach,
+            &obstacles,
+            &iscene::arm::reach::Held::default(),
+            0.0
+        ),
+        "the reach touches the scene"
+    );
+    // A robot file that is no arm.
+    let bad = tmp.path().join("robot.urdf");
+    std::fs::write(&bad, "<robot name='x'><link name='a'/></robot>").expect("write");
+    let out2 = tmp.path().join("sim2");
+    let mut args = args.to_vec();
+    args[5] = out2.to_str().expect("utf8");
+    args[7] = bad.to_str().expect("utf8");
+    let (code, _, stderr) = common::iscene(&args, tmp.path());
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("robot.urdf"), "{stderr}");
+    assert!(!out2.exists(), "nothing written");
+}

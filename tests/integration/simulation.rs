@@ -139,7 +139,7 @@ fn placing_into_the_closed_microwave_is_refused_with_the_reason_and_nothing_move
     let graph = ContactGraph::load(&gt.join("contact_graph.json")).expect("graph");
     let task: Task = serde_json::from_str(r#"{"goals": ["fridge_1 open"]}"#).expect("task");
     let db = CadDatabase::for_scene(&gt).expect("database");
-    let mut app = simulation_app(&graph, &task, &db).expect("app");
+    let mut app = simulation_app(&graph, &task, &db, None).expect("app");
     let world = app.world_mut();
     for action in [
         r#"{"action": "navigate", "to": "fridge_1"}"#,

@@ -141,6 +141,11 @@ pub(crate) struct SimulateArgs {
     /// not write is never replaced).
     #[arg(long)]
     pub(crate) force: bool,
+    /// The URDF of an arm on the robot's base (for instance the Franka Panda that
+    /// scripts/setup-validators.sh installs with PyBullet); picks and places become its
+    /// planned motions, in the trace.
+    #[arg(long)]
+    pub(crate) robot: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -342,6 +347,9 @@ pub(crate) enum BenchCommand {
         dir: PathBuf,
         #[arg(long)]
         task: PathBuf,
+        /// The URDF of an arm on the base, as `iscene simulate --robot`.
+        #[arg(long)]
+        robot: Option<PathBuf>,
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
         runs: u32,
     },

@@ -43,8 +43,14 @@ pub(crate) fn bench(command: BenchCommand) -> Result<(), IsceneError> {
             )?;
             print_json(&report)
         }
-        BenchCommand::Simulation { dir, task, runs } => {
-            let report = iscene::simulation::bench_simulation(&dir, &task, runs as usize)?;
+        BenchCommand::Simulation {
+            dir,
+            task,
+            robot,
+            runs,
+        } => {
+            let report =
+                iscene::simulation::bench_simulation(&dir, &task, robot.as_deref(), runs as usize)?;
             print_json(&report)
         }
     }

@@ -11,12 +11,14 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), IsceneError> {
         task,
         out,
         force,
+        robot,
     } = args;
     let summary = iscene::simulation::simulate(&iscene::simulation::SimulateOptions {
         dir,
         task,
         out,
         force,
+        robot,
     })?;
     if let Some(plan) = &summary.plan {
         println!("plan ({} steps): {}", plan.len(), plan.join(" "));

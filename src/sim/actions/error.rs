@@ -69,4 +69,8 @@ pub enum ActionError {
     WouldRunInto { object: String, after_m: f32 },
     #[error("{object} would slide off {support}")]
     WouldSlideOff { object: String, support: String },
+    #[error("{object} has no side narrower than the gripper's {width_m:.3} m")]
+    NoGrasp { object: String, width_m: f32 },
+    #[error("the arm cannot {what}: {}", attempts.join("; "))]
+    ArmCannot { what: String, attempts: Vec<String> },
 }

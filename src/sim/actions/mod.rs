@@ -6,14 +6,17 @@
 use glam::{Affine3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::arm::reach::ArmRig;
 use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, SweepPose};
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::sim::scene_view::{SceneView, TOUCH_M, closed_value, open_value};
 
+mod arm_motion;
 mod error;
 mod reach;
 
+pub use arm_motion::scene_obstacles;
 pub use error::ActionError;
 pub use reach::nav_grid;
 use reach::{APPROACH_M, approach, approach_point, drive, nav_goal, navigate, within_reach};
@@ -124,6 +127,14 @@ pub enum Change {
         #[serde(skip)]
         parent_from_link: Affine3A,
     },
+    /// The arm moved from its stowed configuration to a grasp or release along `reach`
+    /// (configurations of its chain's joints, radians or metres, root to tool), closed or opened
+    /// the hand, and went back along `retreat`.
+    ArmMotion {
+        what: String,
+        reach: Vec<Vec<f32>>,
+        retreat: Vec<Vec<f32>>,
+    },
 }
 
 /// The robot as the tree holds it: its base pose and what hangs from its gripper.
@@ -154,9 +165,12 @@ pub fn robot_in_tree(tree: &KinematicTree) -> Option<RobotInTree> {
 }
 
 /// Checks `action` against `tree` and returns what it changes, or the precondition that fails.
+/// With an `arm`, picks and places are the arm's planned motions (and fail when it finds none);
+/// without one the gripper takes and sets down what the base reaches.
 pub fn attempt(
     tree: &KinematicTree,
     robot: &RobotSpec,
+    arm: Option<&ArmRig>,
     action: &Action,
 ) -> Result<Vec<Change>, ActionError> {
     let view = SceneView::new(tree);
@@ -174,8 +188,23 @@ pub fn attempt(
             move_joint(tree, robot, &state, object, part.as_deref(), None)
         }
         Action::Pick { object } => {
-            let (mut changes, state) = approach(&view, robot, &state, object)?;
-            changes.extend(pick(&view, robot, &state, object)?);
+            let (changes, moved) = approach(&view, robot, &state, object)?;
+            let picked = pick(&view, robot, &moved, object)?;
+            let mut changes = match (arm, view.node_link(object)) {
+                (Some(rig), Some(link)) => {
+                    let target = view.poses[link].translation.truncate();
+                    arm_motion::from_some_base(
+                        &view,
+                        robot,
+                        &state,
+                        (changes, moved),
+                        target,
+                        &|at| arm_motion::pick_motion(&view, rig, at, object, link),
+                    )?
+                }
+                _ => changes,
+            };
+            changes.extend(picked);
             Ok(changes)
         }
         Action::PlaceOn { object, surface } => {
@@ -189,11 +218,43 @@ pub fn attempt(
             let spot = view
                 .spot_on(link, surface, state.base.position, &[gripper, base])
                 .ok_or_else(|| ActionError::NoFreeSpot(surface.clone()))?;
-            let (changes, _) =
-                approach_point(&view, robot, &state, spot.translation.truncate(), surface)?;
-            let mut changes = changes;
-            changes.extend(attach(&view, link, surface, spot)?);
-            Ok(changes)
+            let Some(rig) = arm else {
+                let target = spot.translation.truncate();
+                let (mut changes, _) = approach_point(&view, robot, &state, target, surface)?;
+                changes.extend(attach(&view, link, surface, spot)?);
+                return Ok(changes);
+            };
+            // The arm tries other free spots when it cannot set the object down at the first.
+            let mut attempts = Vec::new();
+            for spot in arm_motion::free_spots(&view, link, surface, spot, &[gripper, base]) {
+                let target = spot.translation.truncate();
+                let Ok((changes, moved)) = approach_point(&view, robot, &state, target, surface)
+                else {
+                    continue;
+                };
+                match arm_motion::from_some_base(
+                    &view,
+                    robot,
+                    &state,
+                    (changes, moved),
+                    target,
+                    &|at| arm_motion::place_motion(&view, rig, at, object, link, &spot, None),
+                ) {
+                    Ok(mut changes) => {
+                        changes.extend(attach(&view, link, surface, spot)?);
+                        return Ok(changes);
+                    }
+                    Err(ActionError::ArmCannot { attempts: a, .. }) => attempts.extend(
+                        a.into_iter()
+                            .map(|r| format!("spot ({:.2}, {:.2}), {r}", target.x, target.y)),
+                    ),
+                    Err(other) => return Err(other),
+                }
+            }
+            Err(ActionError::ArmCannot {
+                what: format!("place {object} on {surface}"),
+                attempts,
+            })
         }
         Action::PlaceIn { object, container } => {
             let link = held(&view, &state, object)?;
@@ -203,7 +264,7 @@ pub fn attempt(
             if !view.is_open(container) {
                 return Err(ActionError::Closed(container.clone()));
             }
-            let (mut changes, _) = approach(&view, robot, &state, container)?;
+            let (mut changes, moved) = approach(&view, robot, &state, container)?;
             let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
             let spot = view.spot_in(link, container, &[gripper]).ok_or_else(|| {
                 ActionError::DoesNotFit {
@@ -211,6 +272,20 @@ pub fn attempt(
                     container: container.clone(),
                 }
             })?;
+            if let Some(rig) = arm {
+                // Into the container through its front, not down through its top.
+                let inward = view
+                    .node_link(container)
+                    .map(|c| view.poses[c].transform_vector3(Vec3::Y).normalize());
+                changes = arm_motion::from_some_base(
+                    &view,
+                    robot,
+                    &state,
+                    (changes, moved),
+                    spot.translation.truncate(),
+                    &|at| arm_motion::place_motion(&view, rig, at, object, link, &spot, inward),
+                )?;
+            }
             changes.extend(attach(&view, link, container, spot)?);
             Ok(changes)
         }

@@ -10,7 +10,7 @@ use crate::sim::robot::{BasePose, ROBOT_LINK, RobotSpec};
 use crate::sim::scene_view::SceneView;
 
 /// The longest drive (metres) a pick or place makes on its own to get within reach.
-pub(super) const APPROACH_M: f32 = 4.0;
+pub(crate) const APPROACH_M: f32 = 4.0;
 
 pub(super) fn navigate(
     view: &SceneView,
@@ -29,7 +29,7 @@ pub(super) fn navigate(
 
 /// The base's drive from where it stands to the cheapest place that meets `goal`, if one is
 /// no farther than `max_m` along the path: the move and the robot after it.
-pub(super) fn drive(
+pub(crate) fn drive(
     view: &SceneView,
     robot: &RobotSpec,
     state: &RobotInTree,

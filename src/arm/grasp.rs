@@ -1,0 +1,220 @@
+//! Grasps of an object from its box: where the tool goes and from which way the hand comes in.
+//!
+//! The tool frame is the gripper's: +z points out of the hand between the fingertips, the
+//! fingers close along +-y (the Panda's `panda_grasptarget`). A top grasp comes down with the
+//! fingers across a horizontal side of the box that fits between them; a side grasp comes in
+//! horizontally at the box's middle height, across the other horizontal side or across the
+//! height (a book lying flat). Grasps facing the robot come first.
+
+use glam::{Affine3A, Mat3, Vec2, Vec3};
+
+/// How far the fingertips reach below an object's top in a top grasp, metres (less for a
+/// low object: half its height).
+const TOP_GRASP_DEPTH_M: f32 = 0.03;
+/// How far the finger pads reach past the grasp point towards the palm, metres: the band of
+/// the object the fingers close on.
+const FINGER_PAD_M: f32 = 0.02;
+/// Room left between the object and each open finger, metres (the Panda's 8 cm hand takes a
+/// 7.3 cm cup).
+const FINGER_CLEARANCE_M: f32 = 0.003;
+/// A vessel's wall as the fingers take it: its thickness, and how far in from the box's side
+/// the fingers close on it, metres.
+const RIM_WIDTH_M: f32 = 0.01;
+const RIM_INSET_M: f32 = 0.006;
+/// How far back along its approach the hand starts its straight last stretch, metres.
+pub const PREGRASP_M: f32 = 0.1;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GraspKind {
+    Top,
+    Rim,
+    Side,
+}
+
+/// One way to hold an object.
+#[derive(Clone, Copy, Debug)]
+pub struct Grasp {
+    pub kind: GraspKind,
+    /// The tool's pose when holding it.
+    pub world_from_tool: Affine3A,
+    /// Unit direction (world) the hand moves along its last stretch: the tool's +z.
+    pub approach: Vec3,
+    /// The object's width between the fingers, metres.
+    pub width: f32,
+}
+
+impl Grasp {
+    /// The tool's pose at the start of the last stretch.
+    pub fn pregrasp(&self) -> Affine3A {
+        Affine3A::from_translation(-self.approach * PREGRASP_M) * self.world_from_tool
+    }
+}
+
+/// The grasps of an object whose collision vertices are `points` (its frame, z up) placed at
+/// `world_from_object`, for fingers that open to `max_width`, best first for a robot standing
+/// at `robot` (x, y). A top grasp measures the object where the fingers close (a bottle's
+/// neck, not its body). An open vessel (`rim`: a cup, a bowl) too wide for the fingers is also
+/// held by its rim, the fingers across the wall at the middle of each side of its top.
+pub fn grasps(
+    world_from_object: &Affine3A,
+    points: &[Vec3],
+    max_width: f32,
+    robot: Vec2,
+    rim: bool,
+) -> Vec<Grasp> {
+    let Some((lo, hi)) = bounds(points) else {
+        return Vec::new();
+    };
+    let size = hi - lo;
+    let centre = world_from_object.transform_point3(0.5 * (lo + hi));
+    let axis_x = world_from_object.transform_vector3(Vec3::X).normalize();
+    let axis_y = world_from_object.transform_vector3(Vec3::Y).normalize();
+    // A tenth of a millimetre of rounding: a 7.4 cm cup fits the 8 cm hand.
+    let fits = |width: f32| width + 2.0 * FINGER_CLEARANCE_M <= max_width + 1e-4;
+    let to_robot = (robot - centre.truncate()).normalize_or_zero().extend(0.0);
+    let mut out = Vec::new();
+    // Top grasps: down onto the top, the fingers closing across x or y.
+    let depth = TOP_GRASP_DEPTH_M.min(0.5 * size.z);
+    let top = centre + Vec3::Z * (0.5 * size.z - depth);
+    let band: Vec<Vec3> = points
+        .iter()
+        .copied()
+        .filter(|p| p.z >= hi.z - depth - FINGER_PAD_M)
+        .collect();
+    let band_size = bounds(&band).map_or(size, |(l, h)| h - l);
+    for (closing, width) in [(axis_x, band_size.x), (axis_y, band_size.y)] {
+        if fits(width) {
+            out.push(Grasp {
+                kind: GraspKind::Top,
+                world_from_tool: tool_pose(top, -Vec3::Z, closing),
+                approach: -Vec3::Z,
+                width,
+            });
+        }
+    }
+    if rim {
+        let mut rims = Vec::new();
+        for (outward, half) in [
+            (axis_x, 0.5 * size.x),
+            (-axis_x, 0.5 * size.x),
+            (axis_y, 0.5 * size.y),
+            (-axis_y, 0.5 * size.y),
+        ] {
+            let at = top + outward * (half - RIM_INSET_M);
+            rims.push(Grasp {
+                kind: GraspKind::Rim,
+                world_from_tool: tool_pose(at, -Vec3::Z, outward),
+                approach: -Vec3::Z,
+                width: RIM_WIDTH_M,
+            });
+        }
+        // The rim nearest the robot first.
+        rims.sort_by(|a, b| {
+            let d = |g: &Grasp| g.world_from_tool.translation.truncate().distance(robot);
+            d(a).total_cmp(&d(b))
+        });
+        out.extend(rims);
+    }
+    // Side grasps: in from each horizontal side, across the other horizontal side or the height.
+    let mut sides = Vec::new();
+    for (inward, across, across_width) in [
+        (axis_x, axis_y, size.y),
+        (-axis_x, axis_y, size.y),
+        (axis_y, axis_x, size.x),
+        (-axis_y, axis_x, size.x),
+    ] {
+        for (closing, width) in [(across, across_width), (Vec3::Z, size.z)] {
+            if fits(width) {
+                sides.push(Grasp {
+                    kind: GraspKind::Side,
+                    world_from_tool: tool_pose(centre, inward, closing),
+                    approach: inward,
+                    width,
+                });
+            }
+        }
+    }
+    // Facing the robot: coming in away from it first.
+    sides.sort_by(|a, b| {
+        a.approach
+            .dot(to_robot)
+            .total_cmp(&b.approach.dot(to_robot))
+    });
+    out.extend(sides);
+    out
+}
+
+fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let first = *points.first()?;
+    Some(
+        points
+            .iter()
+            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
+    )
+}
+
+/// The tool pose at `at` pointing along `approach` with the fingers closing along `closing`.
+fn tool_pose(at: Vec3, approach: Vec3, closing: Vec3) -> Affine3A {
+    let z = approach.normalize();
+    let y = (closing - z * closing.dot(z)).normalize();
+    let x = y.cross(z);
+    Affine3A::from_mat3_translation(Mat3::from_cols(x, y, z), at)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cup_gets_top_and_side_grasps_and_a_tray_none() {
+        let cuboid = |lo: Vec3, hi: Vec3| crate::geometry::mesh::box_corners(lo, hi).to_vec();
+        let cup = grasps(
+            &Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.75)),
+            &cuboid(Vec3::new(-0.04, -0.04, 0.0), Vec3::new(0.04, 0.04, 0.1)),
+            0.1,
+            Vec2::ZERO,
+            false,
+        );
+        assert_eq!(cup[0].kind, GraspKind::Top);
+        let top = cup[0].world_from_tool;
+        assert!((top.translation.z - (0.75 + 0.07)).abs() < 1e-5);
+        // The hand points down, its axes a rotation.
+        assert!((Vec3::from(top.matrix3.z_axis) + Vec3::Z).length() < 1e-5);
+        assert!((top.matrix3.determinant() - 1.0).abs() < 1e-5);
+        // The first side grasp comes in from the robot's side (it stands at -x).
+        let side = cup
+            .iter()
+            .find(|g| g.kind == GraspKind::Side)
+            .expect("side");
+        assert!(side.approach.x > 0.9, "{:?}", side.approach);
+        assert!((side.pregrasp().translation.x - 0.9).abs() < 1e-5);
+        let tray = grasps(
+            &Affine3A::IDENTITY,
+            &cuboid(Vec3::new(-0.2, -0.2, 0.0), Vec3::new(0.2, 0.2, 0.2)),
+            0.08,
+            Vec2::ZERO,
+            false,
+        );
+        assert!(tray.is_empty());
+        // A bowl is held by its rim, the nearest side first.
+        let bowl = grasps(
+            &Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.75)),
+            &cuboid(Vec3::new(-0.07, -0.07, 0.0), Vec3::new(0.07, 0.07, 0.07)),
+            0.08,
+            Vec2::ZERO,
+            true,
+        );
+        assert_eq!(bowl[0].kind, GraspKind::Rim);
+        assert!((bowl[0].world_from_tool.translation.x - (1.0 - 0.064)).abs() < 1e-5);
+        // A bottle too wide for the hand is taken by its neck from above.
+        let mut bottle = cuboid(Vec3::new(-0.045, -0.045, 0.0), Vec3::new(0.045, 0.045, 0.2));
+        bottle.extend(cuboid(
+            Vec3::new(-0.015, -0.015, 0.2),
+            Vec3::new(0.015, 0.015, 0.3),
+        ));
+        let taken = grasps(&Affine3A::IDENTITY, &bottle, 0.08, Vec2::X, false);
+        assert_eq!(taken[0].kind, GraspKind::Top);
+        assert!((taken[0].width - 0.03).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,284 @@
+//! The arm's motions for a pick or a place: from its stowed configuration to a tool pose along a
+//! straight last stretch, and back, with or without an object in the hand.
+//!
+//! A reach is the inverse kinematics of the target and of the pose a short way back along the
+//! approach, a straight line of tool poses between them (each solved from the one before, so the
+//! hand does not flip), and a planned path from the stowed configuration to the line's start.
+//! A retreat lifts the hand straight up, then plans back to the stowed configuration. Every
+//! configuration on the way is checked against the obstacles with a margin; the last stretch,
+//! where the fingers close around the object or set it down, with a smaller one.
+
+use glam::{Affine3A, Vec3};
+use parry3d::shape::ConvexPolyhedron;
+
+use crate::arm::collision::{ArmCollider, Obstacles, Touching};
+use crate::arm::ik::{IkSettings, solve};
+use crate::arm::rrt::{PlanError, PlanSettings, densify, plan, segment_free};
+use crate::arm::{Arm, LinkMotion};
+use crate::base::JointKind;
+
+/// Clearance kept from everything on the way, metres.
+pub const TRANSIT_MARGIN_M: f32 = 0.02;
+/// Clearance kept on the last stretch (a finger beside the object's support), metres.
+pub const STRETCH_MARGIN_M: f32 = 0.004;
+/// Spacing of the tool poses along a straight stretch, metres.
+const STRETCH_STEP_M: f32 = 0.01;
+/// The largest joint change between two poses of a straight stretch, radians: more is a flip.
+const STRETCH_MAX_JUMP: f32 = 0.25;
+/// How high a retreat lifts the hand before it plans back, metres.
+pub const LIFT_M: f32 = 0.1;
+
+/// An arm ready to work: its model, collision pieces and where it sits on the base.
+pub struct ArmRig {
+    pub arm: Arm,
+    pub collider: ArmCollider,
+    /// The configuration it travels in.
+    pub stow: Vec<f32>,
+    /// The arm's root in the base's frame.
+    pub base_from_root: Affine3A,
+    /// How wide its fingers open, metres.
+    pub max_opening: f32,
+    pub plan: PlanSettings,
+    pub ik: IkSettings,
+}
+
+impl ArmRig {
+    /// The arm on top of a base column `mount_height` high, stowed folded over its root (the
+    /// middle of every joint's range).
+    pub fn new(arm: Arm, mount_height: f32) -> Self {
+        let collider = ArmCollider::new(&arm);
+        let stow = arm.middle();
+        let max_opening = arm
+            .links
+            .iter()
+            .zip(&arm.motion)
+            .filter(|(_, m)| **m == LinkMotion::Finger)
+            .filter_map(|(l, _)| l.joint.as_ref())
+            .filter(|j| j.kind == JointKind::Prismatic)
+            .map(|j| j.limits.1 - j.limits.0)
+            .sum();
+        Self {
+            arm,
+            collider,
+            stow,
+            base_from_root: Affine3A::from_translation(Vec3::Z * mount_height),
+            max_opening,
+            plan: PlanSettings {
+                resolution: 0.01,
+                ..PlanSettings::default()
+            },
+            ik: IkSettings::default(),
+        }
+    }
+}
+
+/// An object in the hand: its convex pieces in the tool's frame.
+#[derive(Clone, Default)]
+pub struct Held {
+    pub pieces: Vec<ConvexPolyhedron>,
+}
+
+/// A planned motion: the configurations (densified for execution) and the final one.
+#[derive(Clone, Debug)]
+pub struct ArmPath {
+    pub configurations: Vec<Vec<f32>>,
+}
+
+impl ArmPath {
+    pub fn last(&self) -> &[f32] {
+        self.configurations.last().map_or(&[], |q| q)
+    }
+}
+
+/// Where a configuration touches something, in words.
+fn describe(rig: &ArmRig, obstacles: &Obstacles, touch: &(usize, Touching)) -> String {
+    let link = &rig.arm.links[touch.0].name;
+    match &touch.1 {
+        Touching::Obstacle(o) => format!("{link} hits {}", obstacles.items[*o].name),
+        Touching::Link(l) => format!("{link} hits {}", rig.arm.links[*l].name),
+        Touching::Held(o) => format!("the held object hits {}", obstacles.items[*o].name),
+    }
+}
+
+/// What touches at `q` within `margin`, in words; `None` when free.
+pub fn touching(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    obstacles: &Obstacles,
+    held: &Held,
+    q: &[f32],
+    margin: f32,
+) -> Option<String> {
+    let poses = rig.arm.link_poses(world_from_root, q, 1.0);
+    rig.collider
+        .touching_holding(&poses, rig.arm.tool, &held.pieces, obstacles, margin)
+        .map(|t| describe(rig, obstacles, &t))
+}
+
+/// The arm's motion from `from` to the tool at `target`, the last `stretch` metres straight
+/// along `approach`: checked against `transit` obstacles on the way and `near` ones (the
+/// object being grasped left out) on the last stretch.
+#[allow(clippy::too_many_arguments, reason = "one motion's whole problem")]
+pub fn reach(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    target: &Affine3A,
+    approach: Vec3,
+    stretch: f32,
+    transit: &Obstacles,
+    near: &Obstacles,
+    held: &Held,
+) -> Result<ArmPath, String> {
+    let free_near = |q: &[f32]| {
+        rig.arm.within_limits(q)
+            && touching(rig, world_from_root, near, held, q, STRETCH_MARGIN_M).is_none()
+    };
+    let q_target = solve(&rig.arm, world_from_root, target, from, &rig.ik, &free_near)
+        .ok_or_else(|| "no collision-free inverse kinematics at the target".to_string())?;
+    // The straight stretch, solved backwards from the target so it ends exactly there.
+    let steps = (stretch / STRETCH_STEP_M).ceil().max(1.0) as usize;
+    let mut line = vec![q_target.clone()];
+    let single = IkSettings {
+        restarts: 0,
+        ..rig.ik
+    };
+    for k in 1..=steps {
+        let back = Affine3A::from_translation(-approach * stretch * k as f32 / steps as f32);
+        let previous = line.last().expect("not empty").clone();
+        let q = solve(
+            &rig.arm,
+            world_from_root,
+            &(back * *target),
+            &previous,
+            &single,
+            &free_near,
+        )
+        .filter(|q| crate::arm::rrt::distance(q, &previous) <= STRETCH_MAX_JUMP)
+        .ok_or_else(|| {
+            format!(
+                "the straight approach is blocked or out of reach {:.0} cm before the target",
+                100.0 * stretch * k as f32 / steps as f32
+            )
+        })?;
+        line.push(q);
+    }
+    line.reverse();
+    let start = line[0].clone();
+    let free_transit = |q: &[f32]| {
+        rig.arm.within_limits(q)
+            && touching(rig, world_from_root, transit, held, q, TRANSIT_MARGIN_M).is_none()
+    };
+    if let Some(why) = touching(
+        rig,
+        world_from_root,
+        transit,
+        held,
+        &start,
+        TRANSIT_MARGIN_M,
+    ) {
+        return Err(format!("at the start of the approach {why}"));
+    }
+    let path =
+        plan(from, &start, &rig.arm.limits(), &free_transit, &rig.plan).map_err(|e| match e {
+            PlanError::StartInCollision => format!(
+                "the arm's configuration before the motion is not clear: {}",
+                touching(rig, world_from_root, transit, held, from, TRANSIT_MARGIN_M)
+                    .unwrap_or_default()
+            ),
+            other => format!("no path to the approach: {other}"),
+        })?;
+    let mut configurations = densify(&path, rig.plan.resolution);
+    configurations.extend(line.into_iter().skip(1));
+    Ok(ArmPath { configurations })
+}
+
+/// The arm's motion from `from` (the tool at a grasp or a release) straight up `LIFT_M`, then
+/// back to the stowed configuration, against `near` obstacles on the lift and `transit` ones
+/// after it.
+pub fn retreat(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    transit: &Obstacles,
+    near: &Obstacles,
+    held: &Held,
+) -> Result<ArmPath, String> {
+    let free_near = |q: &[f32]| {
+        rig.arm.within_limits(q)
+            && touching(rig, world_from_root, near, held, q, STRETCH_MARGIN_M).is_none()
+    };
+    let tool = rig.arm.tool_pose(world_from_root, from);
+    let steps = (LIFT_M / STRETCH_STEP_M).ceil() as usize;
+    let single = IkSettings {
+        restarts: 0,
+        ..rig.ik
+    };
+    let mut line = vec![from.to_vec()];
+    for k in 1..=steps {
+        let up = Affine3A::from_translation(Vec3::Z * LIFT_M * k as f32 / steps as f32);
+        let previous = line.last().expect("not empty").clone();
+        let q = solve(
+            &rig.arm,
+            world_from_root,
+            &(up * tool),
+            &previous,
+            &single,
+            &free_near,
+        )
+        .filter(|q| crate::arm::rrt::distance(q, &previous) <= STRETCH_MAX_JUMP)
+        .ok_or_else(|| "the lift is blocked or out of reach".to_string())?;
+        line.push(q);
+    }
+    let top = line.last().expect("not empty").clone();
+    let free_transit = |q: &[f32]| {
+        rig.arm.within_limits(q)
+            && touching(rig, world_from_root, transit, held, q, TRANSIT_MARGIN_M).is_none()
+    };
+    let path =
+        plan(&top, &rig.stow, &rig.arm.limits(), &free_transit, &rig.plan).map_err(
+            |e| match e {
+                PlanError::StartInCollision => format!(
+                    "after the lift {}",
+                    touching(rig, world_from_root, transit, held, &top, TRANSIT_MARGIN_M)
+                        .unwrap_or_default()
+                ),
+                PlanError::GoalInCollision => format!(
+                    "the stowed arm would touch something: {}",
+                    touching(
+                        rig,
+                        world_from_root,
+                        transit,
+                        held,
+                        &rig.stow,
+                        TRANSIT_MARGIN_M
+                    )
+                    .unwrap_or_default()
+                ),
+                other => format!("no path back to the stowed arm: {other}"),
+            },
+        )?;
+    let mut configurations = line;
+    configurations.extend(densify(&path, rig.plan.resolution).into_iter().skip(1));
+    Ok(ArmPath { configurations })
+}
+
+/// Whether every step of `path` keeps `margin` from the obstacles (what an executed motion is
+/// checked against).
+pub fn path_clear(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    path: &[Vec<f32>],
+    obstacles: &Obstacles,
+    held: &Held,
+    margin: f32,
+) -> bool {
+    path.windows(2).all(|w| {
+        segment_free(
+            &w[0],
+            &w[1],
+            &|q| touching(rig, world_from_root, obstacles, held, q, margin).is_none(),
+            rig.plan.resolution / 4.0,
+        )
+    })
+}

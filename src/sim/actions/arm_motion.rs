@@ -1,0 +1,357 @@
+//! A pick or a place done by the robot's arm: grasps of the object from its box, the arm's
+//! motions to them planned against the scene as it stands, and the motions as changes of the
+//! trace. Each grasp is tried in turn; when none works, the action fails with what went wrong
+//! for each.
+
+use glam::{Affine3A, Vec3};
+use parry3d::shape::ConvexPolyhedron;
+
+use crate::arm::collision::Obstacles;
+use crate::arm::grasp::{Grasp, PREGRASP_M, grasps};
+use crate::arm::reach::{ArmRig, Held, reach, retreat};
+use crate::sim::actions::reach::{APPROACH_M, drive};
+use crate::sim::actions::{ActionError, Change, RobotInTree};
+use crate::sim::navigation::NavGoal;
+use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK, RobotSpec};
+use crate::sim::scene_view::SceneView;
+
+/// Classes held by their rim when too wide for the fingers.
+const VESSELS: [&str; 3] = ["cup", "bowl", "mug"];
+/// At most this many grasps are tried per action (the best first).
+const MAX_GRASPS: usize = 6;
+/// Distances (metres, base centre to the target) of the base poses tried after the one the
+/// base's own approach chose, nearest last: the arm reaches farther down and in from closer.
+const CLOSER_BASES_M: [f32; 2] = [0.7, 0.55];
+/// How far the hand carries an object straight into a container through its front, metres.
+const INSERT_M: f32 = 0.2;
+/// A grasp enters a container's front when its approach is within 45 degrees of the inward
+/// direction.
+const INWARD_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
+/// Base poses closer than this (metres) to one already tried are not tried again.
+const SAME_BASE_M: f32 = 0.05;
+
+/// Every link's collision pieces at its pose, except the robot's own and `skip`.
+pub fn scene_obstacles(view: &SceneView, skip: &[usize]) -> Obstacles {
+    let own = [view.link(ROBOT_LINK), view.link(GRIPPER_LINK)];
+    let mut obstacles = Obstacles::default();
+    for (l, link) in view.tree.links.iter().enumerate() {
+        if skip.contains(&l) || own.contains(&Some(l)) {
+            continue;
+        }
+        for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
+            obstacles.add(&link.name, piece, &view.poses[l]);
+        }
+    }
+    obstacles
+}
+
+/// The links of `link`'s subtree (an object and what it carries).
+fn subtree(view: &SceneView, link: usize) -> Vec<usize> {
+    (0..view.tree.links.len())
+        .filter(|&l| view.descends_from(l, link))
+        .collect()
+}
+
+/// The object's convex pieces in the tool's frame when the tool is at `world_from_tool`.
+fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &Affine3A) -> Held {
+    let tool_from_world = world_from_tool.inverse();
+    let pieces = links
+        .iter()
+        .flat_map(|&l| {
+            let tool_from_link = tool_from_world * view.poses[l];
+            view.tree.links[l]
+                .geometry
+                .iter()
+                .flat_map(|g| g.collision.iter())
+                .filter_map(move |piece| {
+                    let points: Vec<Vec3> = piece
+                        .positions
+                        .iter()
+                        .map(|p| tool_from_link.transform_point3(*p))
+                        .collect();
+                    ConvexPolyhedron::from_convex_hull(&points)
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Held { pieces }
+}
+
+/// The grasps of node `id`'s link `link` at the world pose `world_from_link`.
+fn grasps_of(
+    view: &SceneView,
+    rig: &ArmRig,
+    state: &RobotInTree,
+    id: &str,
+    link: usize,
+    world_from_link: &Affine3A,
+) -> Result<Vec<Grasp>, ActionError> {
+    let points: Vec<Vec3> = view.tree.links[link]
+        .geometry
+        .iter()
+        .flat_map(|g| g.collision.iter())
+        .flat_map(|piece| piece.positions.iter().copied())
+        .collect();
+    if points.is_empty() {
+        return Err(ActionError::NoGeometry(id.to_string()));
+    }
+    let rim = view.class_of(id).is_some_and(|c| VESSELS.contains(&c));
+    let found = grasps(
+        world_from_link,
+        &points,
+        rig.max_opening,
+        state.base.position,
+        rim,
+    );
+    if found.is_empty() {
+        return Err(ActionError::NoGrasp {
+            object: id.to_string(),
+            width_m: rig.max_opening,
+        });
+    }
+    Ok(found)
+}
+
+/// The arm's pick of node `id` (link `link`) from where the base stands: reach, close, lift
+/// and stow with it.
+pub(super) fn pick_motion(
+    view: &SceneView,
+    rig: &ArmRig,
+    state: &RobotInTree,
+    id: &str,
+    link: usize,
+) -> Result<Change, ActionError> {
+    let root = state.base.world_from_base() * rig.base_from_root;
+    let object = subtree(view, link);
+    let transit = scene_obstacles(view, &[]);
+    let near = scene_obstacles(view, &object);
+    let mut attempts = Vec::new();
+    let candidates = grasps_of(view, rig, state, id, link, &view.poses[link])?;
+    for grasp in candidates.into_iter().take(MAX_GRASPS) {
+        let label = grasp_label(&grasp);
+        let outcome = reach(
+            rig,
+            &root,
+            &rig.stow,
+            &grasp.world_from_tool,
+            grasp.approach,
+            PREGRASP_M,
+            &transit,
+            &near,
+            &Held::default(),
+        )
+        .and_then(|to| {
+            let held = held_pieces(view, &object, &grasp.world_from_tool);
+            let back = retreat(rig, &root, to.last(), &near, &near, &held)?;
+            Ok((to, back))
+        });
+        match outcome {
+            Ok((to, back)) => {
+                return Ok(Change::ArmMotion {
+                    what: format!("{label} of {id}"),
+                    reach: to.configurations,
+                    retreat: back.configurations,
+                });
+            }
+            Err(why) => attempts.push(format!("{label}: {why}")),
+        }
+    }
+    Err(ActionError::ArmCannot {
+        what: format!("pick {id}"),
+        attempts,
+    })
+}
+
+/// The arm's placing of the held node `id` (link `link`) at `world_from_link`: reach with it,
+/// open, lift and stow. The hand takes whichever of the object's grasps works there (the base
+/// carries the object between a pick and a place). The last stretch comes down from above,
+/// or along `inward` (horizontal, world) into a container through its front.
+pub(super) fn place_motion(
+    view: &SceneView,
+    rig: &ArmRig,
+    state: &RobotInTree,
+    id: &str,
+    link: usize,
+    world_from_link: &Affine3A,
+    inward: Option<Vec3>,
+) -> Result<Change, ActionError> {
+    let root = state.base.world_from_base() * rig.base_from_root;
+    let object = subtree(view, link);
+    let scene = scene_obstacles(view, &object);
+    // The object at its new place, for the way back.
+    let mut placed = scene.clone();
+    let moved = *world_from_link * view.poses[link].inverse();
+    for &l in &object {
+        let link = &view.tree.links[l];
+        for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
+            placed.add(&link.name, piece, &(moved * view.poses[l]));
+        }
+    }
+    let mut attempts = Vec::new();
+    let mut candidates = grasps_of(view, rig, state, id, link, world_from_link)?;
+    if let Some(inward) = inward {
+        // Into a container the hand comes in level, behind the object: a hand over it would
+        // meet the container's top.
+        candidates.retain(|g| g.approach.dot(inward) > INWARD_COS);
+        if candidates.is_empty() {
+            attempts.push(format!(
+                "no grasp of {id} from behind it (a side grasp) fits the hand"
+            ));
+        }
+    }
+    for grasp in candidates.into_iter().take(MAX_GRASPS) {
+        let label = grasp_label(&grasp);
+        // The object in the hand as it will be at the place.
+        let tool_from_world = grasp.world_from_tool.inverse();
+        let held = Held {
+            pieces: held_pieces(view, &object, &Affine3A::IDENTITY)
+                .pieces
+                .into_iter()
+                .filter_map(|hull| {
+                    let points: Vec<Vec3> = hull
+                        .points()
+                        .iter()
+                        .map(|p| (tool_from_world * moved).transform_point3(*p))
+                        .collect();
+                    ConvexPolyhedron::from_convex_hull(&points)
+                })
+                .collect(),
+        };
+        // Set down from above whatever the grasp, so the object never drags over its support,
+        // and released 5 mm over it (beyond the last stretch's margin): it drops onto it.
+        let release = Affine3A::from_translation(Vec3::Z * 0.005) * grasp.world_from_tool;
+        let outcome = reach(
+            rig,
+            &root,
+            &rig.stow,
+            &release,
+            inward.unwrap_or(-Vec3::Z),
+            inward.map_or(PREGRASP_M, |_| INSERT_M),
+            &scene,
+            &scene,
+            &held,
+        )
+        .and_then(|to| {
+            let back = retreat(rig, &root, to.last(), &placed, &scene, &Held::default())?;
+            Ok((to, back))
+        });
+        match outcome {
+            Ok((to, back)) => {
+                return Ok(Change::ArmMotion {
+                    what: format!("{label} of {id}"),
+                    reach: to.configurations,
+                    retreat: back.configurations,
+                });
+            }
+            Err(why) => attempts.push(format!("{label}: {why}")),
+        }
+    }
+    Err(ActionError::ArmCannot {
+        what: format!("place {id}"),
+        attempts,
+    })
+}
+
+/// A grasp in words: its kind, where the tool goes and which way the hand comes in.
+fn grasp_label(grasp: &Grasp) -> String {
+    let at = grasp.world_from_tool.translation;
+    let d = grasp.approach;
+    let from = if d.z < -0.9 {
+        "from above".to_string()
+    } else {
+        format!("along ({:+.1}, {:+.1})", d.x, d.y)
+    };
+    format!(
+        "{} grasp at ({:.2}, {:.2}, {:.2}) {from}",
+        format!("{:?}", grasp.kind).to_lowercase(),
+        at.x,
+        at.y,
+        at.z
+    )
+}
+
+/// Free spots for `link` on `surface`: `first`, then the ones nearest the surface's middle and
+/// the middles of its four quarters, each once.
+pub(super) fn free_spots(
+    view: &SceneView,
+    link: usize,
+    surface: &str,
+    first: Affine3A,
+    ignore: &[usize],
+) -> Vec<Affine3A> {
+    let mut spots = vec![first];
+    let Some((lo, hi)) = view.node_bounds(surface) else {
+        return spots;
+    };
+    let (lo, hi) = (lo.truncate(), hi.truncate());
+    let centre = 0.5 * (lo + hi);
+    let corners = [
+        lo,
+        glam::Vec2::new(lo.x, hi.y),
+        glam::Vec2::new(hi.x, lo.y),
+        hi,
+    ];
+    let nears = std::iter::once(centre).chain(corners.map(|c| 0.5 * (centre + c)));
+    for near in nears {
+        if let Some(spot) = view.spot_on(link, surface, near, ignore)
+            && spots
+                .iter()
+                .all(|s| s.translation.distance(spot.translation) > SAME_BASE_M)
+        {
+            spots.push(spot);
+        }
+    }
+    spots
+}
+
+/// The arm's `motion` from the base pose the approach chose (`first`: its drive and the robot
+/// after it) or, when the arm finds none there, from base poses closer to `target` (x, y) that
+/// the base drives to from `start`: the drive and the motion, or every attempt's reason.
+pub(super) fn from_some_base(
+    view: &SceneView,
+    robot: &RobotSpec,
+    start: &RobotInTree,
+    first: (Vec<Change>, RobotInTree),
+    target: glam::Vec2,
+    motion: &dyn Fn(&RobotInTree) -> Result<Change, ActionError>,
+) -> Result<Vec<Change>, ActionError> {
+    let mut bases = vec![first];
+    for reach in CLOSER_BASES_M {
+        let goal = NavGoal {
+            target,
+            reach,
+            facing: None,
+            keep_out: Vec::new(),
+        };
+        if let Ok(Some((change, moved))) = drive(view, robot, start, &goal, APPROACH_M)
+            && bases
+                .iter()
+                .all(|(_, b)| b.base.position.distance(moved.base.position) > SAME_BASE_M)
+        {
+            bases.push((vec![change], moved));
+        }
+    }
+    let mut what = String::new();
+    let mut attempts = Vec::new();
+    for (mut changes, moved) in bases {
+        match motion(&moved) {
+            Ok(change) => {
+                changes.push(change);
+                return Ok(changes);
+            }
+            Err(ActionError::ArmCannot {
+                what: w,
+                attempts: a,
+            }) => {
+                what = w;
+                let p = moved.base.position;
+                attempts.extend(
+                    a.into_iter()
+                        .map(|r| format!("base at ({:.2}, {:.2}), {r}", p.x, p.y)),
+                );
+            }
+            Err(other) => return Err(other),
+        }
+    }
+    Err(ActionError::ArmCannot { what, attempts })
+}
