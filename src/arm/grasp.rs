@@ -14,9 +14,9 @@ const TOP_GRASP_DEPTH_M: f32 = 0.03;
 /// How far the finger pads reach past the grasp point towards the palm, metres: the band of
 /// the object the fingers close on.
 const FINGER_PAD_M: f32 = 0.02;
-/// Room left between the object and each open finger, metres (the Panda's 8 cm hand takes a
-/// 7.3 cm cup).
-const FINGER_CLEARANCE_M: f32 = 0.003;
+/// Room left between the object and each open finger, metres (the Panda's 8 cm hand takes the
+/// kitchen's 7.5 cm cup from the side).
+const FINGER_CLEARANCE_M: f32 = 0.002;
 /// A vessel's wall as the fingers take it: its thickness, and how far in from the box's side
 /// the fingers close on it, metres.
 const RIM_WIDTH_M: f32 = 0.01;
@@ -70,7 +70,7 @@ pub fn grasps(
     let centre = world_from_object.transform_point3(0.5 * (lo + hi));
     let axis_x = world_from_object.transform_vector3(Vec3::X).normalize();
     let axis_y = world_from_object.transform_vector3(Vec3::Y).normalize();
-    // A tenth of a millimetre of rounding: a 7.4 cm cup fits the 8 cm hand.
+    // A tenth of a millimetre for rounding: 7.6 cm fits the 8 cm hand.
     let fits = |width: f32| width + 2.0 * FINGER_CLEARANCE_M <= max_width + 1e-4;
     let to_robot = (robot - centre.truncate()).normalize_or_zero().extend(0.0);
     let mut out = Vec::new();

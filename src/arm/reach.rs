@@ -193,13 +193,16 @@ pub fn reach(
     Ok(ArmPath { configurations })
 }
 
-/// The arm's motion from `from` (the tool at a grasp or a release) straight up `LIFT_M`, then
-/// back to the stowed configuration, against `near` obstacles on the lift and `transit` ones
-/// after it.
+/// The arm's motion from `from` (the tool at a grasp or a release) straight along `away`
+/// (a vector in the world: up `LIFT_M` off a surface, back out of a container's front), then
+/// back to the stowed configuration, against `near` obstacles on the straight stretch and
+/// `transit` ones after it.
+#[allow(clippy::too_many_arguments, reason = "one motion's whole problem")]
 pub fn retreat(
     rig: &ArmRig,
     world_from_root: &Affine3A,
     from: &[f32],
+    away: Vec3,
     transit: &Obstacles,
     near: &Obstacles,
     held: &Held,
@@ -209,14 +212,14 @@ pub fn retreat(
             && touching(rig, world_from_root, near, held, q, STRETCH_MARGIN_M).is_none()
     };
     let tool = rig.arm.tool_pose(world_from_root, from);
-    let steps = (LIFT_M / STRETCH_STEP_M).ceil() as usize;
+    let steps = (away.length() / STRETCH_STEP_M).ceil().max(1.0) as usize;
     let single = IkSettings {
         restarts: 0,
         ..rig.ik
     };
     let mut line = vec![from.to_vec()];
     for k in 1..=steps {
-        let up = Affine3A::from_translation(Vec3::Z * LIFT_M * k as f32 / steps as f32);
+        let up = Affine3A::from_translation(away * k as f32 / steps as f32);
         let previous = line.last().expect("not empty").clone();
         let q = solve(
             &rig.arm,
@@ -227,7 +230,10 @@ pub fn retreat(
             &free_near,
         )
         .filter(|q| crate::arm::rrt::distance(q, &previous) <= STRETCH_MAX_JUMP)
-        .ok_or_else(|| "the lift is blocked or out of reach".to_string())?;
+        .ok_or_else(|| {
+            "the straight way back (up, or out of a container) is blocked or out of reach"
+                .to_string()
+        })?;
         line.push(q);
     }
     let top = line.last().expect("not empty").clone();

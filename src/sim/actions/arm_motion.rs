@@ -8,7 +8,7 @@ use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, PREGRASP_M, grasps};
-use crate::arm::reach::{ArmRig, Held, reach, retreat};
+use crate::arm::reach::{ArmRig, Held, LIFT_M, reach, retreat};
 use crate::sim::actions::reach::{APPROACH_M, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
 use crate::sim::navigation::NavGoal;
@@ -22,8 +22,9 @@ const MAX_GRASPS: usize = 6;
 /// Distances (metres, base centre to the target) of the base poses tried after the one the
 /// base's own approach chose, nearest last: the arm reaches farther down and in from closer.
 const CLOSER_BASES_M: [f32; 2] = [0.7, 0.55];
-/// How far the hand carries an object straight into a container through its front, metres.
-const INSERT_M: f32 = 0.2;
+/// Room between the object and a container's front where the hand starts carrying it in,
+/// metres.
+const INSERT_CLEARANCE_M: f32 = 0.03;
 /// A grasp enters a container's front when its approach is within 45 degrees of the inward
 /// direction.
 const INWARD_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
@@ -142,7 +143,8 @@ pub(super) fn pick_motion(
         )
         .and_then(|to| {
             let held = held_pieces(view, &object, &grasp.world_from_tool);
-            let back = retreat(rig, &root, to.last(), &near, &near, &held)?;
+            let up = Vec3::Z * LIFT_M;
+            let back = retreat(rig, &root, to.last(), up, &near, &near, &held)?;
             Ok((to, back))
         });
         match outcome {
@@ -165,7 +167,8 @@ pub(super) fn pick_motion(
 /// The arm's placing of the held node `id` (link `link`) at `world_from_link`: reach with it,
 /// open, lift and stow. The hand takes whichever of the object's grasps works there (the base
 /// carries the object between a pick and a place). The last stretch comes down from above,
-/// or along `inward` (horizontal, world) into a container through its front.
+/// or along `inward` (a horizontal direction in the world, and how far) into a container
+/// through its front.
 pub(super) fn place_motion(
     view: &SceneView,
     rig: &ArmRig,
@@ -173,7 +176,7 @@ pub(super) fn place_motion(
     id: &str,
     link: usize,
     world_from_link: &Affine3A,
-    inward: Option<Vec3>,
+    inward: Option<(Vec3, f32)>,
 ) -> Result<Change, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
     let object = subtree(view, link);
@@ -189,7 +192,7 @@ pub(super) fn place_motion(
     }
     let mut attempts = Vec::new();
     let mut candidates = grasps_of(view, rig, state, id, link, world_from_link)?;
-    if let Some(inward) = inward {
+    if let Some((inward, _)) = inward {
         // Into a container the hand comes in level, behind the object: a hand over it would
         // meet the container's top.
         candidates.retain(|g| g.approach.dot(inward) > INWARD_COS);
@@ -225,14 +228,24 @@ pub(super) fn place_motion(
             &root,
             &rig.stow,
             &release,
-            inward.unwrap_or(-Vec3::Z),
-            inward.map_or(PREGRASP_M, |_| INSERT_M),
+            inward.map_or(-Vec3::Z, |(d, _)| d),
+            inward.map_or(PREGRASP_M, |(_, length)| length),
             &scene,
             &scene,
             &held,
         )
         .and_then(|to| {
-            let back = retreat(rig, &root, to.last(), &placed, &scene, &Held::default())?;
+            // Back the way it came in: up off a surface, out of a container's front.
+            let away = inward.map_or(Vec3::Z * LIFT_M, |(d, length)| -d * length);
+            let back = retreat(
+                rig,
+                &root,
+                to.last(),
+                away,
+                &placed,
+                &scene,
+                &Held::default(),
+            )?;
             Ok((to, back))
         });
         match outcome {
@@ -268,6 +281,24 @@ fn grasp_label(grasp: &Grasp) -> String {
         at.y,
         at.z
     )
+}
+
+/// The way into the container whose body is link `container` for object `link` set down at
+/// `spot`: the inward direction (its frame's +y, the front facing -y) and the distance from
+/// where the object is clear of the front to the spot.
+pub(super) fn way_in(
+    view: &SceneView,
+    container: usize,
+    link: usize,
+    spot: &Affine3A,
+) -> Option<(Vec3, f32)> {
+    let (clo, _) = view.local_bounds(container)?;
+    let (olo, ohi) = view.local_bounds(link)?;
+    let pose = view.poses[container];
+    let inward = pose.transform_vector3(Vec3::Y).normalize();
+    let depth = pose.inverse().transform_point3(spot.translation.into()).y - clo.y;
+    let half = 0.5 * (ohi - olo).truncate().max_element();
+    Some((inward, depth.max(0.0) + half + INSERT_CLEARANCE_M))
 }
 
 /// Free spots for `link` on `surface`: `first`, then the ones nearest the surface's middle and

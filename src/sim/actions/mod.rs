@@ -276,7 +276,7 @@ pub fn attempt(
                 // Into the container through its front, not down through its top.
                 let inward = view
                     .node_link(container)
-                    .map(|c| view.poses[c].transform_vector3(Vec3::Y).normalize());
+                    .and_then(|c| arm_motion::way_in(&view, c, link, &spot));
                 changes = arm_motion::from_some_base(
                     &view,
                     robot,
