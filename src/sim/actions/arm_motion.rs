@@ -9,7 +9,7 @@ use parry3d::shape::ConvexPolyhedron;
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, PREGRASP_M, grasps};
 use crate::arm::reach::{ArmRig, Held, LIFT_M, reach, retreat};
-use crate::sim::actions::reach::{APPROACH_M, drive};
+use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
 use crate::sim::navigation::NavGoal;
 use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK, RobotSpec};
@@ -30,6 +30,8 @@ const INSERT_CLEARANCE_M: f32 = 0.03;
 const INWARD_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
 /// Base poses closer than this (metres) to one already tried are not tried again.
 const SAME_BASE_M: f32 = 0.05;
+/// Free spots closer than this (metres) to one already listed are not listed again.
+const SAME_SPOT_M: f32 = 0.05;
 
 /// Every link's collision pieces at its pose, except the robot's own and `skip`.
 pub fn scene_obstacles(view: &SceneView, skip: &[usize]) -> Obstacles {
@@ -301,6 +303,51 @@ pub(super) fn way_in(
     Some((inward, depth.max(0.0) + half + INSERT_CLEARANCE_M))
 }
 
+/// The arm's placing of the held `object` (node id and link) on `surface`: from the free spot
+/// `first` (with the base's drive to it), or when the arm finds no motion there, from the other
+/// free spots ([`free_spots`], `ignore` left out of their checks). The changes and the spot.
+#[allow(clippy::too_many_arguments, reason = "one action's whole problem")]
+pub(super) fn place_on_some_spot(
+    view: &SceneView,
+    robot: &RobotSpec,
+    rig: &ArmRig,
+    state: &RobotInTree,
+    (object, link): (&str, usize),
+    surface: &str,
+    first: Affine3A,
+    ignore: &[usize],
+) -> Result<(Vec<Change>, Affine3A), ActionError> {
+    let mut attempts = Vec::new();
+    let mut first_error = None;
+    for spot in free_spots(view, link, surface, first, ignore) {
+        let target = spot.translation.truncate();
+        let (changes, moved) = match approach_point(view, robot, state, target, surface) {
+            Ok(found) => found,
+            Err(e) => {
+                first_error.get_or_insert(e);
+                continue;
+            }
+        };
+        let place = |at: &RobotInTree| place_motion(view, rig, at, object, link, &spot, None);
+        match from_some_base(view, robot, state, (changes, moved), target, &place) {
+            Ok(changes) => return Ok((changes, spot)),
+            Err(ActionError::ArmCannot { attempts: a, .. }) => attempts.extend(
+                a.into_iter()
+                    .map(|r| format!("spot ({:.2}, {:.2}), {r}", target.x, target.y)),
+            ),
+            Err(other) => return Err(other),
+        }
+    }
+    match first_error {
+        // The base reached no spot: that is the reason, not the arm.
+        Some(e) if attempts.is_empty() => Err(e),
+        _ => Err(ActionError::ArmCannot {
+            what: format!("place {object} on {surface}"),
+            attempts,
+        }),
+    }
+}
+
 /// Free spots for `link` on `surface`: `first`, then the ones nearest the surface's middle and
 /// the middles of its four quarters, each once.
 pub(super) fn free_spots(
@@ -327,7 +374,7 @@ pub(super) fn free_spots(
         if let Some(spot) = view.spot_on(link, surface, near, ignore)
             && spots
                 .iter()
-                .all(|s| s.translation.distance(spot.translation) > SAME_BASE_M)
+                .all(|s| s.translation.distance(spot.translation) > SAME_SPOT_M)
         {
             spots.push(spot);
         }

@@ -224,37 +224,18 @@ pub fn attempt(
                 changes.extend(attach(&view, link, surface, spot)?);
                 return Ok(changes);
             };
-            // The arm tries other free spots when it cannot set the object down at the first.
-            let mut attempts = Vec::new();
-            for spot in arm_motion::free_spots(&view, link, surface, spot, &[gripper, base]) {
-                let target = spot.translation.truncate();
-                let Ok((changes, moved)) = approach_point(&view, robot, &state, target, surface)
-                else {
-                    continue;
-                };
-                match arm_motion::from_some_base(
-                    &view,
-                    robot,
-                    &state,
-                    (changes, moved),
-                    target,
-                    &|at| arm_motion::place_motion(&view, rig, at, object, link, &spot, None),
-                ) {
-                    Ok(mut changes) => {
-                        changes.extend(attach(&view, link, surface, spot)?);
-                        return Ok(changes);
-                    }
-                    Err(ActionError::ArmCannot { attempts: a, .. }) => attempts.extend(
-                        a.into_iter()
-                            .map(|r| format!("spot ({:.2}, {:.2}), {r}", target.x, target.y)),
-                    ),
-                    Err(other) => return Err(other),
-                }
-            }
-            Err(ActionError::ArmCannot {
-                what: format!("place {object} on {surface}"),
-                attempts,
-            })
+            let (mut changes, spot) = arm_motion::place_on_some_spot(
+                &view,
+                robot,
+                rig,
+                &state,
+                (object, link),
+                surface,
+                spot,
+                &[gripper, base],
+            )?;
+            changes.extend(attach(&view, link, surface, spot)?);
+            Ok(changes)
         }
         Action::PlaceIn { object, container } => {
             let link = held(&view, &state, object)?;

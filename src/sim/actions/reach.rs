@@ -83,7 +83,7 @@ pub(super) fn approach(
 }
 
 /// A drive (if needed, at most `APPROACH_M`) to within reach of the point `target` on `what`.
-pub(super) fn approach_point(
+pub(crate) fn approach_point(
     view: &SceneView,
     robot: &RobotSpec,
     state: &RobotInTree,
