@@ -135,7 +135,7 @@ pub fn reach(
             && touching(rig, world_from_root, near, held, q, STRETCH_MARGIN_M).is_none()
     };
     let q_target = solve(&rig.arm, world_from_root, target, from, &rig.ik, &free_near)
-        .ok_or_else(|| "no collision-free inverse kinematics at the target".to_string())?;
+        .ok_or_else(|| why_no_ik(rig, world_from_root, target, from, near, held))?;
     // The straight stretch, solved backwards from the target so it ends exactly there.
     let steps = (stretch / STRETCH_STEP_M).ceil().max(1.0) as usize;
     let mut line = vec![q_target.clone()];
@@ -191,6 +191,25 @@ pub fn reach(
     let mut configurations = densify(&path, rig.plan.resolution);
     configurations.extend(line.into_iter().skip(1));
     Ok(ArmPath { configurations })
+}
+
+/// Why no collision-free configuration puts the tool at `target`: out of reach, or what the
+/// arm touches in a configuration that reaches it.
+fn why_no_ik(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    target: &Affine3A,
+    from: &[f32],
+    near: &Obstacles,
+    held: &Held,
+) -> String {
+    match solve(&rig.arm, world_from_root, target, from, &rig.ik, &|_| true) {
+        None => "the target is out of the arm's reach".to_string(),
+        Some(q) => format!(
+            "the arm reaches the target only touching something ({})",
+            touching(rig, world_from_root, near, held, &q, STRETCH_MARGIN_M).unwrap_or_default()
+        ),
+    }
 }
 
 /// The arm's motion from `from` (the tool at a grasp or a release) straight along `away`
