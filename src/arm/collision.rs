@@ -9,12 +9,13 @@
 use glam::{Affine3A, Vec3};
 use parry3d::math::Pose;
 use parry3d::shape::ConvexPolyhedron;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::arm::{Arm, LinkMotion};
+use crate::arm::{Arm, LinkMotion, random_configuration};
 use crate::geometry::TriMesh;
 use crate::geometry::convex_depth::rigid_pose;
+use crate::geometry::mesh::points_bounds;
 use crate::kinematics::joint_sweep::world_bounds;
 
 /// Random configurations drawn to find the pairs of links that always touch.
@@ -110,16 +111,7 @@ impl ArmCollider {
         let mut rng = ChaCha8Rng::seed_from_u64(0);
         let limits = arm.limits();
         for _ in 0..SELF_SAMPLES {
-            let q: Vec<f32> = limits
-                .iter()
-                .map(|&(lo, hi)| {
-                    if hi > lo {
-                        rng.random_range(lo..hi)
-                    } else {
-                        lo
-                    }
-                })
-                .collect();
+            let q = random_configuration(&limits, &mut rng);
             let poses = arm.link_poses(&Affine3A::IDENTITY, &q, 0.5);
             for (count, &(a, b)) in touching.iter_mut().zip(&candidates) {
                 *count += usize::from(collider.links_within(a, &poses[a], b, &poses[b], 0.0));
@@ -143,9 +135,9 @@ impl ArmCollider {
         margin: f32,
     ) -> Option<(usize, Touching)> {
         for (l, pieces) in self.pieces.iter().enumerate() {
+            let pose = rigid_pose(&poses[l]);
             for (hull, lo, hi) in pieces {
                 let (wlo, whi) = world_bounds(&poses[l], *lo, *hi);
-                let pose = rigid_pose(&poses[l]);
                 for (o, obstacle) in obstacles.items.iter().enumerate() {
                     if !boxes_within(wlo, whi, obstacle.lo, obstacle.hi, margin) {
                         continue;
@@ -236,8 +228,5 @@ fn boxes_within(alo: Vec3, ahi: Vec3, blo: Vec3, bhi: Vec3, margin: f32) -> bool
 }
 
 fn hull_bounds(hull: &ConvexPolyhedron) -> (Vec3, Vec3) {
-    hull.points().iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    )
+    points_bounds(hull.points()).unwrap_or_default()
 }

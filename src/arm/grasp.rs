@@ -8,6 +8,8 @@
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
+use crate::geometry::mesh::points_bounds;
+
 /// How far the fingertips reach below an object's top in a top grasp, metres (less for a
 /// low object: half its height).
 const TOP_GRASP_DEPTH_M: f32 = 0.03;
@@ -63,7 +65,7 @@ pub fn grasps(
     robot: Vec2,
     rim: bool,
 ) -> Vec<Grasp> {
-    let Some((lo, hi)) = bounds(points) else {
+    let Some((lo, hi)) = points_bounds(points) else {
         return Vec::new();
     };
     let size = hi - lo;
@@ -82,7 +84,7 @@ pub fn grasps(
         .copied()
         .filter(|p| p.z >= hi.z - depth - FINGER_PAD_M)
         .collect();
-    let band_size = bounds(&band).map_or(size, |(l, h)| h - l);
+    let band_size = points_bounds(&band).map_or(size, |(l, h)| h - l);
     for (closing, width) in [(axis_x, band_size.x), (axis_y, band_size.y)] {
         if fits(width) {
             out.push(Grasp {
@@ -143,15 +145,6 @@ pub fn grasps(
     });
     out.extend(sides);
     out
-}
-
-fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
-    let first = *points.first()?;
-    Some(
-        points
-            .iter()
-            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
-    )
 }
 
 /// The tool pose at `at` pointing along `approach` with the fingers closing along `closing`.

@@ -9,10 +9,10 @@
 
 use glam::{Affine3A, Mat3, Quat, Vec3};
 use nalgebra::{Matrix6, Vector6};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::arm::{Arm, joint_axis};
+use crate::arm::{Arm, joint_axis, random_configuration};
 use crate::base::JointKind;
 
 /// What counts as reaching the target, and how hard to try.
@@ -107,16 +107,7 @@ pub fn solve(
         {
             return Some(q);
         }
-        start = limits
-            .iter()
-            .map(|&(lo, hi)| {
-                if hi > lo {
-                    rng.random_range(lo..hi)
-                } else {
-                    lo
-                }
-            })
-            .collect();
+        start = random_configuration(&limits, &mut rng);
     }
     None
 }

@@ -220,6 +220,20 @@ pub fn joint_motion(joint: &BodyJoint, v: f32) -> Affine3A {
     }
 }
 
+/// A configuration drawn uniformly within `limits` (a joint with no range at its one value).
+pub fn random_configuration(limits: &[(f32, f32)], rng: &mut impl rand::Rng) -> Vec<f32> {
+    limits
+        .iter()
+        .map(|&(lo, hi)| {
+            if hi > lo {
+                rng.random_range(lo..hi)
+            } else {
+                lo
+            }
+        })
+        .collect()
+}
+
 /// Where the chain's joint `i` turns or slides, in the world, from the link poses: the axis's
 /// direction and a point on it.
 pub fn joint_axis(arm: &Arm, poses: &[Affine3A], i: usize) -> (Vec3, Vec3) {

@@ -130,45 +130,21 @@ pub fn reach(
     near: &Obstacles,
     held: &Held,
 ) -> Result<ArmPath, String> {
-    let free_near = |q: &[f32]| {
-        rig.arm.within_limits(q)
-            && touching(rig, world_from_root, near, held, q, STRETCH_MARGIN_M).is_none()
-    };
+    let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     let q_target = solve(&rig.arm, world_from_root, target, from, &rig.ik, &free_near)
         .ok_or_else(|| why_no_ik(rig, world_from_root, target, from, near, held))?;
     // The straight stretch, solved backwards from the target so it ends exactly there.
-    let steps = (stretch / STRETCH_STEP_M).ceil().max(1.0) as usize;
-    let mut line = vec![q_target.clone()];
-    let single = IkSettings {
-        restarts: 0,
-        ..rig.ik
-    };
-    for k in 1..=steps {
-        let back = Affine3A::from_translation(-approach * stretch * k as f32 / steps as f32);
-        let previous = line.last().expect("not empty").clone();
-        let q = solve(
-            &rig.arm,
-            world_from_root,
-            &(back * *target),
-            &previous,
-            &single,
-            &free_near,
-        )
-        .filter(|q| crate::arm::rrt::distance(q, &previous) <= STRETCH_MAX_JUMP)
-        .ok_or_else(|| {
+    let back = -approach * stretch;
+    let mut line = straight_line(rig, world_from_root, &q_target, target, back, &free_near)
+        .map_err(|at| {
             format!(
                 "the straight approach is blocked or out of reach {:.0} cm before the target",
-                100.0 * stretch * k as f32 / steps as f32
+                100.0 * at
             )
         })?;
-        line.push(q);
-    }
     line.reverse();
     let start = line[0].clone();
-    let free_transit = |q: &[f32]| {
-        rig.arm.within_limits(q)
-            && touching(rig, world_from_root, transit, held, q, TRANSIT_MARGIN_M).is_none()
-    };
+    let free_transit = clear_of(rig, world_from_root, transit, held, TRANSIT_MARGIN_M);
     if let Some(why) = touching(
         rig,
         world_from_root,
@@ -191,6 +167,49 @@ pub fn reach(
     let mut configurations = densify(&path, rig.plan.resolution);
     configurations.extend(line.into_iter().skip(1));
     Ok(ArmPath { configurations })
+}
+
+/// Whether a configuration is within the limits and keeps `margin` from the obstacles.
+fn clear_of<'a>(
+    rig: &'a ArmRig,
+    world_from_root: &'a Affine3A,
+    obstacles: &'a Obstacles,
+    held: &'a Held,
+    margin: f32,
+) -> impl Fn(&[f32]) -> bool + 'a {
+    move |q: &[f32]| {
+        rig.arm.within_limits(q)
+            && touching(rig, world_from_root, obstacles, held, q, margin).is_none()
+    }
+}
+
+/// The configurations that move the tool from `start` (at configuration `from`, included
+/// first) straight by `offset` (world) in steps of `STRETCH_STEP_M`, each solved from the one
+/// before and accepted by `free`; where it fails, the fraction of the way.
+fn straight_line(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    start: &Affine3A,
+    offset: Vec3,
+    free: &dyn Fn(&[f32]) -> bool,
+) -> Result<Vec<Vec<f32>>, f32> {
+    let steps = (offset.length() / STRETCH_STEP_M).ceil().max(1.0) as usize;
+    let single = IkSettings {
+        restarts: 0,
+        ..rig.ik
+    };
+    let mut line = vec![from.to_vec()];
+    for k in 1..=steps {
+        let t = k as f32 / steps as f32;
+        let pose = Affine3A::from_translation(offset * t) * *start;
+        let previous = line.last().expect("not empty");
+        let q = solve(&rig.arm, world_from_root, &pose, previous, &single, free)
+            .filter(|q| crate::arm::rrt::distance(q, previous) <= STRETCH_MAX_JUMP)
+            .ok_or(t)?;
+        line.push(q);
+    }
+    Ok(line)
 }
 
 /// Why no collision-free configuration puts the tool at `target`: out of reach, or what the
@@ -226,40 +245,15 @@ pub fn retreat(
     near: &Obstacles,
     held: &Held,
 ) -> Result<ArmPath, String> {
-    let free_near = |q: &[f32]| {
-        rig.arm.within_limits(q)
-            && touching(rig, world_from_root, near, held, q, STRETCH_MARGIN_M).is_none()
-    };
+    let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     let tool = rig.arm.tool_pose(world_from_root, from);
-    let steps = (away.length() / STRETCH_STEP_M).ceil().max(1.0) as usize;
-    let single = IkSettings {
-        restarts: 0,
-        ..rig.ik
-    };
-    let mut line = vec![from.to_vec()];
-    for k in 1..=steps {
-        let up = Affine3A::from_translation(away * k as f32 / steps as f32);
-        let previous = line.last().expect("not empty").clone();
-        let q = solve(
-            &rig.arm,
-            world_from_root,
-            &(up * tool),
-            &previous,
-            &single,
-            &free_near,
-        )
-        .filter(|q| crate::arm::rrt::distance(q, &previous) <= STRETCH_MAX_JUMP)
-        .ok_or_else(|| {
+    let line =
+        straight_line(rig, world_from_root, from, &tool, away, &free_near).map_err(|_| {
             "the straight way back (up, or out of a container) is blocked or out of reach"
                 .to_string()
         })?;
-        line.push(q);
-    }
     let top = line.last().expect("not empty").clone();
-    let free_transit = |q: &[f32]| {
-        rig.arm.within_limits(q)
-            && touching(rig, world_from_root, transit, held, q, TRANSIT_MARGIN_M).is_none()
-    };
+    let free_transit = clear_of(rig, world_from_root, transit, held, TRANSIT_MARGIN_M);
     let path =
         plan(&top, &rig.stow, &rig.arm.limits(), &free_transit, &rig.plan).map_err(
             |e| match e {
@@ -298,12 +292,7 @@ pub fn path_clear(
     held: &Held,
     margin: f32,
 ) -> bool {
-    path.windows(2).all(|w| {
-        segment_free(
-            &w[0],
-            &w[1],
-            &|q| touching(rig, world_from_root, obstacles, held, q, margin).is_none(),
-            rig.plan.resolution / 4.0,
-        )
-    })
+    let clear = clear_of(rig, world_from_root, obstacles, held, margin);
+    path.windows(2)
+        .all(|w| segment_free(&w[0], &w[1], &clear, rig.plan.resolution / 4.0))
 }

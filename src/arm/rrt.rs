@@ -69,16 +69,7 @@ pub fn plan(
     let mut b = Tree::new(goal);
     let mut a_is_start = true;
     for _ in 0..settings.max_samples {
-        let sample: Vec<f32> = limits
-            .iter()
-            .map(|&(lo, hi)| {
-                if hi > lo {
-                    rng.random_range(lo..hi)
-                } else {
-                    lo
-                }
-            })
-            .collect();
+        let sample = crate::arm::random_configuration(limits, &mut rng);
         if let Some(new) = a.extend(&sample, free, settings) {
             let target = a.nodes[new].clone();
             if let Some(reached) = b.connect(&target, free, settings) {

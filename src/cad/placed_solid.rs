@@ -7,6 +7,7 @@ use parry3d::shape::ConvexPolyhedron;
 
 use crate::cad::db::database::DatabaseModel;
 use crate::geometry::convex_depth::convex_penetration;
+use crate::geometry::mesh::points_bounds;
 use crate::geometry::{Plane, TriMesh};
 
 /// How far (metres) below or above a child's bottom the parent's upward surface may be found.
@@ -71,7 +72,7 @@ impl PlacedSolid {
     ) -> Self {
         let pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)> = pieces
             .filter_map(|points| {
-                let (lo, hi) = bounds(&points)?;
+                let (lo, hi) = points_bounds(&points)?;
                 Some((ConvexPolyhedron::from_convex_hull(&points)?, lo, hi))
             })
             .collect();
@@ -101,7 +102,7 @@ impl PlacedSolid {
             triangles: Vec::new(),
         }
         .convex_hull()?;
-        let (lo, hi) = bounds(&hull.positions)?;
+        let (lo, hi) = points_bounds(&hull.positions)?;
         let piece = ConvexPolyhedron::from_convex_hull(&hull.positions)?;
         let upward = (0..hull.triangles.len())
             .filter(|&t| hull.face_normal(t).z > 0.9)
@@ -179,15 +180,6 @@ impl PlacedSolid {
             .filter(|h| (h - z).abs() <= band)
             .min_by(|a, b| (a - z).abs().total_cmp(&(b - z).abs()))
     }
-}
-
-fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
-    let first = *points.first()?;
-    Some(
-        points
-            .iter()
-            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
-    )
 }
 
 /// The height of triangle `t`'s plane at `xy` when `xy` lies inside its projection.

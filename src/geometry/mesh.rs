@@ -120,12 +120,7 @@ impl TriMesh {
 
     /// Axis-aligned bounds `(min, max)`; `None` for a mesh without vertices.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let first = *self.positions.first()?;
-        Some(
-            self.positions
-                .iter()
-                .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
-        )
+        points_bounds(&self.positions)
     }
 
     /// Per-vertex unit normals: the area-weighted mean of the adjacent triangles' normals (zero
@@ -324,6 +319,16 @@ impl TriMesh {
 }
 
 /// The 8 corners of the box `min..max`; corner `i` takes max on x, y, z for bits 1, 2, 4 of `i`.
+/// Axis-aligned bounds `(min, max)` of `points`; `None` when there are none.
+pub fn points_bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let first = *points.first()?;
+    Some(
+        points
+            .iter()
+            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
+    )
+}
+
 pub fn box_corners(min: Vec3, max: Vec3) -> [Vec3; 8] {
     std::array::from_fn(|i| {
         Vec3::new(

@@ -10,7 +10,7 @@ use iscene::arm::ik::{IkSettings, pose_error, solve};
 use iscene::arm::rrt::{PlanSettings, densify, plan, segment_free};
 use iscene::arm::{Arm, LinkMotion};
 use iscene::geometry::TriMesh;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 
 use crate::common;
 
@@ -34,10 +34,7 @@ fn panda_urdf() -> PathBuf {
 }
 
 fn random_configuration(arm: &Arm, rng: &mut rand_chacha::ChaCha8Rng) -> Vec<f32> {
-    arm.limits()
-        .iter()
-        .map(|&(lo, hi)| rng.random_range(lo..hi))
-        .collect()
+    iscene::arm::random_configuration(&arm.limits(), rng)
 }
 
 /// Every link frame of the Panda in 20 random configurations, fingers half open, matches

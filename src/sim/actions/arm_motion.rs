@@ -8,7 +8,7 @@ use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, PREGRASP_M, grasps};
-use crate::arm::reach::{ArmRig, Held, LIFT_M, reach, retreat};
+use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat};
 use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
 use crate::sim::navigation::NavGoal;
@@ -36,16 +36,47 @@ const SAME_SPOT_M: f32 = 0.05;
 /// Every link's collision pieces at its pose, except the robot's own and `skip`.
 pub fn scene_obstacles(view: &SceneView, skip: &[usize]) -> Obstacles {
     let own = [view.link(ROBOT_LINK), view.link(GRIPPER_LINK)];
+    let links: Vec<usize> = (0..view.tree.links.len())
+        .filter(|l| !skip.contains(l) && !own.contains(&Some(*l)))
+        .collect();
     let mut obstacles = Obstacles::default();
-    for (l, link) in view.tree.links.iter().enumerate() {
-        if skip.contains(&l) || own.contains(&Some(l)) {
-            continue;
-        }
+    add_links(&mut obstacles, view, &links, &Affine3A::IDENTITY);
+    obstacles
+}
+
+/// Adds the collision pieces of `links`, each at its pose moved by `moved` (world).
+fn add_links(obstacles: &mut Obstacles, view: &SceneView, links: &[usize], moved: &Affine3A) {
+    for &l in links {
+        let link = &view.tree.links[l];
         for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
-            obstacles.add(&link.name, piece, &view.poses[l]);
+            obstacles.add(&link.name, piece, &(*moved * view.poses[l]));
         }
     }
-    obstacles
+}
+
+/// The scene's obstacles around an object the arm takes or sets down, built once per action
+/// (every base pose and spot tried shares them).
+pub(super) struct AroundObject {
+    /// The object's link and what it carries.
+    links: Vec<usize>,
+    /// Everything but the robot.
+    with_object: Obstacles,
+    /// Everything but the robot and the object.
+    without_object: Obstacles,
+}
+
+impl AroundObject {
+    pub(super) fn new(view: &SceneView, link: usize) -> Self {
+        let links = subtree(view, link);
+        let without_object = scene_obstacles(view, &links);
+        let mut with_object = without_object.clone();
+        add_links(&mut with_object, view, &links, &Affine3A::IDENTITY);
+        Self {
+            links,
+            with_object,
+            without_object,
+        }
+    }
 }
 
 /// The links of `link`'s subtree (an object and what it carries).
@@ -115,41 +146,49 @@ fn grasps_of(
     Ok(found)
 }
 
-/// The arm's pick of node `id` (link `link`) from where the base stands: reach, close, lift
-/// and stow with it.
+/// The arm's pick of node `id` (link `link`, its obstacles `around`) from where the base
+/// stands: reach, close, lift and stow with it.
 pub(super) fn pick_motion(
     view: &SceneView,
     rig: &ArmRig,
     state: &RobotInTree,
-    id: &str,
-    link: usize,
+    (id, link): (&str, usize),
+    around: &AroundObject,
 ) -> Result<Change, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
-    let object = subtree(view, link);
-    let transit = scene_obstacles(view, &[]);
-    let near = scene_obstacles(view, &object);
-    let mut attempts = Vec::new();
+    let (transit, near) = (&around.with_object, &around.without_object);
     let candidates = grasps_of(view, rig, state, id, link, &view.poses[link])?;
-    for grasp in candidates.into_iter().take(MAX_GRASPS) {
-        let label = grasp_label(&grasp);
-        let outcome = reach(
+    first_grasp_that_works(id, &format!("pick {id}"), Vec::new(), candidates, |grasp| {
+        let to = reach(
             rig,
             &root,
             &rig.stow,
             &grasp.world_from_tool,
             grasp.approach,
             PREGRASP_M,
-            &transit,
-            &near,
+            transit,
+            near,
             &Held::default(),
-        )
-        .and_then(|to| {
-            let held = held_pieces(view, &object, &grasp.world_from_tool);
-            let up = Vec3::Z * LIFT_M;
-            let back = retreat(rig, &root, to.last(), up, &near, &near, &held)?;
-            Ok((to, back))
-        });
-        match outcome {
+        )?;
+        let held = held_pieces(view, &around.links, &grasp.world_from_tool);
+        let up = Vec3::Z * LIFT_M;
+        let back = retreat(rig, &root, to.last(), up, near, near, &held)?;
+        Ok((to, back))
+    })
+}
+
+/// The arm's motion with the first of `candidates` (at most `MAX_GRASPS`) for which `plan`
+/// finds a reach and a retreat; else `what` fails with `attempts` and each grasp's reason.
+fn first_grasp_that_works(
+    id: &str,
+    what: &str,
+    mut attempts: Vec<String>,
+    candidates: Vec<Grasp>,
+    plan: impl Fn(&Grasp) -> Result<(ArmPath, ArmPath), String>,
+) -> Result<Change, ActionError> {
+    for grasp in candidates.into_iter().take(MAX_GRASPS) {
+        let label = grasp_label(&grasp);
+        match plan(&grasp) {
             Ok((to, back)) => {
                 return Ok(Change::ArmMotion {
                     what: format!("{label} of {id}"),
@@ -161,7 +200,7 @@ pub(super) fn pick_motion(
         }
     }
     Err(ActionError::ArmCannot {
-        what: format!("pick {id}"),
+        what: what.to_string(),
         attempts,
     })
 }
@@ -175,23 +214,17 @@ pub(super) fn place_motion(
     view: &SceneView,
     rig: &ArmRig,
     state: &RobotInTree,
-    id: &str,
-    link: usize,
+    (id, link): (&str, usize),
+    around: &AroundObject,
     world_from_link: &Affine3A,
     inward: Option<(Vec3, f32)>,
 ) -> Result<Change, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
-    let object = subtree(view, link);
-    let scene = scene_obstacles(view, &object);
+    let scene = &around.without_object;
     // The object at its new place, for the way back.
-    let mut placed = scene.clone();
     let moved = *world_from_link * view.poses[link].inverse();
-    for &l in &object {
-        let link = &view.tree.links[l];
-        for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
-            placed.add(&link.name, piece, &(moved * view.poses[l]));
-        }
-    }
+    let mut placed = scene.clone();
+    add_links(&mut placed, view, &around.links, &moved);
     let mut attempts = Vec::new();
     let mut candidates = grasps_of(view, rig, state, id, link, world_from_link)?;
     if let Some((inward, _)) = inward {
@@ -204,66 +237,40 @@ pub(super) fn place_motion(
             ));
         }
     }
-    for grasp in candidates.into_iter().take(MAX_GRASPS) {
-        let label = grasp_label(&grasp);
-        // The object in the hand as it will be at the place.
-        let tool_from_world = grasp.world_from_tool.inverse();
-        let held = Held {
-            pieces: held_pieces(view, &object, &Affine3A::IDENTITY)
-                .pieces
-                .into_iter()
-                .filter_map(|hull| {
-                    let points: Vec<Vec3> = hull
-                        .points()
-                        .iter()
-                        .map(|p| (tool_from_world * moved).transform_point3(*p))
-                        .collect();
-                    ConvexPolyhedron::from_convex_hull(&points)
-                })
-                .collect(),
-        };
+    first_grasp_that_works(id, &format!("place {id}"), attempts, candidates, |grasp| {
+        // The object in the hand as it will be at the place: the tool's pose taken back to
+        // where the object stands now.
+        let held = held_pieces(
+            view,
+            &around.links,
+            &(moved.inverse() * grasp.world_from_tool),
+        );
         // Set down from above whatever the grasp, so the object never drags over its support,
         // and released 5 mm over it (beyond the last stretch's margin): it drops onto it.
         let release = Affine3A::from_translation(Vec3::Z * 0.005) * grasp.world_from_tool;
-        let outcome = reach(
+        let to = reach(
             rig,
             &root,
             &rig.stow,
             &release,
             inward.map_or(-Vec3::Z, |(d, _)| d),
             inward.map_or(PREGRASP_M, |(_, length)| length),
-            &scene,
-            &scene,
+            scene,
+            scene,
             &held,
-        )
-        .and_then(|to| {
-            // Back the way it came in: up off a surface, out of a container's front.
-            let away = inward.map_or(Vec3::Z * LIFT_M, |(d, length)| -d * length);
-            let back = retreat(
-                rig,
-                &root,
-                to.last(),
-                away,
-                &placed,
-                &scene,
-                &Held::default(),
-            )?;
-            Ok((to, back))
-        });
-        match outcome {
-            Ok((to, back)) => {
-                return Ok(Change::ArmMotion {
-                    what: format!("{label} of {id}"),
-                    reach: to.configurations,
-                    retreat: back.configurations,
-                });
-            }
-            Err(why) => attempts.push(format!("{label}: {why}")),
-        }
-    }
-    Err(ActionError::ArmCannot {
-        what: format!("place {id}"),
-        attempts,
+        )?;
+        // Back the way it came in: up off a surface, out of a container's front.
+        let away = inward.map_or(Vec3::Z * LIFT_M, |(d, length)| -d * length);
+        let back = retreat(
+            rig,
+            &root,
+            to.last(),
+            away,
+            &placed,
+            scene,
+            &Held::default(),
+        )?;
+        Ok((to, back))
     })
 }
 
@@ -317,6 +324,7 @@ pub(super) fn place_on_some_spot(
     first: Affine3A,
     ignore: &[usize],
 ) -> Result<(Vec<Change>, Affine3A), ActionError> {
+    let around = AroundObject::new(view, link);
     let mut attempts = Vec::new();
     let mut first_error = None;
     for spot in free_spots(view, link, surface, first, ignore) {
@@ -328,7 +336,8 @@ pub(super) fn place_on_some_spot(
                 continue;
             }
         };
-        let place = |at: &RobotInTree| place_motion(view, rig, at, object, link, &spot, None);
+        let place =
+            |at: &RobotInTree| place_motion(view, rig, at, (object, link), &around, &spot, None);
         match from_some_base(view, robot, state, (changes, moved), target, &place) {
             Ok(changes) => return Ok((changes, spot)),
             Err(ActionError::ArmCannot { attempts: a, .. }) => attempts.extend(

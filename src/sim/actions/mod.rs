@@ -192,6 +192,7 @@ pub fn attempt(
             let picked = pick(&view, robot, &moved, object)?;
             let mut changes = match (arm, view.node_link(object)) {
                 (Some(rig), Some(link)) => {
+                    let around = arm_motion::AroundObject::new(&view, link);
                     let target = view.poses[link].translation.truncate();
                     arm_motion::from_some_base(
                         &view,
@@ -199,7 +200,7 @@ pub fn attempt(
                         &state,
                         (changes, moved),
                         target,
-                        &|at| arm_motion::pick_motion(&view, rig, at, object, link),
+                        &|at| arm_motion::pick_motion(&view, rig, at, (object, link), &around),
                     )?
                 }
                 _ => changes,
@@ -258,13 +259,24 @@ pub fn attempt(
                 let inward = view
                     .node_link(container)
                     .and_then(|c| arm_motion::way_in(&view, c, link, &spot));
+                let around = arm_motion::AroundObject::new(&view, link);
                 changes = arm_motion::from_some_base(
                     &view,
                     robot,
                     &state,
                     (changes, moved),
                     spot.translation.truncate(),
-                    &|at| arm_motion::place_motion(&view, rig, at, object, link, &spot, inward),
+                    &|at| {
+                        arm_motion::place_motion(
+                            &view,
+                            rig,
+                            at,
+                            (object, link),
+                            &around,
+                            &spot,
+                            inward,
+                        )
+                    },
                 )?;
             }
             changes.extend(attach(&view, link, container, spot)?);
