@@ -15,6 +15,7 @@ use crate::arm::reach::ArmRig;
 use crate::base::InvalidValue;
 use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
+use crate::export::replay::replay_files;
 use crate::export::write_tree_exports;
 use crate::graph::ContactGraph;
 use crate::graph::GraphEdge;
@@ -25,7 +26,9 @@ use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::nav_grid;
 use crate::sim::graph_sync::graph_after;
 use crate::sim::planner::{ground, plan};
-use crate::sim::robot::BasePose;
+use crate::sim::actions::Change;
+use crate::sim::robot::{BasePose, ROBOT_LINK};
+use crate::sim::trajectory::trajectory;
 use crate::sim::scene_view::SceneView;
 use crate::sim::symbolic::{Fact, SymbolicScene, parse_goal, symbolic_scene};
 use crate::sim::task::{AddedObject, Task};
@@ -99,9 +102,14 @@ pub fn simulation_app(
         }
     };
     let spec = task.robot_spec(arm.is_some());
-    spawn_robot(world, spec, pose)?;
-    if let Some(arm) = arm {
-        let rig = ArmRig::new(arm.clone(), spec.height);
+    let rig = arm.map(|arm| ArmRig::new(arm.clone(), spec.height));
+    // A held object rides in the arm's stowed hand, or on the plate of a base without one.
+    let gripper = rig.as_ref().map_or_else(
+        || (spec.base_from_gripper(), spec.gripper_mesh()),
+        |rig| (rig.base_from_stowed_tool(), rig.arm.hand_mesh()),
+    );
+    spawn_robot(world, spec, pose, gripper)?;
+    if let Some(rig) = rig {
         app.insert_resource(RobotArm(std::sync::Arc::new(rig)));
     }
     Ok(app)
@@ -386,7 +394,8 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
         steps,
         output: options.out.clone(),
     };
-    write_outputs(&target, &prepared, &before, &after, &summary)?;
+    let rig = app.world().get_resource::<RobotArm>().map(|r| r.0.clone());
+    write_outputs(&target, &prepared, (&before, &after), &summary, rig.as_deref())?;
     Ok(summary)
 }
 
@@ -487,12 +496,14 @@ pub fn bench_simulation(
     })
 }
 
+/// Writes the trace, the task's PDDL, the contact graph and exports of the scene after the
+/// task and, for a robot with an arm, the task's replay for MuJoCo.
 fn write_outputs(
     out: &OutputTarget,
     prepared: &PreparedTask,
-    before: &KinematicTree,
-    after: &KinematicTree,
+    (before, after): (&KinematicTree, &KinematicTree),
     summary: &SimulationSummary,
+    rig: Option<&ArmRig>,
 ) -> Result<(), IsceneError> {
     let staged = StagedDir::new(out)?;
     let dir = staged.path();
@@ -511,6 +522,38 @@ fn write_outputs(
         &graph_after(&prepared.graph, before, after).to_json(),
     )?;
     write_tree_exports(dir, after, "scene")?;
+    if let Some(rig) = rig {
+        write_replay(dir, before, &prepared.task, summary, rig)?;
+    }
     staged.commit()?;
+    Ok(())
+}
+
+/// `replay.xml` (the scene as the task found it, with the robot and its arm), its arm's meshes
+/// and `trajectory.csv` (the performed steps' joint values over time) into `dir`.
+fn write_replay(
+    dir: &Path,
+    before: &KinematicTree,
+    task: &Task,
+    summary: &SimulationSummary,
+    rig: &ArmRig,
+) -> Result<(), IsceneError> {
+    let steps: Vec<(usize, &[Change])> = summary
+        .steps
+        .iter()
+        .filter(|s| s.success)
+        .map(|s| (s.step, s.changes.as_slice()))
+        .collect();
+    let robot = before
+        .links
+        .iter()
+        .position(|l| l.name == ROBOT_LINK)
+        .ok_or_else(|| IsceneError::Internal("the scene has no robot to replay".into()))?;
+    let trajectory = trajectory(before, rig, &steps)
+        .ok_or_else(|| IsceneError::Internal("the scene has no robot to replay".into()))?;
+    write_text(&dir.join("trajectory.csv"), &trajectory.csv())?;
+    for file in replay_files(before, &[robot], &task.robot_spec(true), rig) {
+        write_text(&dir.join(&file.path), &file.text)?;
+    }
     Ok(())
 }

@@ -32,6 +32,8 @@ pub enum GraspKind {
     Top,
     Rim,
     Side,
+    /// The grasp an object is already held by (set down as it was picked).
+    Held,
 }
 
 /// One way to hold an object.

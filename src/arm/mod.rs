@@ -198,6 +198,36 @@ impl Arm {
         poses
     }
 
+    /// The hand in the tool's frame, its fingers open: the pieces of every link past the
+    /// chain's last joint (the hand, its fingers, the tool). What the tree shows of the arm.
+    pub fn hand_mesh(&self) -> TriMesh {
+        let last = self.chain.last().copied().unwrap_or(0);
+        let poses = self.link_poses(&Affine3A::IDENTITY, &self.middle(), 1.0);
+        let tool_from_root = poses[self.tool].inverse();
+        let mut hand = TriMesh::default();
+        for (l, link) in self.links.iter().enumerate() {
+            if l != last && self.descends_from(l, last) {
+                for piece in &link.pieces {
+                    hand.append(&piece.transformed(&(tool_from_root * poses[l])));
+                }
+            }
+        }
+        hand
+    }
+
+    /// Whether link `l` is `ancestor` or hangs from it.
+    fn descends_from(&self, mut l: usize, ancestor: usize) -> bool {
+        loop {
+            if l == ancestor {
+                return true;
+            }
+            match self.links[l].parent {
+                Some(p) => l = p,
+                None => return false,
+            }
+        }
+    }
+
     /// The tool's world pose.
     pub fn tool_pose(&self, world_from_root: &Affine3A, q: &[f32]) -> Affine3A {
         // Only the chain leads to the tool; the fingers do not move it.

@@ -72,6 +72,14 @@ impl ArmRig {
     }
 }
 
+impl ArmRig {
+    /// The tool's pose in the base's frame with the arm stowed: where a held object rides
+    /// between a pick and a place.
+    pub fn base_from_stowed_tool(&self) -> Affine3A {
+        self.base_from_root * self.arm.tool_pose(&Affine3A::IDENTITY, &self.stow)
+    }
+}
+
 /// An object in the hand: its convex pieces in the tool's frame.
 #[derive(Clone, Default)]
 pub struct Held {

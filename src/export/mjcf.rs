@@ -16,14 +16,14 @@ use crate::kinematics::tree::{KinematicTree, TreeLink};
 /// Damping on hinge and slide joints (N m s/rad, N s/m): doors swing shut slowly, not forever.
 const JOINT_DAMPING: f32 = 0.5;
 
-fn attr_escape(s: &str) -> String {
+pub fn attr_escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
 }
 
-fn numbers(values: &[f32]) -> String {
+pub fn numbers(values: &[f32]) -> String {
     values
         .iter()
         .map(|v| tidy(*v).to_string())
@@ -32,7 +32,7 @@ fn numbers(values: &[f32]) -> String {
 }
 
 /// `pos` and `quat` (w x y z) attributes of a rigid pose.
-fn pose_attrs(a: &Affine3A) -> String {
+pub fn pose_attrs(a: &Affine3A) -> String {
     let (_, q, t) = a.to_scale_rotation_translation();
     let q = q.normalize();
     format!(
@@ -48,13 +48,28 @@ fn mesh_name(link: &str, piece: usize) -> String {
 
 /// `scene.xml`: the MJCF model of `tree`, its meshes referenced relative to the file.
 pub fn mjcf_text(tree: &KinematicTree, name: &str) -> String {
+    mjcf_document(tree, name, &[], &MjcfExtra::default())
+}
+
+/// What a document adds to a tree's model: assets and top-level bodies, as MJCF text.
+#[derive(Default)]
+pub struct MjcfExtra {
+    pub assets: String,
+    pub bodies: String,
+}
+
+/// The MJCF model of `tree` without the links `skip` (and what hangs from them), with `extra`.
+pub fn mjcf_document(tree: &KinematicTree, name: &str, skip: &[usize], extra: &MjcfExtra) -> String {
     let world_from_links = tree.world_from_links();
     let mut children: Vec<Vec<usize>> = vec![Vec::new(); tree.links.len()];
     for (i, link) in tree.links.iter().enumerate() {
-        if let Some(p) = link.parent {
+        if let Some(p) = link.parent
+            && !skip.contains(&i)
+        {
             children[p].push(i);
         }
     }
+    let skipped = |i: usize| skip.iter().any(|&s| tree.descends_from(i, s));
     let mut xml = String::new();
     let _ = writeln!(xml, "<mujoco model=\"{}\">", attr_escape(name));
     let _ = writeln!(
@@ -63,8 +78,11 @@ pub fn mjcf_text(tree: &KinematicTree, name: &str) -> String {
     );
     let _ = writeln!(xml, "  <option timestep=\"0.002\" gravity=\"0 0 -9.81\"/>");
     let _ = writeln!(xml, "  <asset>");
-    for link in &tree.links {
+    for (i, link) in tree.links.iter().enumerate() {
         let Some(g) = &link.geometry else { continue };
+        if skipped(i) {
+            continue;
+        }
         for k in 0..g.collision.len() {
             let _ = writeln!(
                 xml,
@@ -74,6 +92,7 @@ pub fn mjcf_text(tree: &KinematicTree, name: &str) -> String {
             );
         }
     }
+    xml.push_str(&extra.assets);
     let _ = writeln!(xml, "  </asset>");
     let _ = writeln!(xml, "  <worldbody>");
     let _ = writeln!(
@@ -87,7 +106,9 @@ pub fn mjcf_text(tree: &KinematicTree, name: &str) -> String {
             .iter()
             .enumerate()
             .skip(1)
-            .filter(|(_, l)| l.joint.kind == JointKind::Floating && l.parent != Some(0))
+            .filter(|(i, l)| {
+                l.joint.kind == JointKind::Floating && l.parent != Some(0) && !skipped(*i)
+            })
             .map(|(i, _)| i),
     );
     for i in top {
@@ -98,6 +119,7 @@ pub fn mjcf_text(tree: &KinematicTree, name: &str) -> String {
         };
         write_body(&mut xml, tree, &children, i, &pose, 2);
     }
+    xml.push_str(&extra.bodies);
     let _ = writeln!(xml, "  </worldbody>");
     let _ = writeln!(xml, "</mujoco>");
     xml

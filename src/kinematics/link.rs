@@ -33,7 +33,8 @@ pub struct LinkGeometry {
     pub surface: TriMesh,
     /// Linear RGB in 0..1.
     pub color: [f32; 3],
-    /// Convex pieces covering the surface (the hull of each connected component).
+    /// Convex pieces covering the surface (`TriMesh::collision_pieces`: the hull of each
+    /// connected component, a hollow one decomposed).
     pub collision: Vec<TriMesh>,
     pub inertial: Inertial,
     pub friction: f32,
@@ -46,11 +47,7 @@ impl LinkGeometry {
         let info = ClassTable::builtin().get(class);
         let density = info.map_or(500.0, |c| c.density);
         let friction = info.map_or(0.5, |c| c.friction);
-        let collision = visual
-            .connected_components()
-            .iter()
-            .filter_map(TriMesh::convex_hull)
-            .collect();
+        let collision = visual.collision_pieces();
         let inertial = Inertial::of_mesh(&visual, density);
         Self {
             surface: visual.clone(),

@@ -13,3 +13,4 @@ pub mod robot;
 pub mod scene_view;
 pub mod symbolic;
 pub mod task;
+pub mod trajectory;

@@ -88,11 +88,13 @@ impl StepRecord {
 pub struct SimulationTrace(pub Vec<StepRecord>);
 
 /// Spawns the robot under the scene root at `pose`: a base link on a fixed joint (the mobile
-/// base is placed, not simulated) and a gripper link fixed on it.
+/// base is placed, not simulated) and a gripper link fixed on it at `base_from_gripper` (its
+/// mesh `gripper_mesh`): the plate on the base's column, or an arm's stowed hand.
 pub fn spawn_robot(
     world: &mut World,
     spec: RobotSpec,
     pose: BasePose,
+    (base_from_gripper, gripper_mesh): (glam::Affine3A, crate::geometry::TriMesh),
 ) -> Result<Entity, ReadTreeError> {
     let root = world
         .query_filtered::<Entity, With<SceneRoot>>()
@@ -124,12 +126,12 @@ pub fn spawn_robot(
         Name::new(GRIPPER_LINK),
         Gripper,
         LinkBody(std::sync::Arc::new(LinkGeometry::new(
-            spec.gripper_mesh(),
+            gripper_mesh,
             [0.1, 0.1, 0.1],
             ROBOT_LINK,
         ))),
         fixed,
-        transform_of(spec.base_from_gripper()),
+        transform_of(base_from_gripper),
         ChildOf(base),
     ));
     Ok(base)

@@ -7,13 +7,13 @@ use glam::{Affine3A, Vec3};
 use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
-use crate::arm::grasp::{Grasp, PREGRASP_M, grasps};
+use crate::arm::grasp::{Grasp, GraspKind, PREGRASP_M, grasps};
 use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat};
 use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
 use crate::sim::navigation::NavGoal;
 use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK, RobotSpec};
-use crate::sim::scene_view::SceneView;
+use crate::sim::scene_view::{SceneView, TOUCH_M};
 
 /// Classes held by their rim when too wide for the fingers.
 const VESSELS: [&str; 3] = ["cup", "bowl", "mug"];
@@ -25,9 +25,6 @@ const CLOSER_BASES_M: [f32; 2] = [0.7, 0.55];
 /// Room between the object and a container's front where the hand starts carrying it in,
 /// metres.
 const INSERT_CLEARANCE_M: f32 = 0.03;
-/// A grasp enters a container's front when its approach is within 45 degrees of the inward
-/// direction.
-const INWARD_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
 /// Base poses closer than this (metres) to one already tried are not tried again.
 const SAME_BASE_M: f32 = 0.05;
 /// Free spots closer than this (metres) to one already listed are not listed again.
@@ -147,18 +144,20 @@ fn grasps_of(
 }
 
 /// The arm's pick of node `id` (link `link`, its obstacles `around`) from where the base
-/// stands: reach, close, lift and stow with it.
+/// stands: reach, close, lift and stow with it. The object then hangs from the gripper (the
+/// stowed hand) as the fingers hold it.
 pub(super) fn pick_motion(
     view: &SceneView,
     rig: &ArmRig,
     state: &RobotInTree,
     (id, link): (&str, usize),
     around: &AroundObject,
-) -> Result<Change, ActionError> {
+) -> Result<Vec<Change>, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
     let (transit, near) = (&around.with_object, &around.without_object);
     let candidates = grasps_of(view, rig, state, id, link, &view.poses[link])?;
-    first_grasp_that_works(id, &format!("pick {id}"), Vec::new(), candidates, |grasp| {
+    let from = view.support_of(id).map_or(String::new(), String::from);
+    first_grasp_that_works(id, &format!("pick {id}"), Vec::new(), candidates, |_, grasp| {
         let to = reach(
             rig,
             &root,
@@ -170,31 +169,41 @@ pub(super) fn pick_motion(
             near,
             &Held::default(),
         )?;
-        let held = held_pieces(view, &around.links, &grasp.world_from_tool);
+        // Where the fingers closed: the tool as the arm put it, not as the grasp asked.
+        let world_from_tool = rig.arm.tool_pose(&root, to.last());
+        let held = held_pieces(view, &around.links, &world_from_tool);
         let up = Vec3::Z * LIFT_M;
         let back = retreat(rig, &root, to.last(), up, near, near, &held)?;
-        Ok((to, back))
+        let in_hand = Change::Attach {
+            link: id.to_string(),
+            from: from.clone(),
+            to: GRIPPER_LINK.into(),
+            parent_from_link: world_from_tool.inverse() * view.poses[link],
+        };
+        Ok((to, back, in_hand))
     })
 }
 
 /// The arm's motion with the first of `candidates` (at most `MAX_GRASPS`) for which `plan`
-/// finds a reach and a retreat; else `what` fails with `attempts` and each grasp's reason.
+/// (given the grasp and its index) finds a reach, a retreat and where the object ends up; else
+/// `what` fails with `attempts` and each grasp's reason.
 fn first_grasp_that_works(
     id: &str,
     what: &str,
     mut attempts: Vec<String>,
     candidates: Vec<Grasp>,
-    plan: impl Fn(&Grasp) -> Result<(ArmPath, ArmPath), String>,
-) -> Result<Change, ActionError> {
-    for grasp in candidates.into_iter().take(MAX_GRASPS) {
+    plan: impl Fn(usize, &Grasp) -> Result<(ArmPath, ArmPath, Change), String>,
+) -> Result<Vec<Change>, ActionError> {
+    for (i, grasp) in candidates.into_iter().take(MAX_GRASPS).enumerate() {
         let label = grasp_label(&grasp);
-        match plan(&grasp) {
-            Ok((to, back)) => {
-                return Ok(Change::ArmMotion {
+        match plan(i, &grasp) {
+            Ok((to, back, attach)) => {
+                let motion = Change::ArmMotion {
                     what: format!("{label} of {id}"),
                     reach: to.configurations,
                     retreat: back.configurations,
-                });
+                };
+                return Ok(vec![motion, attach]);
             }
             Err(why) => attempts.push(format!("{label}: {why}")),
         }
@@ -205,48 +214,45 @@ fn first_grasp_that_works(
     })
 }
 
-/// The arm's placing of the held node `id` (link `link`) at `world_from_link`: reach with it,
-/// open, lift and stow. The hand takes whichever of the object's grasps works there (the base
-/// carries the object between a pick and a place). The last stretch comes down from above,
-/// or along `inward` (a horizontal direction in the world, and how far) into a container
-/// through its front.
+/// The arm's placing of the held node `id` (link `link`) at `world_from_link` on or in `host`:
+/// reach with it, open, lift and stow. The hand keeps the grasp it picked the object with; the
+/// object may stand turned about its vertical axis (by a half turn, or any eighth of one for
+/// a round vessel or a bottle) where the spot has room for it that way, `ignore` left out of
+/// that check. The last stretch comes down from above, or along `inward` (a horizontal
+/// direction in the world, and how far) into a container through its front. The motion and
+/// the object's attachment to `host`.
+#[allow(clippy::too_many_arguments, reason = "one action's whole problem")]
 pub(super) fn place_motion(
     view: &SceneView,
     rig: &ArmRig,
     state: &RobotInTree,
     (id, link): (&str, usize),
     around: &AroundObject,
-    world_from_link: &Affine3A,
+    (host, world_from_link): (&str, &Affine3A),
     inward: Option<(Vec3, f32)>,
-) -> Result<Change, ActionError> {
+    ignore: &[usize],
+) -> Result<Vec<Change>, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
     let scene = &around.without_object;
-    // The object at its new place, for the way back.
-    let moved = *world_from_link * view.poses[link].inverse();
-    let mut placed = scene.clone();
-    add_links(&mut placed, view, &around.links, &moved);
-    let mut attempts = Vec::new();
-    let mut candidates = grasps_of(view, rig, state, id, link, world_from_link)?;
-    if let Some((inward, _)) = inward {
-        // Into a container the hand comes in level, behind the object: a hand over it would
-        // meet the container's top.
-        candidates.retain(|g| g.approach.dot(inward) > INWARD_COS);
-        if candidates.is_empty() {
-            attempts.push(format!(
-                "no grasp of {id} from behind it (a side grasp) fits the hand"
-            ));
-        }
-    }
-    first_grasp_that_works(id, &format!("place {id}"), attempts, candidates, |grasp| {
-        // The object in the hand as it will be at the place: the tool's pose taken back to
-        // where the object stands now.
-        let held = held_pieces(
-            view,
-            &around.links,
-            &(moved.inverse() * grasp.world_from_tool),
-        );
-        // Set down from above whatever the grasp, so the object never drags over its support,
-        // and released 5 mm over it (beyond the last stretch's margin): it drops onto it.
+    let gripper = view
+        .link(GRIPPER_LINK)
+        .ok_or_else(|| ActionError::NotHolding(id.to_string()))?;
+    // How the fingers hold it, and the object in the hand as the tool's pieces.
+    let link_from_tool = view.poses[link].inverse() * view.poses[gripper];
+    let held = held_pieces(view, &around.links, &view.poses[gripper]);
+    let spots = turned_spots(view, id, link, world_from_link, ignore);
+    let candidates = spots
+        .iter()
+        .map(|spot| held_grasp(*spot * link_from_tool))
+        .collect();
+    first_grasp_that_works(id, &format!("place {id}"), Vec::new(), candidates, |i, grasp| {
+        let spot = spots[i];
+        // The object at its new place, for the way back.
+        let moved = spot * view.poses[link].inverse();
+        let mut placed = scene.clone();
+        add_links(&mut placed, view, &around.links, &moved);
+        // Set down from above, so the object never drags over its support, and released 5 mm
+        // over it (beyond the last stretch's margin): it drops onto it.
         let release = Affine3A::from_translation(Vec3::Z * 0.005) * grasp.world_from_tool;
         let to = reach(
             rig,
@@ -270,8 +276,54 @@ pub(super) fn place_motion(
             scene,
             &Held::default(),
         )?;
-        Ok((to, back))
+        let attach = super::attach(view, link, host, spot)
+            .map_err(|e| e.to_string())?
+            .pop()
+            .expect("one attachment");
+        Ok((to, back, attach))
     })
+}
+
+/// The grasp the hand holds an object by, the tool at `world_from_tool` once it is set down.
+fn held_grasp(world_from_tool: Affine3A) -> Grasp {
+    Grasp {
+        kind: GraspKind::Held,
+        world_from_tool,
+        approach: world_from_tool.transform_vector3(Vec3::Z).normalize(),
+        width: 0.0,
+    }
+}
+
+/// `spot` and the same spot with the object turned about its vertical axis through its middle,
+/// where it has room that way: by a half turn (a box's footprint is the same), or by every
+/// eighth of a turn for a round vessel or a bottle.
+fn turned_spots(
+    view: &SceneView,
+    id: &str,
+    link: usize,
+    spot: &Affine3A,
+    ignore: &[usize],
+) -> Vec<Affine3A> {
+    let round = view
+        .class_of(id)
+        .is_some_and(|c| VESSELS.contains(&c) || c == "bottle");
+    let turns: &[f32] = if round {
+        &[0.0, 4.0, 2.0, 6.0, 1.0, 7.0, 3.0, 5.0]
+    } else {
+        &[0.0, 4.0]
+    };
+    let (lo, hi) = view.local_bounds(link).unwrap_or_default();
+    let middle = spot.transform_point3(0.5 * (lo + hi));
+    turns
+        .iter()
+        .map(|eighths| {
+            let turn = Affine3A::from_translation(middle)
+                * Affine3A::from_rotation_z(eighths * std::f32::consts::FRAC_PI_4)
+                * Affine3A::from_translation(-middle);
+            turn * *spot
+        })
+        .filter(|s| s == spot || view.overlap_at(link, *s, ignore) <= TOUCH_M)
+        .collect()
 }
 
 /// A grasp in words: its kind, where the tool goes and which way the hand comes in.
@@ -312,7 +364,8 @@ pub(super) fn way_in(
 
 /// The arm's placing of the held `object` (node id and link) on `surface`: from the free spot
 /// `first` (with the base's drive to it), or when the arm finds no motion there, from the other
-/// free spots ([`free_spots`], `ignore` left out of their checks). The changes and the spot.
+/// free spots ([`free_spots`], `ignore` left out of their checks). The drive, the arm's motion
+/// and the object's attachment to the surface.
 #[allow(clippy::too_many_arguments, reason = "one action's whole problem")]
 pub(super) fn place_on_some_spot(
     view: &SceneView,
@@ -323,7 +376,7 @@ pub(super) fn place_on_some_spot(
     surface: &str,
     first: Affine3A,
     ignore: &[usize],
-) -> Result<(Vec<Change>, Affine3A), ActionError> {
+) -> Result<Vec<Change>, ActionError> {
     let around = AroundObject::new(view, link);
     let mut attempts = Vec::new();
     let mut first_error = None;
@@ -336,10 +389,20 @@ pub(super) fn place_on_some_spot(
                 continue;
             }
         };
-        let place =
-            |at: &RobotInTree| place_motion(view, rig, at, (object, link), &around, &spot, None);
+        let place = |at: &RobotInTree| {
+            place_motion(
+                view,
+                rig,
+                at,
+                (object, link),
+                &around,
+                (surface, &spot),
+                None,
+                ignore,
+            )
+        };
         match from_some_base(view, robot, state, (changes, moved), target, &place) {
-            Ok(changes) => return Ok((changes, spot)),
+            Ok(changes) => return Ok(changes),
             Err(ActionError::ArmCannot { attempts: a, .. }) => attempts.extend(
                 a.into_iter()
                     .map(|r| format!("spot ({:.2}, {:.2}), {r}", target.x, target.y)),
@@ -400,7 +463,7 @@ pub(super) fn from_some_base(
     start: &RobotInTree,
     first: (Vec<Change>, RobotInTree),
     target: glam::Vec2,
-    motion: &dyn Fn(&RobotInTree) -> Result<Change, ActionError>,
+    motion: &dyn Fn(&RobotInTree) -> Result<Vec<Change>, ActionError>,
 ) -> Result<Vec<Change>, ActionError> {
     let mut bases = vec![first];
     for reach in CLOSER_BASES_M {
@@ -422,8 +485,8 @@ pub(super) fn from_some_base(
     let mut attempts = Vec::new();
     for (mut changes, moved) in bases {
         match motion(&moved) {
-            Ok(change) => {
-                changes.push(change);
+            Ok(motion) => {
+                changes.extend(motion);
                 return Ok(changes);
             }
             Err(ActionError::ArmCannot {

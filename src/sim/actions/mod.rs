@@ -189,8 +189,9 @@ pub fn attempt(
         }
         Action::Pick { object } => {
             let (changes, moved) = approach(&view, robot, &state, object)?;
+            // The checks of a pick, and the gripper's taking of the object without an arm.
             let picked = pick(&view, robot, &moved, object)?;
-            let mut changes = match (arm, view.node_link(object)) {
+            match (arm, view.node_link(object)) {
                 (Some(rig), Some(link)) => {
                     let around = arm_motion::AroundObject::new(&view, link);
                     let target = view.poses[link].translation.truncate();
@@ -201,12 +202,10 @@ pub fn attempt(
                         (changes, moved),
                         target,
                         &|at| arm_motion::pick_motion(&view, rig, at, (object, link), &around),
-                    )?
+                    )
                 }
-                _ => changes,
-            };
-            changes.extend(picked);
-            Ok(changes)
+                _ => Ok(changes.into_iter().chain(picked).collect()),
+            }
         }
         Action::PlaceOn { object, surface } => {
             let link = held(&view, &state, object)?;
@@ -225,7 +224,7 @@ pub fn attempt(
                 changes.extend(attach(&view, link, surface, spot)?);
                 return Ok(changes);
             };
-            let (mut changes, spot) = arm_motion::place_on_some_spot(
+            arm_motion::place_on_some_spot(
                 &view,
                 robot,
                 rig,
@@ -234,9 +233,7 @@ pub fn attempt(
                 surface,
                 spot,
                 &[gripper, base],
-            )?;
-            changes.extend(attach(&view, link, surface, spot)?);
-            Ok(changes)
+            )
         }
         Action::PlaceIn { object, container } => {
             let link = held(&view, &state, object)?;
@@ -254,33 +251,34 @@ pub fn attempt(
                     container: container.clone(),
                 }
             })?;
-            if let Some(rig) = arm {
-                // Into the container through its front, not down through its top.
-                let inward = view
-                    .node_link(container)
-                    .and_then(|c| arm_motion::way_in(&view, c, link, &spot));
-                let around = arm_motion::AroundObject::new(&view, link);
-                changes = arm_motion::from_some_base(
-                    &view,
-                    robot,
-                    &state,
-                    (changes, moved),
-                    spot.translation.truncate(),
-                    &|at| {
-                        arm_motion::place_motion(
-                            &view,
-                            rig,
-                            at,
-                            (object, link),
-                            &around,
-                            &spot,
-                            inward,
-                        )
-                    },
-                )?;
-            }
-            changes.extend(attach(&view, link, container, spot)?);
-            Ok(changes)
+            let Some(rig) = arm else {
+                changes.extend(attach(&view, link, container, spot)?);
+                return Ok(changes);
+            };
+            // Into the container through its front, not down through its top.
+            let inward = view
+                .node_link(container)
+                .and_then(|c| arm_motion::way_in(&view, c, link, &spot));
+            let around = arm_motion::AroundObject::new(&view, link);
+            arm_motion::from_some_base(
+                &view,
+                robot,
+                &state,
+                (changes, moved),
+                spot.translation.truncate(),
+                &|at| {
+                    arm_motion::place_motion(
+                        &view,
+                        rig,
+                        at,
+                        (object, link),
+                        &around,
+                        (container, &spot),
+                        inward,
+                        &[gripper],
+                    )
+                },
+            )
         }
         Action::Push {
             object,
@@ -427,7 +425,7 @@ fn held(view: &SceneView, state: &RobotInTree, object: &str) -> Result<usize, Ac
         .ok_or_else(|| ActionError::NotInScene(object.to_string()))
 }
 
-fn attach(
+pub(super) fn attach(
     view: &SceneView,
     link: usize,
     to: &str,

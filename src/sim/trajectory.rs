@@ -1,0 +1,357 @@
+//! An executed task as motion over time, for a simulator to replay: every joint's value (the
+//! base's two slides and turn, the arm's joints, the doors and drawers, and the free joint of
+//! every loose object) at instants of the drives, joint moves and arm motions of the trace.
+//!
+//! The walk keeps each link's world pose and what hangs from what as the steps leave them: a
+//! drive moves the base with what it carries, a door turns with what stands on it, the arm's
+//! hand (the gripper link) follows the arm's configurations with what it holds, and an object
+//! changes hands between a reach and its retreat (taken at the end of a pick's reach, let go at
+//! the end of a place's).
+
+use std::fmt::Write;
+
+use glam::Affine3A;
+
+use crate::arm::LinkMotion;
+use crate::arm::reach::ArmRig;
+use crate::base::JointKind;
+use crate::kinematics::tree::KinematicTree;
+use crate::sim::actions::Change;
+use crate::sim::motion_path::link_motion;
+use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK};
+use crate::sim::scene_view::yaw_of;
+
+/// Seconds between the instants of a drive or a door's motion.
+const SAMPLE_S: f32 = 0.1;
+/// The arm's fastest joint, radians (or metres) a second: the time between two configurations
+/// of a motion.
+pub const ARM_SPEED: f32 = 1.0;
+
+/// What a column of the trajectory holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Column {
+    /// The base's position along the world's x and y, metres, and its heading, radians.
+    BaseX,
+    BaseY,
+    BaseYaw,
+    /// Joint `i` of the arm's chain.
+    Arm(usize),
+    /// A finger's joint (arm link index), open.
+    Finger(usize),
+    /// Component `component` of the free joint of tree link `link`: x, y, z, then the
+    /// orientation's w, x, y, z (MuJoCo's order).
+    Free { link: usize, component: usize },
+    /// A door's or drawer's joint (tree link index).
+    Joint(usize),
+}
+
+/// One instant: when, during which step, what the hand holds, and each column's value.
+#[derive(Clone, Debug)]
+pub struct Sample {
+    pub time: f32,
+    pub step: usize,
+    pub held: Option<String>,
+    pub values: Vec<f32>,
+}
+
+/// Joint values over time; `names[i]` is column `columns[i]`'s joint (a free joint's
+/// components are `<joint>.x` .. `<joint>.qz`).
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    pub names: Vec<String>,
+    pub columns: Vec<Column>,
+    pub samples: Vec<Sample>,
+}
+
+/// The names of the robot's base joints in the replay model.
+pub const BASE_JOINTS: [&str; 3] = ["robot_x", "robot_y", "robot_yaw"];
+const FREE_COMPONENTS: [&str; 7] = ["x", "y", "z", "qw", "qx", "qy", "qz"];
+
+/// The columns for the scene `tree` (its links but `skip` and what hangs from them) and the
+/// arm of `rig`, with their names.
+pub fn columns(tree: &KinematicTree, skip: &[usize], rig: &ArmRig) -> (Vec<String>, Vec<Column>) {
+    let mut names: Vec<String> = BASE_JOINTS.iter().map(|s| s.to_string()).collect();
+    let mut columns = vec![Column::BaseX, Column::BaseY, Column::BaseYaw];
+    for (i, &l) in rig.arm.chain.iter().enumerate() {
+        names.push(arm_joint_name(rig, l));
+        columns.push(Column::Arm(i));
+    }
+    for (l, motion) in rig.arm.motion.iter().enumerate() {
+        if *motion == LinkMotion::Finger {
+            names.push(arm_joint_name(rig, l));
+            columns.push(Column::Finger(l));
+        }
+    }
+    for (l, link) in tree.links.iter().enumerate().skip(1) {
+        if skip.iter().any(|&s| tree.descends_from(l, s)) {
+            continue;
+        }
+        match link.joint.kind {
+            JointKind::Floating => {
+                for (component, c) in FREE_COMPONENTS.iter().enumerate() {
+                    names.push(format!("{}.{c}", tree.joint_name(l)));
+                    columns.push(Column::Free { link: l, component });
+                }
+            }
+            JointKind::Revolute | JointKind::Prismatic => {
+                names.push(tree.joint_name(l));
+                columns.push(Column::Joint(l));
+            }
+            JointKind::Fixed => {}
+        }
+    }
+    (names, columns)
+}
+
+/// The name of the joint that moves arm link `l`.
+pub fn arm_joint_name(rig: &ArmRig, l: usize) -> String {
+    let link = &rig.arm.links[l];
+    link.joint
+        .as_ref()
+        .map_or_else(|| format!("{}_joint", link.name), |j| j.name.clone())
+}
+
+/// The trajectory of `steps` (each performed step's index and changes, in order) from the scene
+/// `before` them, the robot carrying the arm of `rig` (stowed between its motions, the fingers
+/// open throughout). `None` when the tree has no robot.
+pub fn trajectory(
+    before: &KinematicTree,
+    rig: &ArmRig,
+    steps: &[(usize, &[Change])],
+) -> Option<Trajectory> {
+    let robot = before.links.iter().position(|l| l.name == ROBOT_LINK)?;
+    let gripper = before.links.iter().position(|l| l.name == GRIPPER_LINK)?;
+    let (names, columns) = columns(before, &[robot], rig);
+    let poses = before.world_from_links();
+    let mut walk = Walk {
+        tree: before,
+        rig,
+        columns: &columns,
+        parent: before.links.iter().map(|l| l.parent).collect(),
+        base: BasePose {
+            position: poses[robot].translation.truncate(),
+            yaw: yaw_of(&poses[robot]),
+        },
+        values: before.links.iter().map(|l| l.value).collect(),
+        poses,
+        q: rig.stow.clone(),
+        robot,
+        gripper,
+        time: 0.0,
+        samples: Vec::new(),
+    };
+    walk.record(steps.first().map_or(0, |s| s.0));
+    for &(step, changes) in steps {
+        let mut k = 0;
+        while k < changes.len() {
+            // An object changes hands between an arm's reach and its retreat.
+            let handover = match (&changes[k], changes.get(k + 1)) {
+                (Change::ArmMotion { .. }, Some(attach @ Change::Attach { .. })) => Some(attach),
+                _ => None,
+            };
+            walk.change(step, &changes[k], handover);
+            k += if handover.is_some() { 2 } else { 1 };
+        }
+    }
+    let samples = walk.samples;
+    Some(Trajectory {
+        names,
+        columns,
+        samples,
+    })
+}
+
+/// The scene's state as the walk through the steps leaves it.
+struct Walk<'a> {
+    tree: &'a KinematicTree,
+    rig: &'a ArmRig,
+    columns: &'a [Column],
+    /// What each link hangs from now.
+    parent: Vec<Option<usize>>,
+    /// Each link's world pose now.
+    poses: Vec<Affine3A>,
+    /// Each link's joint value now.
+    values: Vec<f32>,
+    base: BasePose,
+    /// The arm's configuration.
+    q: Vec<f32>,
+    robot: usize,
+    gripper: usize,
+    time: f32,
+    samples: Vec<Sample>,
+}
+
+impl Walk<'_> {
+    fn change(&mut self, step: usize, change: &Change, handover: Option<&Change>) {
+        match change {
+            Change::MoveBase { to, .. } => {
+                if let Some(motion) = link_motion(self.tree, change, SAMPLE_S) {
+                    for pose in motion.world_from_link.iter().skip(1) {
+                        self.base = BasePose {
+                            position: pose.translation.truncate(),
+                            yaw: yaw_of(pose),
+                        };
+                        self.move_subtree(self.robot, *pose);
+                        self.time += SAMPLE_S;
+                        self.record(step);
+                    }
+                }
+                self.base = *to;
+                self.move_subtree(self.robot, to.world_from_base());
+            }
+            Change::SetJoint { link, from, to } => {
+                let Some(l) = self.link_named(link) else {
+                    return;
+                };
+                let link = &self.tree.links[l];
+                let parent = self.parent[l].map_or(Affine3A::IDENTITY, |p| self.poses[p]);
+                let at = |v: f32| parent * link.parent_from_link * link.joint.motion(v);
+                let samples = link_motion(self.tree, change, SAMPLE_S)
+                    .map_or(1, |m| m.world_from_link.len().saturating_sub(1).max(1));
+                for k in 1..=samples {
+                    let v = from + (to - from) * k as f32 / samples as f32;
+                    let pose = at(v);
+                    self.values[l] = v;
+                    self.move_subtree(l, pose);
+                    self.time += SAMPLE_S;
+                    self.record(step);
+                }
+            }
+            Change::Attach { .. } => self.attach(change),
+            Change::ArmMotion { reach, retreat, .. } => {
+                self.follow(step, reach);
+                if let Some(attach) = handover {
+                    self.attach(attach);
+                }
+                self.follow(step, retreat);
+            }
+        }
+    }
+
+    /// The hand along `path`, with what it holds.
+    fn follow(&mut self, step: usize, path: &[Vec<f32>]) {
+        let root = self.base.world_from_base() * self.rig.base_from_root;
+        for q in path {
+            let dt = crate::arm::rrt::distance(q, &self.q) / ARM_SPEED;
+            self.q.clone_from(q);
+            let hand = self.rig.arm.tool_pose(&root, q);
+            self.move_subtree(self.gripper, hand);
+            self.time += dt;
+            self.record(step);
+        }
+    }
+
+    /// `link` now hangs from `to` at `parent_from_link`.
+    fn attach(&mut self, change: &Change) {
+        let Change::Attach {
+            link,
+            to,
+            parent_from_link,
+            ..
+        } = change
+        else {
+            return;
+        };
+        let (Some(l), Some(p)) = (self.link_named(link), self.link_named(to)) else {
+            return;
+        };
+        self.parent[l] = Some(p);
+        let pose = self.poses[p] * *parent_from_link;
+        self.move_subtree(l, pose);
+    }
+
+    /// A link by its name, or a node's own link by the node's id.
+    fn link_named(&self, name: &str) -> Option<usize> {
+        let links = &self.tree.links;
+        links.iter().position(|l| l.name == name).or_else(|| {
+            links
+                .iter()
+                .position(|l| l.node.as_deref() == Some(name))
+        })
+    }
+
+    /// Moves link `l` to `pose`, and everything hanging from it with it.
+    fn move_subtree(&mut self, l: usize, pose: Affine3A) {
+        let delta = pose * self.poses[l].inverse();
+        for d in 0..self.poses.len() {
+            if self.hangs_from(d, l) {
+                self.poses[d] = delta * self.poses[d];
+            }
+        }
+    }
+
+    /// Whether `link` is `ancestor` or hangs from it now.
+    fn hangs_from(&self, mut link: usize, ancestor: usize) -> bool {
+        loop {
+            if link == ancestor {
+                return true;
+            }
+            match self.parent[link] {
+                Some(p) => link = p,
+                None => return false,
+            }
+        }
+    }
+
+    fn record(&mut self, step: usize) {
+        let values = self.columns.iter().map(|c| self.value(*c)).collect();
+        let held = (0..self.parent.len())
+            .find(|&l| self.parent[l] == Some(self.gripper))
+            .map(|l| self.tree.links[l].name.clone());
+        self.samples.push(Sample {
+            time: self.time,
+            step,
+            held,
+            values,
+        });
+    }
+
+    fn value(&self, column: Column) -> f32 {
+        match column {
+            Column::BaseX => self.base.position.x,
+            Column::BaseY => self.base.position.y,
+            Column::BaseYaw => self.base.yaw,
+            Column::Arm(i) => self.q[i],
+            Column::Finger(l) => self.rig.arm.links[l]
+                .joint
+                .as_ref()
+                .map_or(0.0, |j| j.limits.1),
+            Column::Free { link, component } => {
+                let (_, rotation, translation) = self.poses[link].to_scale_rotation_translation();
+                let rotation = rotation.normalize();
+                [
+                    translation.x,
+                    translation.y,
+                    translation.z,
+                    rotation.w,
+                    rotation.x,
+                    rotation.y,
+                    rotation.z,
+                ][component]
+            }
+            Column::Joint(l) => self.values[l],
+        }
+    }
+}
+
+impl Trajectory {
+    /// `trajectory.csv`: a header (`time`, `step`, `held`, then the joints), one line a sample.
+    pub fn csv(&self) -> String {
+        let mut text = String::new();
+        let _ = writeln!(text, "time,step,held,{}", self.names.join(","));
+        for sample in &self.samples {
+            let _ = write!(
+                text,
+                "{:.4},{},{}",
+                sample.time,
+                sample.step,
+                sample.held.as_deref().unwrap_or("")
+            );
+            for v in &sample.values {
+                let _ = write!(text, ",{v:.6}");
+            }
+            text.push('\n');
+        }
+        text
+    }
+}
