@@ -23,15 +23,15 @@ use crate::io::atomic::StagedDir;
 use crate::io::output_folder::{OutputCommand, OutputTarget};
 use crate::io::write_sequence::write_text;
 use crate::kinematics::tree::KinematicTree;
+use crate::sim::actions::Change;
 use crate::sim::actions::nav_grid;
 use crate::sim::graph_sync::graph_after;
 use crate::sim::planner::{ground, plan};
-use crate::sim::actions::Change;
 use crate::sim::robot::{BasePose, ROBOT_LINK};
-use crate::sim::trajectory::trajectory;
 use crate::sim::scene_view::SceneView;
 use crate::sim::symbolic::{Fact, SymbolicScene, parse_goal, symbolic_scene};
 use crate::sim::task::{AddedObject, Task};
+use crate::sim::trajectory::trajectory;
 use crate::sim::{actions::Action, pddl};
 use crate::systems::kinematic_tree::{read_kinematic_tree, spawn_node_links};
 use crate::systems::physics_validation::scene_rest_physics;
@@ -395,7 +395,13 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
         output: options.out.clone(),
     };
     let rig = app.world().get_resource::<RobotArm>().map(|r| r.0.clone());
-    write_outputs(&target, &prepared, (&before, &after), &summary, rig.as_deref())?;
+    write_outputs(
+        &target,
+        &prepared,
+        (&before, &after),
+        &summary,
+        rig.as_deref(),
+    )?;
     Ok(summary)
 }
 

@@ -59,7 +59,12 @@ pub struct MjcfExtra {
 }
 
 /// The MJCF model of `tree` without the links `skip` (and what hangs from them), with `extra`.
-pub fn mjcf_document(tree: &KinematicTree, name: &str, skip: &[usize], extra: &MjcfExtra) -> String {
+pub fn mjcf_document(
+    tree: &KinematicTree,
+    name: &str,
+    skip: &[usize],
+    extra: &MjcfExtra,
+) -> String {
     let world_from_links = tree.world_from_links();
     let mut children: Vec<Vec<usize>> = vec![Vec::new(); tree.links.len()];
     for (i, link) in tree.links.iter().enumerate() {

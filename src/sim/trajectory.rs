@@ -40,7 +40,10 @@ pub enum Column {
     Finger(usize),
     /// Component `component` of the free joint of tree link `link`: x, y, z, then the
     /// orientation's w, x, y, z (MuJoCo's order).
-    Free { link: usize, component: usize },
+    Free {
+        link: usize,
+        component: usize,
+    },
     /// A door's or drawer's joint (tree link index).
     Joint(usize),
 }
@@ -263,11 +266,10 @@ impl Walk<'_> {
     /// A link by its name, or a node's own link by the node's id.
     fn link_named(&self, name: &str) -> Option<usize> {
         let links = &self.tree.links;
-        links.iter().position(|l| l.name == name).or_else(|| {
-            links
-                .iter()
-                .position(|l| l.node.as_deref() == Some(name))
-        })
+        links
+            .iter()
+            .position(|l| l.name == name)
+            .or_else(|| links.iter().position(|l| l.node.as_deref() == Some(name)))
     }
 
     /// Moves link `l` to `pose`, and everything hanging from it with it.

@@ -212,7 +212,7 @@ fn mover_collider(
         let (_, rotation, translation) =
             (mover_from_world * poses[l]).to_scale_rotation_translation();
         pieces.extend(
-            g.collision
+            g.hulls
                 .iter()
                 .flat_map(|piece| contact_pieces(&piece.positions))
                 .filter_map(|points| Collider::convex_hull(&points))

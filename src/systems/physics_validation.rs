@@ -54,7 +54,7 @@ pub(crate) fn dynamic_collider(
         let (_, rotation, translation) = body_from_link.to_scale_rotation_translation();
         let rotation = rotation.normalize();
         pieces.extend(
-            g.collision
+            g.hulls
                 .iter()
                 .flat_map(|piece| contact_pieces(&piece.positions))
                 .filter_map(|points| Collider::convex_hull(&points))

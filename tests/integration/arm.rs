@@ -347,12 +347,28 @@ fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::reach::ArmRig) {
     let replay = common::json_line(&stdout);
     eprintln!("MuJoCo replay: {replay}");
     assert_eq!(replay["missing_joints"], serde_json::json!([]), "{replay}");
-    assert_eq!(replay["steps"], serde_json::json!([0, 1, 2, 3, 4, 5]), "{replay}");
-    assert!(replay["arm_travel_rad"].as_f64().expect("travel") > 6.0, "{replay}");
-    assert!(replay["held_samples"].as_u64().expect("held") > 100, "{replay}");
+    assert_eq!(
+        replay["steps"],
+        serde_json::json!([0, 1, 2, 3, 4, 5]),
+        "{replay}"
+    );
+    assert!(
+        replay["arm_travel_rad"].as_f64().expect("travel") > 6.0,
+        "{replay}"
+    );
+    assert!(
+        replay["held_samples"].as_u64().expect("held") > 100,
+        "{replay}"
+    );
     let drift = replay["held_drift_m"].as_f64().expect("drift");
-    assert!(drift < 1e-3, "a held object slipped {drift} m in the hand: {replay}");
+    assert!(
+        drift < 1e-3,
+        "a held object slipped {drift} m in the hand: {replay}"
+    );
     if let Some(depth) = replay["deepest"]["depth_m"].as_f64() {
-        assert!(depth <= 0.005, "the robot goes {depth} m into the scene: {replay}");
+        assert!(
+            depth <= 0.005,
+            "the robot goes {depth} m into the scene: {replay}"
+        );
     }
 }

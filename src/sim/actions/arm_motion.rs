@@ -157,31 +157,37 @@ pub(super) fn pick_motion(
     let (transit, near) = (&around.with_object, &around.without_object);
     let candidates = grasps_of(view, rig, state, id, link, &view.poses[link])?;
     let from = view.support_of(id).map_or(String::new(), String::from);
-    first_grasp_that_works(id, &format!("pick {id}"), Vec::new(), candidates, |_, grasp| {
-        let to = reach(
-            rig,
-            &root,
-            &rig.stow,
-            &grasp.world_from_tool,
-            grasp.approach,
-            PREGRASP_M,
-            transit,
-            near,
-            &Held::default(),
-        )?;
-        // Where the fingers closed: the tool as the arm put it, not as the grasp asked.
-        let world_from_tool = rig.arm.tool_pose(&root, to.last());
-        let held = held_pieces(view, &around.links, &world_from_tool);
-        let up = Vec3::Z * LIFT_M;
-        let back = retreat(rig, &root, to.last(), up, near, near, &held)?;
-        let in_hand = Change::Attach {
-            link: id.to_string(),
-            from: from.clone(),
-            to: GRIPPER_LINK.into(),
-            parent_from_link: world_from_tool.inverse() * view.poses[link],
-        };
-        Ok((to, back, in_hand))
-    })
+    first_grasp_that_works(
+        id,
+        &format!("pick {id}"),
+        Vec::new(),
+        candidates,
+        |_, grasp| {
+            let to = reach(
+                rig,
+                &root,
+                &rig.stow,
+                &grasp.world_from_tool,
+                grasp.approach,
+                PREGRASP_M,
+                transit,
+                near,
+                &Held::default(),
+            )?;
+            // Where the fingers closed: the tool as the arm put it, not as the grasp asked.
+            let world_from_tool = rig.arm.tool_pose(&root, to.last());
+            let held = held_pieces(view, &around.links, &world_from_tool);
+            let up = Vec3::Z * LIFT_M;
+            let back = retreat(rig, &root, to.last(), up, near, near, &held)?;
+            let in_hand = Change::Attach {
+                link: id.to_string(),
+                from: from.clone(),
+                to: GRIPPER_LINK.into(),
+                parent_from_link: world_from_tool.inverse() * view.poses[link],
+            };
+            Ok((to, back, in_hand))
+        },
+    )
 }
 
 /// The arm's motion with the first of `candidates` (at most `MAX_GRASPS`) for which `plan`
@@ -245,43 +251,49 @@ pub(super) fn place_motion(
         .iter()
         .map(|spot| held_grasp(*spot * link_from_tool))
         .collect();
-    first_grasp_that_works(id, &format!("place {id}"), Vec::new(), candidates, |i, grasp| {
-        let spot = spots[i];
-        // The object at its new place, for the way back.
-        let moved = spot * view.poses[link].inverse();
-        let mut placed = scene.clone();
-        add_links(&mut placed, view, &around.links, &moved);
-        // Set down from above, so the object never drags over its support, and released 5 mm
-        // over it (beyond the last stretch's margin): it drops onto it.
-        let release = Affine3A::from_translation(Vec3::Z * 0.005) * grasp.world_from_tool;
-        let to = reach(
-            rig,
-            &root,
-            &rig.stow,
-            &release,
-            inward.map_or(-Vec3::Z, |(d, _)| d),
-            inward.map_or(PREGRASP_M, |(_, length)| length),
-            scene,
-            scene,
-            &held,
-        )?;
-        // Back the way it came in: up off a surface, out of a container's front.
-        let away = inward.map_or(Vec3::Z * LIFT_M, |(d, length)| -d * length);
-        let back = retreat(
-            rig,
-            &root,
-            to.last(),
-            away,
-            &placed,
-            scene,
-            &Held::default(),
-        )?;
-        let attach = super::attach(view, link, host, spot)
-            .map_err(|e| e.to_string())?
-            .pop()
-            .expect("one attachment");
-        Ok((to, back, attach))
-    })
+    first_grasp_that_works(
+        id,
+        &format!("place {id}"),
+        Vec::new(),
+        candidates,
+        |i, grasp| {
+            let spot = spots[i];
+            // The object at its new place, for the way back.
+            let moved = spot * view.poses[link].inverse();
+            let mut placed = scene.clone();
+            add_links(&mut placed, view, &around.links, &moved);
+            // Set down from above, so the object never drags over its support, and released 5 mm
+            // over it (beyond the last stretch's margin): it drops onto it.
+            let release = Affine3A::from_translation(Vec3::Z * 0.005) * grasp.world_from_tool;
+            let to = reach(
+                rig,
+                &root,
+                &rig.stow,
+                &release,
+                inward.map_or(-Vec3::Z, |(d, _)| d),
+                inward.map_or(PREGRASP_M, |(_, length)| length),
+                scene,
+                scene,
+                &held,
+            )?;
+            // Back the way it came in: up off a surface, out of a container's front.
+            let away = inward.map_or(Vec3::Z * LIFT_M, |(d, length)| -d * length);
+            let back = retreat(
+                rig,
+                &root,
+                to.last(),
+                away,
+                &placed,
+                scene,
+                &Held::default(),
+            )?;
+            let attach = super::attach(view, link, host, spot)
+                .map_err(|e| e.to_string())?
+                .pop()
+                .expect("one attachment");
+            Ok((to, back, attach))
+        },
+    )
 }
 
 /// The grasp the hand holds an object by, the tool at `world_from_tool` once it is set down.
