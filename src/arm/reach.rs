@@ -43,11 +43,11 @@ pub struct ArmRig {
 }
 
 impl ArmRig {
-    /// The arm on top of a base column `mount_height` high, stowed folded over its root (the
-    /// middle of every joint's range).
+    /// The arm on top of a base column `mount_height` high, stowed folded over its root
+    /// ([`compact_stow`]).
     pub fn new(arm: Arm, mount_height: f32) -> Self {
         let collider = ArmCollider::new(&arm);
-        let stow = arm.middle();
+        let stow = compact_stow(&arm, &collider);
         let max_opening = arm
             .links
             .iter()
@@ -70,6 +70,79 @@ impl ArmRig {
             ik: IkSettings::default(),
         }
     }
+}
+
+/// Random configurations tried for the stowed arm, and refinements of the best.
+const STOW_SAMPLES: usize = 4000;
+const STOW_REFINEMENTS: usize = 1500;
+/// The stowed hand points down (its approach within 25 degrees of the vertical) with its tool
+/// at least this high above the arm's root, metres: what it holds hangs clear of the column.
+const STOW_DOWN_COS: f32 = 0.9;
+const STOW_TOOL_HEIGHT_M: f32 = 0.3;
+/// The stowed arm's clearance from itself: the planner's on the way, and 5 mm to spare.
+const STOW_SELF_CLEARANCE_M: f32 = TRANSIT_MARGIN_M + 0.005;
+
+/// The configuration the arm travels in: of the middle of its joint ranges and seeded random
+/// configurations (then small random changes of the best), the one whose links stay nearest
+/// the vertical through its root (the farthest point of any piece, horizontally), clear of
+/// itself by more than the planner's margin, its hand pointing down with the tool at least 30 cm over the root. A drive
+/// then carries the arm and what it holds no farther out than that, and a door the base stands
+/// clear of misses them. The middle of the ranges held the Panda's hand 50 cm out in front of
+/// the base, where the fridge's door swung into it.
+pub fn compact_stow(arm: &Arm, collider: &ArmCollider) -> Vec<f32> {
+    use rand::{Rng, SeedableRng};
+    let limits = arm.limits();
+    let reach_out = |q: &[f32]| -> Option<f32> {
+        let poses = arm.link_poses(&Affine3A::IDENTITY, q, 1.0);
+        let tool = poses[arm.tool];
+        let down = -tool.transform_vector3(Vec3::Z).normalize().z;
+        if down < STOW_DOWN_COS || tool.translation.z < STOW_TOOL_HEIGHT_M {
+            return None;
+        }
+        if collider
+            .touching(&poses, &Obstacles::default(), STOW_SELF_CLEARANCE_M)
+            .is_some()
+        {
+            return None;
+        }
+        let far = arm
+            .links
+            .iter()
+            .zip(&poses)
+            .flat_map(|(link, pose)| {
+                link.pieces
+                    .iter()
+                    .flat_map(|piece| piece.positions.iter().map(|p| pose.transform_point3(*p)))
+            })
+            .map(|p| p.truncate().length())
+            .fold(0.0f32, f32::max);
+        Some(far)
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5704);
+    let middle = arm.middle();
+    let mut best = (reach_out(&middle).unwrap_or(f32::MAX), middle);
+    for _ in 0..STOW_SAMPLES {
+        let q = crate::arm::random_configuration(&limits, &mut rng);
+        if let Some(far) = reach_out(&q)
+            && far < best.0
+        {
+            best = (far, q);
+        }
+    }
+    for _ in 0..STOW_REFINEMENTS {
+        let q: Vec<f32> = best
+            .1
+            .iter()
+            .map(|v| v + rng.random_range(-0.1f32..0.1))
+            .collect();
+        let q = arm.clamped(&q);
+        if let Some(far) = reach_out(&q)
+            && far < best.0
+        {
+            best = (far, q);
+        }
+    }
+    best.1
 }
 
 impl ArmRig {

@@ -276,8 +276,10 @@ pub(super) fn place_motion(
                 scene,
                 &held,
             )?;
-            // Back the way it came in: up off a surface, out of a container's front.
-            let away = inward.map_or(Vec3::Z * LIFT_M, |(d, length)| -d * length);
+            // Out of the grasp: back along the hand's approach off a surface (up from a top
+            // grasp; straight up would drag a side grasp's fingers along a bottle's height),
+            // back out of a container's front.
+            let away = inward.map_or(-grasp.approach * LIFT_M, |(d, length)| -d * length);
             let back = retreat(
                 rig,
                 &root,
