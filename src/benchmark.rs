@@ -35,6 +35,9 @@ pub struct BenchmarkOptions {
     pub shard: Option<Shard>,
     /// The `iscene` executable each room runs in.
     pub executable: PathBuf,
+    /// An arm's URDF: each room also gets a pick and place planned with it
+    /// ([`crate::simulation::pick_and_place_trial`]).
+    pub robot: Option<PathBuf>,
 }
 
 impl BenchmarkOptions {
@@ -50,6 +53,9 @@ impl BenchmarkOptions {
         });
         if let Some(db) = &self.cad {
             defaults["cad"] = json!(db);
+        }
+        if let Some(robot) = &self.robot {
+            defaults["robot"] = json!(robot);
         }
         let value = json!({
             "benchmark": {

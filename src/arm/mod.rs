@@ -277,7 +277,7 @@ pub fn joint_axis(arm: &Arm, poses: &[Affine3A], i: usize) -> (Vec3, Vec3) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::cad::import::body_tree::Body;
 

@@ -35,7 +35,7 @@ use crate::segmentation::SegmentationChoice;
 /// Folder names inside a batch folder that no input may take.
 const RESERVED_NAMES: [&str; 1] = ["slurm"];
 /// Keys an input or `defaults` may set besides its source.
-const OPTION_KEYS: [&str; 9] = [
+const OPTION_KEYS: [&str; 10] = [
     "name",
     "frames",
     "voxel",
@@ -45,6 +45,7 @@ const OPTION_KEYS: [&str; 9] = [
     "style",
     "noise",
     "evaluate",
+    "robot",
 ];
 /// Frames of a generated room when nothing says otherwise (as `iscene generate`).
 const DEFAULT_GENERATED_FRAMES: usize = 300;
@@ -80,6 +81,9 @@ pub struct BatchInput {
     pub unseen: bool,
     /// Score the reconstruction against the truth (when the input has one).
     pub evaluate: bool,
+    /// The URDF of an arm: a scored room also gets a pick and place planned with it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<PathBuf>,
 }
 
 impl BatchInput {
@@ -103,7 +107,11 @@ impl BatchInput {
             InputSource::Spec { spec } => Some(spec.as_path()),
             InputSource::Sequence { sequence } => Some(sequence.as_path()),
         };
-        source.into_iter().chain(self.cad.as_deref()).collect()
+        source
+            .into_iter()
+            .chain(self.cad.as_deref())
+            .chain(self.robot.as_deref())
+            .collect()
     }
 
     /// The reconstruction's CAD database: the input's, unless it is unseen.
@@ -403,6 +411,7 @@ struct Options {
     style: RoomStyle,
     noise: NoiseChoice,
     evaluate: bool,
+    robot: Option<PathBuf>,
 }
 
 impl Options {
@@ -483,6 +492,19 @@ impl Options {
             ));
         }
         let evaluate = option("evaluate").is_none() || flag("evaluate")?;
+        let robot = match text("robot")? {
+            None => None,
+            Some(file) => {
+                let file = base.join(file);
+                if !file.is_file() {
+                    return Err(at(
+                        "robot",
+                        format!("{} is missing (an arm's URDF file)", file.display()),
+                    ));
+                }
+                Some(std::path::absolute(&file).map_err(|e| at("robot", e.to_string()))?)
+            }
+        };
         Ok(Self {
             frames,
             voxel,
@@ -492,6 +514,7 @@ impl Options {
             style,
             noise,
             evaluate,
+            robot,
         })
     }
 
@@ -508,6 +531,7 @@ impl Options {
             cad: self.cad.clone(),
             unseen: self.unseen,
             evaluate: self.evaluate,
+            robot: self.robot.clone(),
         }
     }
 }

@@ -374,8 +374,18 @@ pub fn run_input(input: &BatchInput, folder: &Path) -> Result<bool, IsceneError>
         return Ok(false);
     }
     let report = crate::eval::evaluate_reconstruction(&reconstruction, &sequence)?;
-    let eval: Value = serde_json::to_value(&report)
+    let mut eval: Value = serde_json::to_value(&report)
         .map_err(|e| IsceneError::Internal(format!("eval JSON: {e}")))?;
+    if let Some(robot) = &input.robot
+        && let Some(trial) = crate::simulation::pick_and_place_trial(
+            &reconstruction,
+            robot,
+            &folder.join("pick_place"),
+        )?
+    {
+        eval["pick_place_success"] = serde_json::json!(if trial.success { 1.0 } else { 0.0 });
+        eval["pick_place_seconds"] = serde_json::json!(trial.seconds);
+    }
     let path = folder.join("eval.json");
     std::fs::write(
         &path,

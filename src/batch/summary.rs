@@ -90,6 +90,7 @@ pub fn higher_is_better(metric: &str) -> bool {
         "residual",
         "void_voxels",
         "distance",
+        "seconds",
     ];
     !lower.iter().any(|w| metric.contains(w))
 }

@@ -357,3 +357,104 @@ impl Trajectory {
         text
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::base::JointSpec;
+    use crate::geometry::TriMesh;
+    use crate::kinematics::tree::TreeLink;
+
+    /// A planar two-link arm on a base at the origin, its hand stowed, and a cup where the
+    /// hand reaches at `grasp`: the walk of a pick's reach, handover and retreat.
+    #[test]
+    fn a_picked_object_stays_until_the_reach_ends_then_moves_with_the_hand() {
+        let rig = ArmRig::new(crate::arm::tests::two_link_arm(), 0.5);
+        let cube = TriMesh::cuboid(Vec3::splat(-0.02), Vec3::splat(0.02));
+        let root = rig.base_from_root;
+        let grasp = vec![0.6, -0.9];
+        let tool_at_grasp = rig.arm.tool_pose(&root, &grasp);
+        let cup_pose = tool_at_grasp * Affine3A::from_translation(Vec3::new(0.0, 0.0, 0.03));
+        let fixed = JointSpec::FIXED;
+        let tree = KinematicTree {
+            links: vec![
+                TreeLink::root(),
+                TreeLink::body(
+                    ROBOT_LINK,
+                    "robot",
+                    0,
+                    fixed,
+                    Affine3A::IDENTITY,
+                    cube.clone(),
+                ),
+                TreeLink::body(
+                    GRIPPER_LINK,
+                    "robot",
+                    1,
+                    fixed,
+                    rig.base_from_stowed_tool(),
+                    cube.clone(),
+                ),
+                TreeLink::body("cup_1", "cup", 0, JointSpec::FLOATING, cup_pose, cube),
+            ],
+        };
+        let halfway: Vec<f32> = rig
+            .stow
+            .iter()
+            .zip(&grasp)
+            .map(|(a, b)| 0.5 * (a + b))
+            .collect();
+        let changes = vec![
+            Change::ArmMotion {
+                what: "test".into(),
+                reach: vec![halfway.clone(), grasp.clone()],
+                retreat: vec![halfway.clone(), rig.stow.clone()],
+            },
+            Change::Attach {
+                link: "cup_1".into(),
+                from: String::new(),
+                to: GRIPPER_LINK.into(),
+                parent_from_link: tool_at_grasp.inverse() * cup_pose,
+            },
+        ];
+        let walk = trajectory(&tree, &rig, &[(0, &changes)]).expect("a robot");
+        assert_eq!(
+            walk.samples.len(),
+            5,
+            "the start, two reach and two retreat samples"
+        );
+        let column = |name: &str| walk.names.iter().position(|n| n == name).expect(name);
+        let (x, z) = (column("cup_1_joint.x"), column("cup_1_joint.z"));
+        let arm0 = column(&arm_joint_name(&rig, rig.arm.chain[0]));
+        let cup_at = |k: usize| {
+            let v = &walk.samples[k].values;
+            Vec3::new(v[x], v[x + 1], v[z])
+        };
+        let expected = |q: &[f32]| {
+            (rig.arm.tool_pose(&root, q) * (tool_at_grasp.inverse() * cup_pose)).translation
+        };
+        for k in 0..3 {
+            assert!(
+                cup_at(k).distance(cup_pose.translation.into()) < 1e-5,
+                "sample {k}"
+            );
+            assert_eq!(walk.samples[k].held, None);
+        }
+        assert_eq!(walk.samples[2].values[arm0], grasp[0]);
+        for (k, q) in [(3, &halfway), (4, &rig.stow)] {
+            assert!(cup_at(k).distance(expected(q).into()) < 1e-5, "sample {k}");
+            assert_eq!(walk.samples[k].held.as_deref(), Some("cup_1"));
+        }
+        // Time runs at the arm's speed: the last sample is the path's length later.
+        let length: f32 = [&rig.stow, &halfway, &grasp, &halfway, &rig.stow]
+            .windows(2)
+            .map(|w| crate::arm::rrt::distance(w[0], w[1]))
+            .sum();
+        assert!((walk.samples[4].time - length / ARM_SPEED).abs() < 1e-4);
+        let csv = walk.csv();
+        assert_eq!(csv.lines().count(), 6);
+        assert!(csv.starts_with("time,step,held,robot_x,robot_y,robot_yaw,"));
+    }
+}

@@ -2,8 +2,6 @@
 //! against PyBullet's, inverse kinematics to poses it can reach, and collision-free motions
 //! planned around a table.
 
-use std::path::PathBuf;
-
 use glam::{Affine3A, Quat, Vec3};
 use iscene::arm::collision::{ArmCollider, Obstacles};
 use iscene::arm::ik::{IkSettings, pose_error, solve};
@@ -13,25 +11,7 @@ use iscene::geometry::TriMesh;
 use rand::SeedableRng;
 
 use crate::common;
-
-/// The Panda that scripts/setup-validators.sh installs with PyBullet.
-fn panda_urdf() -> PathBuf {
-    let lib = common::validator(".venv-validators/lib");
-    let urdf = std::fs::read_dir(&lib)
-        .expect("the validators' lib folder")
-        .filter_map(Result::ok)
-        .map(|e| {
-            e.path()
-                .join("site-packages/pybullet_data/franka_panda/panda.urdf")
-        })
-        .find(|p| p.is_file());
-    urdf.unwrap_or_else(|| {
-        panic!(
-            "no pybullet_data/franka_panda/panda.urdf under {}: run scripts/setup-validators.sh",
-            lib.display()
-        )
-    })
-}
+use crate::common::panda_urdf;
 
 fn random_configuration(arm: &Arm, rng: &mut rand_chacha::ChaCha8Rng) -> Vec<f32> {
     iscene::arm::random_configuration(&arm.limits(), rng)

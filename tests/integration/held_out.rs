@@ -357,12 +357,15 @@ fn the_benchmark_scores_every_room_resumes_and_keeps_its_bounds() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("bench");
     let out_s = out.to_str().expect("utf-8");
+    let panda = crate::common::panda_urdf();
     let args = [
         "benchmark",
         "--seeds",
         "0:3",
         "--frames",
         "60",
+        "--robot",
+        panda.to_str().expect("utf-8"),
         "--out",
         out_s,
     ];
@@ -389,6 +392,8 @@ fn the_benchmark_scores_every_room_resumes_and_keeps_its_bounds() {
         "articulation_precision",
         "articulation_recall",
         "articulation_f1",
+        "pick_place_success",
+        "pick_place_seconds",
     ] {
         for stat in ["mean", "median", "worst"] {
             assert!(

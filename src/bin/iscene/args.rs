@@ -120,6 +120,10 @@ pub(crate) struct BenchmarkArgs {
     /// writes the summary of every shard's rooms.
     #[arg(long, value_parser = Shard::parse)]
     pub(crate) shard: Option<Shard>,
+    /// The URDF of an arm on the robot's base: each room also gets a pick and place planned
+    /// with it (success and seconds in the summary).
+    #[arg(long, value_name = "ARM.urdf")]
+    pub(crate) robot: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]

@@ -45,6 +45,7 @@ pub(crate) fn benchmark(args: BenchmarkArgs) -> Result<(), IsceneError> {
         out: args.out,
         shard: args.shard,
         executable: executable()?,
+        robot: args.robot,
     })?;
     print_batch_outcome(&outcome);
     Ok(())

@@ -201,6 +201,25 @@ pub fn validator(relative: &str) -> PathBuf {
     path
 }
 
+/// The Panda that scripts/setup-validators.sh installs with PyBullet.
+pub fn panda_urdf() -> PathBuf {
+    let lib = validator(".venv-validators/lib");
+    let urdf = std::fs::read_dir(&lib)
+        .expect("the validators' lib folder")
+        .filter_map(Result::ok)
+        .map(|e| {
+            e.path()
+                .join("site-packages/pybullet_data/franka_panda/panda.urdf")
+        })
+        .find(|p| p.is_file());
+    urdf.unwrap_or_else(|| {
+        panic!(
+            "no pybullet_data/franka_panda/panda.urdf under {}: run scripts/setup-validators.sh",
+            lib.display()
+        )
+    })
+}
+
 /// Runs a third-party tool in the temporary folder; returns (exit code, stdout, stderr).
 pub fn run_tool(program: &Path, args: &[&Path]) -> (i32, String, String) {
     // MuJoCo writes MUJOCO_LOG.TXT into its working folder: keep it out of the checkout.
