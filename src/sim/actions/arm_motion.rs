@@ -262,8 +262,9 @@ pub(super) fn place_motion(
             let moved = spot * view.poses[link].inverse();
             let mut placed = scene.clone();
             add_links(&mut placed, view, &around.links, &moved);
-            // Set down from above, so the object never drags over its support, and released 5 mm
-            // over it (beyond the last stretch's margin): it drops onto it.
+            // Set down from above (or carried in through a container's front), so the object
+            // never drags over its support, and released 5 mm over it (beyond the last
+            // stretch's margin): it drops onto it.
             let release = Affine3A::from_translation(Vec3::Z * 0.005) * grasp.world_from_tool;
             let to = reach(
                 rig,
