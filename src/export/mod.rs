@@ -5,7 +5,6 @@ pub mod augmented;
 pub mod mjcf;
 pub mod obj;
 pub mod occupancy;
-pub mod replay;
 pub mod scene_glb;
 pub mod urdf;
 

@@ -9,6 +9,7 @@ pub mod motion_path;
 pub mod navigation;
 pub mod pddl;
 pub mod planner;
+pub mod replay;
 pub mod robot;
 pub mod scene_view;
 pub mod symbolic;
