@@ -202,6 +202,7 @@ impl Arm {
     /// chain's last joint (the hand, its fingers, the tool). What the tree shows of the arm.
     pub fn hand_mesh(&self) -> TriMesh {
         let last = self.chain.last().copied().unwrap_or(0);
+        // The chain's values do not move the hand in the tool's frame: any will do.
         let poses = self.link_poses(&Affine3A::IDENTITY, &self.middle(), 1.0);
         let tool_from_root = poses[self.tool].inverse();
         let mut hand = TriMesh::default();
@@ -216,16 +217,8 @@ impl Arm {
     }
 
     /// Whether link `l` is `ancestor` or hangs from it.
-    fn descends_from(&self, mut l: usize, ancestor: usize) -> bool {
-        loop {
-            if l == ancestor {
-                return true;
-            }
-            match self.links[l].parent {
-                Some(p) => l = p,
-                None => return false,
-            }
-        }
+    fn descends_from(&self, l: usize, ancestor: usize) -> bool {
+        crate::base::parent_chain::descends_from(l, ancestor, |k| self.links[k].parent)
     }
 
     /// The tool's world pose.

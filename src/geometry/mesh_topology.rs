@@ -126,21 +126,31 @@ impl TriMesh {
     /// volume) decomposed by V-HACD, so that what is open stays open (a finger goes in a bowl
     /// as far as its rim grasp needs, an object fits in it).
     pub fn collision_pieces(&self) -> Vec<TriMesh> {
-        self.connected_components()
-            .iter()
-            .flat_map(|component| {
-                let Some(hull) = component.convex_hull() else {
-                    return Vec::new();
-                };
-                if hull.signed_volume() > HOLLOW_HULL_RATIO * component.signed_volume().abs() {
-                    let pieces = hollow_pieces(component);
-                    if !pieces.is_empty() {
-                        return pieces;
-                    }
-                }
-                vec![hull]
-            })
-            .collect()
+        self.hulls_and_collision_pieces().1
+    }
+
+    /// The hull of each connected component, and [`Self::collision_pieces`] made from them.
+    pub fn hulls_and_collision_pieces(&self) -> (Vec<TriMesh>, Vec<TriMesh>) {
+        let mut hulls = Vec::new();
+        let mut pieces = Vec::new();
+        for component in self.connected_components() {
+            let Some(hull) = component.convex_hull() else {
+                continue;
+            };
+            let hollow = hull.signed_volume() > HOLLOW_HULL_RATIO * component.signed_volume().abs();
+            let open = if hollow {
+                hollow_pieces(&component)
+            } else {
+                Vec::new()
+            };
+            if open.is_empty() {
+                pieces.push(hull.clone());
+            } else {
+                pieces.extend(open);
+            }
+            hulls.push(hull);
+        }
+        (hulls, pieces)
     }
 
     /// The mesh split into at most `max_pieces` convex pieces by V-HACD (parry's), each the exact

@@ -52,12 +52,7 @@ impl LinkGeometry {
         let info = ClassTable::builtin().get(class);
         let density = info.map_or(500.0, |c| c.density);
         let friction = info.map_or(0.5, |c| c.friction);
-        let collision = visual.collision_pieces();
-        let hulls = visual
-            .connected_components()
-            .iter()
-            .filter_map(TriMesh::convex_hull)
-            .collect();
+        let (hulls, collision) = visual.hulls_and_collision_pieces();
         let inertial = Inertial::of_mesh(&visual, density);
         Self {
             surface: visual.clone(),

@@ -86,16 +86,8 @@ pub struct KinematicTree {
 
 impl KinematicTree {
     /// Whether `link` is `ancestor` or hangs below it.
-    pub fn descends_from(&self, mut link: usize, ancestor: usize) -> bool {
-        loop {
-            if link == ancestor {
-                return true;
-            }
-            match self.links[link].parent {
-                Some(p) => link = p,
-                None => return false,
-            }
-        }
+    pub fn descends_from(&self, link: usize, ancestor: usize) -> bool {
+        crate::base::parent_chain::descends_from(link, ancestor, |l| self.links[l].parent)
     }
 
     /// Every link's pose in the world at the current joint values.

@@ -283,16 +283,8 @@ impl Walk<'_> {
     }
 
     /// Whether `link` is `ancestor` or hangs from it now.
-    fn hangs_from(&self, mut link: usize, ancestor: usize) -> bool {
-        loop {
-            if link == ancestor {
-                return true;
-            }
-            match self.parent[link] {
-                Some(p) => link = p,
-                None => return false,
-            }
-        }
+    fn hangs_from(&self, link: usize, ancestor: usize) -> bool {
+        crate::base::parent_chain::descends_from(link, ancestor, |l| self.parent[l])
     }
 
     fn record(&mut self, step: usize) {
