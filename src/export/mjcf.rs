@@ -66,14 +66,12 @@ pub fn mjcf_document(
     extra: &MjcfExtra,
 ) -> String {
     let world_from_links = tree.world_from_links();
-    let mut children: Vec<Vec<usize>> = vec![Vec::new(); tree.links.len()];
-    for (i, link) in tree.links.iter().enumerate() {
-        if let Some(p) = link.parent
-            && !skip.contains(&i)
-        {
-            children[p].push(i);
-        }
-    }
+    let children = crate::base::parent_chain::children(
+        tree.links
+            .iter()
+            .enumerate()
+            .map(|(i, link)| link.parent.filter(|_| !skip.contains(&i))),
+    );
     let skipped = |i: usize| skip.iter().any(|&s| tree.descends_from(i, s));
     let mut xml = String::new();
     let _ = writeln!(xml, "<mujoco model=\"{}\">", attr_escape(name));

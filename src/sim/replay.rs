@@ -91,12 +91,7 @@ fn robot_bodies(spec: &RobotSpec, rig: &ArmRig) -> String {
         tidy(half),
         tidy(half)
     );
-    let mut children: Vec<Vec<usize>> = vec![Vec::new(); rig.arm.links.len()];
-    for (l, link) in rig.arm.links.iter().enumerate() {
-        if let Some(p) = link.parent {
-            children[p].push(l);
-        }
-    }
+    let children = crate::base::parent_chain::children(rig.arm.links.iter().map(|l| l.parent));
     arm_body(&mut xml, rig, &children, 0, &rig.base_from_root, 3);
     let _ = writeln!(xml, "    </body>");
     xml
