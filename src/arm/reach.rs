@@ -220,7 +220,7 @@ pub fn reach(
         .map_err(|at| {
             format!(
                 "the straight approach is blocked or out of reach {:.0} cm before the target",
-                100.0 * at
+                100.0 * at * stretch
             )
         })?;
     line.reverse();
