@@ -156,7 +156,10 @@ fn prepare(
     let mut app = simulation_app(&graph, &task, &db, arm)?;
     let before = read_kinematic_tree(app.world_mut())?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
-    let scene = symbolic_scene(&SceneView::new(&before), &place, holding.as_deref());
+    let scene = SymbolicScene {
+        hand_works_parts: arm.is_some(),
+        ..symbolic_scene(&SceneView::new(&before), &place, holding.as_deref())
+    };
     let goals: Vec<Fact> = task
         .goals
         .iter()
@@ -518,7 +521,10 @@ fn write_outputs(
         &serde_json::to_string_pretty(summary)
             .map_err(|e| IsceneError::Internal(format!("trace.json: {e}")))?,
     )?;
-    write_text(&dir.join("domain.pddl"), &pddl::domain())?;
+    write_text(
+        &dir.join("domain.pddl"),
+        &pddl::domain(prepared.scene.hand_works_parts),
+    )?;
     write_text(
         &dir.join("problem.pddl"),
         &pddl::problem("task", &prepared.scene, &prepared.goals),

@@ -134,7 +134,28 @@ impl ArmCollider {
         obstacles: &Obstacles,
         margin: f32,
     ) -> Option<(usize, Touching)> {
+        self.touching_obstacles(poses, obstacles, margin, &[])
+            .or_else(|| {
+                self.self_pairs
+                    .iter()
+                    .find(|&&(a, b)| self.links_within(a, &poses[a], b, &poses[b], margin))
+                    .map(|&(a, b)| (a, Touching::Link(b)))
+            })
+    }
+
+    /// The first link of the arm, but those in `skip`, that comes within `margin` of an
+    /// obstacle, with the obstacle (the arm's own links not checked).
+    pub fn touching_obstacles(
+        &self,
+        poses: &[Affine3A],
+        obstacles: &Obstacles,
+        margin: f32,
+        skip: &[usize],
+    ) -> Option<(usize, Touching)> {
         for (l, pieces) in self.pieces.iter().enumerate() {
+            if skip.contains(&l) {
+                continue;
+            }
             let pose = rigid_pose(&poses[l]);
             for (hull, lo, hi) in pieces {
                 let (wlo, whi) = world_bounds(&poses[l], *lo, *hi);
@@ -148,10 +169,7 @@ impl ArmCollider {
                 }
             }
         }
-        self.self_pairs
-            .iter()
-            .find(|&&(a, b)| self.links_within(a, &poses[a], b, &poses[b], margin))
-            .map(|&(a, b)| (a, Touching::Link(b)))
+        None
     }
 
     /// [`Self::touching`] with an object in the hand: its convex pieces `held`, in the frame of

@@ -33,6 +33,10 @@ pub struct IkSettings {
     /// Runs from random configurations after the run from the seed configuration.
     pub restarts: usize,
     pub seed: u64,
+    /// How strongly each step also moves the joints towards the middle of their ranges in the
+    /// null space of the tool's motion (a redundant arm's self-motion; Liegeois 1977): 0 leaves
+    /// the redundancy alone. Keeps a hand that follows a path away from the joints' limits.
+    pub centering: f32,
 }
 
 impl Default for IkSettings {
@@ -46,6 +50,7 @@ impl Default for IkSettings {
             iterations: 150,
             restarts: 40,
             seed: 0,
+            centering: 0.0,
         }
     }
 }
@@ -121,6 +126,7 @@ fn descend(
     settings: &IkSettings,
 ) -> Option<Vec<f32>> {
     let lambda2 = settings.damping * settings.damping;
+    let limits = arm.limits();
     for _ in 0..settings.iterations {
         let (position, mut rotation) = pose_error(&arm.tool_pose(world_from_root, &q), target);
         if !settings.orientation {
@@ -140,16 +146,45 @@ fn descend(
                 c[3..].fill(0.0);
             }
         }
-        let mut a = Matrix6::<f32>::identity() * lambda2;
-        for c in &columns {
-            let c = Vector6::from_row_slice(c);
-            a += c * c.transpose();
+        // A joint at its limit that the step would push past it is held where it is, and the
+        // step solved again with the other joints: clamping it afterwards would stall the run
+        // with the rest of the arm waiting for a motion it cannot make.
+        let mut dq = damped_step(&columns, &e, lambda2)?;
+        for _ in 0..columns.len() {
+            let pushed: Vec<usize> = (0..columns.len())
+                .filter(|&i| {
+                    let (lo, hi) = limits[i];
+                    columns[i] != [0.0; 6]
+                        && ((q[i] <= lo && dq[i] < 0.0) || (q[i] >= hi && dq[i] > 0.0))
+                })
+                .collect();
+            if pushed.is_empty() {
+                break;
+            }
+            for i in pushed {
+                columns[i] = [0.0; 6];
+            }
+            dq = damped_step(&columns, &e, lambda2)?;
         }
-        let y = a.cholesky()?.solve(&e);
-        let mut dq: Vec<f32> = columns
-            .iter()
-            .map(|c| Vector6::from_row_slice(c).dot(&y))
-            .collect();
+        if settings.centering > 0.0 {
+            let toward_middle: Vec<f32> = (0..columns.len())
+                .map(|i| {
+                    let (lo, hi) = limits[i];
+                    settings.centering * (0.5 * (lo + hi) - q[i]) / (hi - lo).max(1e-3)
+                })
+                .collect();
+            // Its part that moves the tool, taken off: J+ J z.
+            let moved = columns
+                .iter()
+                .zip(&toward_middle)
+                .fold(Vector6::zeros(), |w, (c, z)| {
+                    w + Vector6::from_row_slice(c) * *z
+                });
+            let along_task = damped_step(&columns, &moved, lambda2)?;
+            for i in 0..dq.len() {
+                dq[i] += toward_middle[i] - along_task[i];
+            }
+        }
         let largest = dq.iter().fold(0.0f32, |m, v| m.max(v.abs()));
         if !largest.is_finite() {
             return None;
@@ -162,6 +197,22 @@ fn descend(
         q = arm.clamped(&stepped);
     }
     None
+}
+
+/// The damped least-squares step `J^T (J J^T + lambda2 I)^-1 e` for the Jacobian's `columns`.
+fn damped_step(columns: &[[f32; 6]], e: &Vector6<f32>, lambda2: f32) -> Option<Vec<f32>> {
+    let mut a = Matrix6::<f32>::identity() * lambda2;
+    for c in columns {
+        let c = Vector6::from_row_slice(c);
+        a += c * c.transpose();
+    }
+    let y = a.cholesky()?.solve(e);
+    Some(
+        columns
+            .iter()
+            .map(|c| Vector6::from_row_slice(c).dot(&y))
+            .collect(),
+    )
 }
 
 #[cfg(test)]

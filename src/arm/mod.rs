@@ -201,19 +201,24 @@ impl Arm {
     /// The hand in the tool's frame, its fingers open: the pieces of every link past the
     /// chain's last joint (the hand, its fingers, the tool). What the tree shows of the arm.
     pub fn hand_mesh(&self) -> TriMesh {
-        let last = self.chain.last().copied().unwrap_or(0);
         // The chain's values do not move the hand in the tool's frame: any will do.
         let poses = self.link_poses(&Affine3A::IDENTITY, &self.middle(), 1.0);
         let tool_from_root = poses[self.tool].inverse();
         let mut hand = TriMesh::default();
-        for (l, link) in self.links.iter().enumerate() {
-            if l != last && self.descends_from(l, last) {
-                for piece in &link.pieces {
-                    hand.append(&piece.transformed(&(tool_from_root * poses[l])));
-                }
+        for l in self.hand_links() {
+            for piece in &self.links[l].pieces {
+                hand.append(&piece.transformed(&(tool_from_root * poses[l])));
             }
         }
         hand
+    }
+
+    /// The links past the chain's last joint: the hand, its fingers and the tool.
+    pub fn hand_links(&self) -> Vec<usize> {
+        let last = self.chain.last().copied().unwrap_or(0);
+        (0..self.links.len())
+            .filter(|&l| l != last && self.descends_from(l, last))
+            .collect()
     }
 
     /// Whether link `l` is `ancestor` or hangs from it.

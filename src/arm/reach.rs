@@ -25,6 +25,9 @@ pub const STRETCH_MARGIN_M: f32 = 0.004;
 const STRETCH_STEP_M: f32 = 0.01;
 /// The largest joint change between two poses of a straight stretch, radians: more is a flip.
 const STRETCH_MAX_JUMP: f32 = 0.25;
+/// How strongly a hand following a path keeps its joints towards the middle of their ranges
+/// (`IkSettings::centering`).
+const FOLLOW_CENTERING: f32 = 0.1;
 /// How high a retreat lifts the hand before it plans back, metres.
 pub const LIFT_M: f32 = 0.1;
 
@@ -172,7 +175,7 @@ impl ArmPath {
 }
 
 /// Where a configuration touches something, in words.
-fn describe(rig: &ArmRig, obstacles: &Obstacles, touch: &(usize, Touching)) -> String {
+pub fn describe(rig: &ArmRig, obstacles: &Obstacles, touch: &(usize, Touching)) -> String {
     let link = &rig.arm.links[touch.0].name;
     match &touch.1 {
         Touching::Obstacle(o) => format!("{link} hits {}", obstacles.items[*o].name),
@@ -214,9 +217,69 @@ pub fn reach(
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     let q_target = solve(&rig.arm, world_from_root, target, from, &rig.ik, &free_near)
         .ok_or_else(|| why_no_ik(rig, world_from_root, target, from, near, held))?;
+    reach_configuration(
+        rig,
+        world_from_root,
+        from,
+        (&q_target, target),
+        approach,
+        stretch,
+        transit,
+        near,
+        held,
+    )
+}
+
+/// Configurations that put the tool at `target` clear of `near` obstacles, from up to `count`
+/// seeded inverse kinematics runs, each different from those before.
+pub fn configurations_at(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    target: &Affine3A,
+    near: &Obstacles,
+    count: usize,
+) -> Vec<Vec<f32>> {
+    let empty = Held::default();
+    let free_near = clear_of(rig, world_from_root, near, &empty, STRETCH_MARGIN_M);
+    let mut found: Vec<Vec<f32>> = Vec::new();
+    for seed in 0..count as u64 {
+        let settings = IkSettings { seed, ..rig.ik };
+        if let Some(q) = solve(
+            &rig.arm,
+            world_from_root,
+            target,
+            &rig.stow,
+            &settings,
+            &|q| {
+                free_near(q)
+                    && found
+                        .iter()
+                        .all(|f| crate::arm::rrt::distance(f, q) > STRETCH_MAX_JUMP)
+            },
+        ) {
+            found.push(q);
+        }
+    }
+    found
+}
+
+/// [`reach`] to a configuration already solved: `q_target` puts the tool at `target`.
+#[allow(clippy::too_many_arguments, reason = "one motion's whole problem")]
+pub fn reach_configuration(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    (q_target, target): (&[f32], &Affine3A),
+    approach: Vec3,
+    stretch: f32,
+    transit: &Obstacles,
+    near: &Obstacles,
+    held: &Held,
+) -> Result<ArmPath, String> {
+    let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     // The straight stretch, solved backwards from the target so it ends exactly there.
     let back = -approach * stretch;
-    let mut line = straight_line(rig, world_from_root, &q_target, target, back, &free_near)
+    let mut line = straight_line(rig, world_from_root, q_target, target, back, &free_near)
         .map_err(|at| {
             format!(
                 "the straight approach is blocked or out of reach {:.0} cm before the target",
@@ -276,21 +339,87 @@ fn straight_line(
     free: &dyn Fn(&[f32]) -> bool,
 ) -> Result<Vec<Vec<f32>>, f32> {
     let steps = (offset.length() / STRETCH_STEP_M).ceil().max(1.0) as usize;
+    let poses: Vec<Affine3A> = (1..=steps)
+        .map(|k| Affine3A::from_translation(offset * (k as f32 / steps as f32)) * *start)
+        .collect();
+    let mut line = vec![from.to_vec()];
     let single = IkSettings {
         restarts: 0,
+        centering: FOLLOW_CENTERING,
         ..rig.ik
     };
-    let mut line = vec![from.to_vec()];
-    for k in 1..=steps {
-        let t = k as f32 / steps as f32;
-        let pose = Affine3A::from_translation(offset * t) * *start;
-        let previous = line.last().expect("not empty");
-        let q = solve(&rig.arm, world_from_root, &pose, previous, &single, free)
-            .filter(|q| crate::arm::rrt::distance(q, previous) <= STRETCH_MAX_JUMP)
-            .ok_or(t)?;
-        line.push(q);
-    }
+    let along = along_poses(rig, world_from_root, from, &poses, &single, &|_, q| free(q))
+        .map_err(|k| (k + 1) as f32 / steps as f32)?;
+    line.extend(along);
     Ok(line)
+}
+
+/// The configurations that put the tool on `poses` in turn, each solved from the one before
+/// (the first from `from`), accepted by `free(k, q)` for pose `k` and no flip away from the one
+/// before; where it fails, the index of the pose.
+fn along_poses(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    poses: &[Affine3A],
+    single: &IkSettings,
+    free: &dyn Fn(usize, &[f32]) -> bool,
+) -> Result<Vec<Vec<f32>>, usize> {
+    let mut along: Vec<Vec<f32>> = Vec::with_capacity(poses.len());
+    for (k, pose) in poses.iter().enumerate() {
+        let previous = along.last().map_or(from, |q| q.as_slice());
+        let q = solve(&rig.arm, world_from_root, pose, previous, single, &|q| {
+            free(k, q)
+        })
+        .filter(|q| crate::arm::rrt::distance(q, previous) <= STRETCH_MAX_JUMP)
+        .ok_or(k)?;
+        along.push(q);
+    }
+    Ok(along)
+}
+
+/// The arm keeping the tool on `poses` in turn from `from` (the tool at the first pose's
+/// predecessor): a hand on a handle that turns or slides with its door or drawer. Each pose is
+/// solved from the one before; `touching_at(k, q)` says what the arm touches at pose `k` in
+/// configuration `q` (`None` when clear). Returns the configurations of the poses it follows,
+/// and, where it stops short of the last, why.
+pub fn follow(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    poses: &[Affine3A],
+    touching_at: &dyn Fn(usize, &[f32]) -> Option<String>,
+) -> (Vec<Vec<f32>>, Option<String>) {
+    let free = |k: usize, q: &[f32]| rig.arm.within_limits(q) && touching_at(k, q).is_none();
+    let single = IkSettings {
+        restarts: 0,
+        centering: FOLLOW_CENTERING,
+        ..rig.ik
+    };
+    match along_poses(rig, world_from_root, from, poses, &single, &free) {
+        Ok(along) => (along, None),
+        Err(k) => {
+            let along = along_poses(rig, world_from_root, from, &poses[..k], &single, &free)
+                .unwrap_or_default();
+            let previous = along.last().map_or(from, |q| q.as_slice());
+            let why = match solve(
+                &rig.arm,
+                world_from_root,
+                &poses[k],
+                previous,
+                &single,
+                &|_| true,
+            ) {
+                None => "the hand's next pose is out of the arm's reach".to_string(),
+                Some(q) if crate::arm::rrt::distance(&q, previous) > STRETCH_MAX_JUMP => {
+                    "the arm would have to flip to follow".to_string()
+                }
+                Some(q) => touching_at(k, &q)
+                    .unwrap_or_else(|| "no configuration follows the hand".to_string()),
+            };
+            (along, Some(why))
+        }
+    }
 }
 
 /// Why no collision-free configuration puts the tool at `target`: out of reach, or what the
@@ -327,12 +456,29 @@ pub fn retreat(
     held: &Held,
 ) -> Result<ArmPath, String> {
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
+    retreat_along(rig, world_from_root, from, away, &free_near, transit, held)
+}
+
+/// [`retreat`] with the straight stretch accepted by `free_line` instead of a clearance from
+/// obstacles: a hand letting go of a handle may stay near it, the rest of the arm may not.
+pub fn retreat_along(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    away: Vec3,
+    free_line: &dyn Fn(&[f32]) -> bool,
+    transit: &Obstacles,
+    held: &Held,
+) -> Result<ArmPath, String> {
     let tool = rig.arm.tool_pose(world_from_root, from);
-    let line =
-        straight_line(rig, world_from_root, from, &tool, away, &free_near).map_err(|_| {
-            "the straight way back (up, or out of a container) is blocked or out of reach"
-                .to_string()
-        })?;
+    let line = straight_line(rig, world_from_root, from, &tool, away, free_line).map_err(|at| {
+        format!(
+            "the straight way back (up, or out of a container) is blocked or out of reach \
+                 after {:.0} of {:.0} cm",
+            100.0 * away.length() * at,
+            100.0 * away.length()
+        )
+    })?;
     let top = line.last().expect("not empty").clone();
     let free_transit = clear_of(rig, world_from_root, transit, held, TRANSIT_MARGIN_M);
     let path =

@@ -59,6 +59,11 @@ pub struct LinkSolids {
 }
 
 impl LinkSolids {
+    /// Nothing: a link left out of a sweep.
+    pub fn none() -> Self {
+        Self { pieces: Vec::new() }
+    }
+
     pub fn of(tree: &KinematicTree, link: usize) -> Self {
         let pieces = tree.links[link]
             .geometry

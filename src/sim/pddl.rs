@@ -3,9 +3,16 @@
 
 use crate::sim::symbolic::{Fact, START_PLACE, SymbolicScene};
 
-/// The domain: navigate, open, close, pick-on, pick-in, place-on, place-in.
-pub fn domain() -> String {
-    r#"(define (domain iscene)
+/// The domain: navigate, open, close, pick-on, pick-in, place-on, place-in; open and close need
+/// the hand empty when `hand_works_parts` (an arm takes the handle).
+pub fn domain(hand_works_parts: bool) -> String {
+    let hand = if hand_works_parts {
+        " (hand-empty)"
+    } else {
+        ""
+    };
+    format!(
+        r#"(define (domain iscene)
   (:requirements :strips)
   (:predicates
     (robot-at ?p) (holding ?o) (hand-empty) (on ?o ?s) (inside ?o ?c)
@@ -17,11 +24,11 @@ pub fn domain() -> String {
     :effect (and (robot-at ?to) (not (robot-at ?from))))
   (:action open
     :parameters (?c)
-    :precondition (and (container ?c) (robot-at ?c) (is-closed ?c))
+    :precondition (and (container ?c) (robot-at ?c) (is-closed ?c){hand})
     :effect (and (is-open ?c) (not (is-closed ?c))))
   (:action close
     :parameters (?c)
-    :precondition (and (container ?c) (robot-at ?c) (is-open ?c))
+    :precondition (and (container ?c) (robot-at ?c) (is-open ?c){hand})
     :effect (and (is-closed ?c) (not (is-open ?c))))
   (:action pick-on
     :parameters (?o ?s ?p)
@@ -41,7 +48,7 @@ pub fn domain() -> String {
     :precondition (and (movable ?o) (container ?c) (robot-at ?c) (holding ?o) (is-open ?c))
     :effect (and (inside ?o ?c) (hand-empty) (not (holding ?o)))))
 "#
-    .to_string()
+    )
 }
 
 /// The problem of reaching `goal` from the scene's facts.

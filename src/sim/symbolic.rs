@@ -59,6 +59,9 @@ pub struct SymbolicScene {
     /// `(object, support)` to the place the robot picks it there from.
     pub pick_places: BTreeMap<(String, String), String>,
     pub facts: BTreeSet<Fact>,
+    /// The robot's one hand opens and closes doors and drawers by their handles (an arm): it
+    /// must be empty to do so. A base without an arm works them without its gripper.
+    pub hand_works_parts: bool,
 }
 
 /// Reads the symbolic scene from `view`; `robot_at` is the robot's place (`start` before it

@@ -206,29 +206,50 @@ impl Walk<'_> {
                 let Some(l) = self.link_named(link) else {
                     return;
                 };
-                let link = &self.tree.links[l];
-                let parent = self.parent[l].map_or(Affine3A::IDENTITY, |p| self.poses[p]);
-                let at = |v: f32| parent * link.parent_from_link * link.joint.motion(v);
+                // A part the hand has already moved (it followed the handle) stays where it is.
+                if (self.values[l] - to).abs() <= f32::EPSILON && (from - to).abs() > 0.0 {
+                    return;
+                }
                 let samples = link_motion(self.tree, change, SAMPLE_S)
                     .map_or(1, |m| m.world_from_link.len().saturating_sub(1).max(1));
                 for k in 1..=samples {
                     let v = from + (to - from) * k as f32 / samples as f32;
-                    let pose = at(v);
-                    self.values[l] = v;
-                    self.move_subtree(l, pose);
+                    self.set_joint(l, v);
                     self.time += SAMPLE_S;
                     self.record(step);
                 }
             }
             Change::Attach { .. } => self.attach(change),
-            Change::ArmMotion { reach, retreat, .. } => {
+            Change::ArmMotion {
+                reach,
+                retreat,
+                part,
+                ..
+            } => {
                 self.follow(step, reach);
                 if let Some(attach) = handover {
                     self.attach(attach);
                 }
+                if let Some(part) = part
+                    && let Some(l) = self.link_named(&part.link)
+                {
+                    for (q, &v) in part.along.iter().zip(&part.values) {
+                        self.set_joint(l, v);
+                        self.follow(step, std::slice::from_ref(q));
+                    }
+                }
                 self.follow(step, retreat);
             }
         }
+    }
+
+    /// Turns or slides link `l`'s joint to `v`, with what hangs from the link.
+    fn set_joint(&mut self, l: usize, v: f32) {
+        let link = &self.tree.links[l];
+        let parent = self.parent[l].map_or(Affine3A::IDENTITY, |p| self.poses[p]);
+        let pose = parent * link.parent_from_link * link.joint.motion(v);
+        self.values[l] = v;
+        self.move_subtree(l, pose);
     }
 
     /// The hand along `path`, with what it holds.
@@ -400,6 +421,7 @@ mod tests {
             .collect();
         let changes = vec![
             Change::ArmMotion {
+                part: None,
                 what: "test".into(),
                 reach: vec![halfway.clone(), grasp.clone()],
                 retreat: vec![halfway.clone(), rig.stow.clone()],

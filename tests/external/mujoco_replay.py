@@ -11,7 +11,10 @@ what the hand holds (the line's `held` body) counts with it.
  "deepest": {"depth_m", "time", "step", "robot_body", "scene_body"} (the robot or what it holds
  into the scene; null when nothing touches), "deepest_per_step": {"<step>": depth_m},
  "held_drift_m": the most a held object moved in the frame of TOOL_BODY from one line to the
- next while held, "held_samples": lines with something held, "missing_joints": [...]}
+ next while held, "held_samples": lines with something held, "part_drift_m": the most TOOL_BODY
+ moved in the frame of a door or drawer from one line to the next while the hand moved it (a
+ hinge or slide joint of the scene changing on both), "part_samples": such lines,
+ "missing_joints": [...]}
 """
 import csv
 import json
@@ -45,6 +48,16 @@ def main(xml, trajectory, tool_body):
         if header[i] not in base_joints
         and m.body_rootid[m.jnt_bodyid[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, header[i].partition(".")[0])]] == robot_root
     ]
+    # The scene's own hinge and slide joints (doors and drawers): (CSV column, qpos address, body).
+    part_columns = []
+    for i, adr in columns:
+        jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, header[i].partition(".")[0])
+        if (
+            int(m.jnt_type[jid]) in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+            and m.body_rootid[m.jnt_bodyid[jid]] != robot_root
+        ):
+            part_columns.append((i, int(m.jnt_bodyid[jid])))
+    part_drift, part_samples, last_parts, last_in_part = 0.0, 0, None, {}
     deepest, per_step = None, {}
     drift, held_samples, previous, travel, last_arm = 0.0, 0, None, 0.0, None
     steps = []
@@ -77,6 +90,18 @@ def main(xml, trajectory, tool_body):
                     "robot_body": m.body(m.geom_bodyid[ours]).name,
                     "scene_body": m.body(m.geom_bodyid[theirs]).name,
                 }
+        parts = [float(row[i]) for i, _ in part_columns]
+        moving = [
+            body for k, (_, body) in enumerate(part_columns)
+            if last_parts is not None and abs(parts[k] - last_parts[k]) > 1e-6
+        ]
+        in_part = {}
+        for body in moving:
+            in_part[body] = d.xmat[body].reshape(3, 3).T @ (d.xpos[tool] - d.xpos[body])
+            if body in last_in_part:
+                part_drift = max(part_drift, float(np.linalg.norm(in_part[body] - last_in_part[body])))
+        part_samples += bool(moving)
+        last_parts, last_in_part = parts, in_part
         if held:
             held_samples += 1
             body = m.body(held).id
@@ -94,6 +119,8 @@ def main(xml, trajectory, tool_body):
         "deepest_per_step": {k: round(v, 5) for k, v in per_step.items()},
         "held_drift_m": drift,
         "held_samples": held_samples,
+        "part_drift_m": part_drift,
+        "part_samples": part_samples,
         "missing_joints": missing,
     }))
     return 0

@@ -1,6 +1,6 @@
 //! The Franka Emika Panda of the PyBullet package as the arm (issue 37): its forward kinematics
 //! against PyBullet's, inverse kinematics to poses it can reach, and collision-free motions
-//! planned around a table.
+//! planned around a table, picks and places, and doors opened and closed by their handles.
 
 use glam::{Affine3A, Quat, Vec3};
 use iscene::arm::collision::{ArmCollider, Obstacles};
@@ -204,40 +204,18 @@ fn panda_plans_around_a_post() {
 #[test]
 fn panda_picks_and_places_in_the_kitchen() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let seq = tmp.path().join("seq");
-    common::render_scene("kitchen", &seq, 2, true);
-    let gt = seq.join("gt");
-    let task = tmp.path().join("task.json");
-    std::fs::write(
-        &task,
-        serde_json::json!({"steps": [
+    let (gt, task, out, trace) = panda_task_in_the_kitchen(
+        tmp.path(),
+        serde_json::json!([
             {"action": "pick", "object": "cup_2"},
             {"action": "place_on", "object": "cup_2", "surface": "cabinet_2"},
             {"action": "pick", "object": "bowl_1"},
             {"action": "place_on", "object": "bowl_1", "surface": "table_1"},
             {"action": "pick", "object": "bottle_1"},
             {"action": "place_on", "object": "bottle_1", "surface": "table_1"},
-        ]})
-        .to_string(),
-    )
-    .expect("task");
+        ]),
+    );
     let urdf = panda_urdf();
-    let out = tmp.path().join("sim");
-    let args = [
-        "simulate",
-        gt.to_str().expect("utf8"),
-        "--task",
-        task.to_str().expect("utf8"),
-        "--out",
-        out.to_str().expect("utf8"),
-        "--robot",
-        urdf.to_str().expect("utf8"),
-    ];
-    let (code, stdout, stderr) = common::iscene(&args, tmp.path());
-    assert_eq!(code, 0, "{stdout}{stderr}");
-    let trace: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
-            .expect("JSON");
     let arm = Arm::read_urdf(&urdf, None).expect("the Panda reads");
     let rig = iscene::arm::reach::ArmRig::new(arm, iscene::sim::robot::RobotSpec::ARM_BASE.height);
     let mut motions = 0;
@@ -293,40 +271,8 @@ fn panda_picks_and_places_in_the_kitchen() {
         ),
         "the reach touches the scene"
     );
-    replay_in_mujoco(&out, &rig);
-    // A robot file that is no arm.
-    let bad = tmp.path().join("robot.urdf");
-    std::fs::write(&bad, "<robot name='x'><link name='a'/></robot>").expect("write");
-    let out2 = tmp.path().join("sim2");
-    let mut args = args.to_vec();
-    args[5] = out2.to_str().expect("utf8");
-    args[7] = bad.to_str().expect("utf8");
-    let (code, _, stderr) = common::iscene(&args, tmp.path());
-    assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("robot.urdf"), "{stderr}");
-    assert!(!out2.exists(), "nothing written");
-}
-
-/// The task in `out` (a `simulate --robot` output) replayed in MuJoCo: every joint of the CSV
-/// is in the model, every step moves, nothing of the robot or in its hand goes 5 mm into the
-/// scene, and what the hand holds keeps its place in it.
-fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::reach::ArmRig) {
-    let python = common::validator(".venv-validators/bin/python");
-    let script = common::root().join("tests/external/mujoco_replay.py");
-    let tool = format!("robot_{}", rig.arm.links[rig.arm.tool].name);
-    let (code, stdout, stderr) = common::run_tool(
-        &python,
-        &[
-            &script,
-            &out.join("replay.xml"),
-            &out.join("trajectory.csv"),
-            std::path::Path::new(&tool),
-        ],
-    );
-    assert_eq!(code, 0, "{stdout}{stderr}");
-    let replay = common::json_line(&stdout);
-    eprintln!("MuJoCo replay: {replay}");
-    assert_eq!(replay["missing_joints"], serde_json::json!([]), "{replay}");
+    // Every step moves the arm, and a held object stays where the fingers took it.
+    let replay = replay_in_mujoco(&out, &rig);
     assert_eq!(
         replay["steps"],
         serde_json::json!([0, 1, 2, 3, 4, 5]),
@@ -345,10 +291,158 @@ fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::reach::ArmRig) {
         drift < 1e-3,
         "a held object slipped {drift} m in the hand: {replay}"
     );
+    // A robot file that is no arm.
+    let bad = tmp.path().join("robot.urdf");
+    std::fs::write(&bad, "<robot name='x'><link name='a'/></robot>").expect("write");
+    let out2 = tmp.path().join("sim2");
+    let (code, _, stderr) = common::simulate(&gt, &task, &out2, Some(&bad));
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("robot.urdf"), "{stderr}");
+    assert!(!out2.exists(), "nothing written");
+}
+
+/// The kitchen rendered into `dir` (2 frames, no noise) and the task of `steps` simulated on its
+/// ground truth with the Panda (`iscene simulate --robot`), which must succeed: the truth's
+/// folder, the task file, the output folder and its trace.
+fn panda_task_in_the_kitchen(
+    dir: &std::path::Path,
+    steps: serde_json::Value,
+) -> (
+    std::path::PathBuf,
+    std::path::PathBuf,
+    std::path::PathBuf,
+    serde_json::Value,
+) {
+    let seq = dir.join("seq");
+    common::render_scene("kitchen", &seq, 2, true);
+    let gt = seq.join("gt");
+    let task = dir.join("task.json");
+    std::fs::write(&task, serde_json::json!({ "steps": steps }).to_string()).expect("task");
+    let out = dir.join("sim");
+    let (code, stdout, stderr) = common::simulate(&gt, &task, &out, Some(&panda_urdf()));
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let trace: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
+            .expect("JSON");
+    (gt, task, out, trace)
+}
+
+/// The task in `out` (a `simulate --robot` output) replayed in MuJoCo: every joint of the CSV
+/// is in the model and nothing of the robot or in its hand goes 5 mm into the scene at any
+/// sample; the replay's figures (tests/external/mujoco_replay.py) for the caller's checks.
+fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::reach::ArmRig) -> serde_json::Value {
+    let python = common::validator(".venv-validators/bin/python");
+    let script = common::root().join("tests/external/mujoco_replay.py");
+    let tool = format!("robot_{}", rig.arm.links[rig.arm.tool].name);
+    let (code, stdout, stderr) = common::run_tool(
+        &python,
+        &[
+            &script,
+            &out.join("replay.xml"),
+            &out.join("trajectory.csv"),
+            std::path::Path::new(&tool),
+        ],
+    );
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let replay = common::json_line(&stdout);
+    eprintln!("MuJoCo replay: {replay}");
+    assert_eq!(replay["missing_joints"], serde_json::json!([]), "{replay}");
     if let Some(depth) = replay["deepest"]["depth_m"].as_f64() {
         assert!(
             depth <= 0.005,
             "the robot goes {depth} m into the scene: {replay}"
         );
     }
+    replay
+}
+
+/// On the rendered kitchen's ground truth the Panda opens the microwave's door and a cabinet's
+/// drawer by their handles and closes them again (`iscene simulate --robot`): the hand takes
+/// the part's bar handle and follows its arc or line, the part moving with it, until it is open
+/// at least as far as the simulation asks of a part opened as far as it goes (0.6 of its range),
+/// lets go, and later pushes it shut the same way. Replayed in MuJoCo, the hand keeps its place
+/// on the part (within 2 mm from one sample to the next) while the part moves, and nothing of
+/// the robot goes 5 mm into the scene.
+#[test]
+fn panda_opens_and_closes_a_door_and_a_drawer_by_their_handles() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (_, _, out, trace) = panda_task_in_the_kitchen(
+        tmp.path(),
+        serde_json::json!([
+            {"action": "open", "object": "microwave_1"},
+            {"action": "close", "object": "microwave_1"},
+            {"action": "open", "object": "cabinet_2", "part": "drawer_1"},
+            {"action": "close", "object": "cabinet_2", "part": "drawer_1"},
+        ]),
+    );
+    let robot = urdf_rs::read_file(out.join("scene.urdf")).expect("the scene's URDF");
+    let upper = |link: &str| {
+        robot
+            .joints
+            .iter()
+            .find(|j| j.child.link == link)
+            .map(|j| j.limit.upper)
+            .unwrap_or_else(|| panic!("no joint moves {link}"))
+    };
+    let parts = [
+        "microwave_1_door",
+        "microwave_1_door",
+        "cabinet_2_drawer_1",
+        "cabinet_2_drawer_1",
+    ];
+    let steps = trace["steps"].as_array().expect("steps");
+    assert_eq!(steps.len(), parts.len());
+    for (k, (step, link)) in steps.iter().zip(parts).enumerate() {
+        assert_eq!(step["success"], true, "{step}");
+        let changes = step["changes"].as_array().expect("changes");
+        let motion = changes
+            .iter()
+            .find(|c| c["change"] == "arm_motion")
+            .unwrap_or_else(|| panic!("the arm works {link}: {step}"));
+        assert!(
+            motion["what"]
+                .as_str()
+                .is_some_and(|w| w.contains(&format!("handle of {link}"))),
+            "{motion}"
+        );
+        let part = &motion["part"];
+        assert_eq!(part["link"], link, "{motion}");
+        let values: Vec<f64> = serde_json::from_value(part["values"].clone()).expect("values");
+        let along = part["along"].as_array().expect("along");
+        assert_eq!(values.len(), along.len(), "one configuration per value");
+        // A centimetre of handle travel per pose: many poses, each a small move.
+        assert!(values.len() >= 15, "{values:?}");
+        assert!(
+            values.windows(2).all(|w| (w[1] - w[0]).abs() < 0.05),
+            "{values:?}"
+        );
+        let set = changes
+            .iter()
+            .find(|c| c["change"] == "set_joint")
+            .expect("the part's new value");
+        let last = *values.last().expect("values");
+        assert!(
+            (set["to"].as_f64().expect("to") - last).abs() < 1e-4,
+            "{set}"
+        );
+        if k % 2 == 0 {
+            let range = upper(link);
+            assert!(last >= 0.6 * range, "{link} opened to {last} of {range}");
+        } else {
+            assert!(last.abs() < 1e-4, "{link} closed to {last}");
+        }
+    }
+    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
+    let rig = iscene::arm::reach::ArmRig::new(arm, iscene::sim::robot::RobotSpec::ARM_BASE.height);
+    let replay = replay_in_mujoco(&out, &rig);
+    assert_eq!(replay["steps"], serde_json::json!([0, 1, 2, 3]), "{replay}");
+    assert!(
+        replay["part_samples"].as_u64().expect("part samples") >= 60,
+        "{replay}"
+    );
+    let drift = replay["part_drift_m"].as_f64().expect("part drift");
+    assert!(
+        drift < 0.002,
+        "the hand slipped {drift} m on a handle: {replay}"
+    );
 }

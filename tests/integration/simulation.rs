@@ -24,17 +24,7 @@ fn kitchen_truth(dir: &Path) -> std::path::PathBuf {
 
 /// `iscene simulate GT --task TASK --out OUT`: exit code, stdout, stderr.
 fn run_simulate(gt: &Path, task: &Path, out: &Path) -> (i32, String, String) {
-    common::iscene(
-        &[
-            "simulate",
-            gt.to_str().expect("utf8"),
-            "--task",
-            task.to_str().expect("utf8"),
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        &common::root(),
-    )
+    common::simulate(gt, task, out, None)
 }
 
 fn simulate(gt: &Path, task: &Path, out: &Path) -> (i32, serde_json::Value) {

@@ -21,12 +21,12 @@ const VESSELS: [&str; 3] = ["cup", "bowl", "mug"];
 const MAX_GRASPS: usize = 6;
 /// Distances (metres, base centre to the target) of the base poses tried after the one the
 /// base's own approach chose, nearest last: the arm reaches farther down and in from closer.
-const CLOSER_BASES_M: [f32; 2] = [0.7, 0.55];
+pub(super) const CLOSER_BASES_M: [f32; 2] = [0.7, 0.55];
 /// Room between the object and a container's front where the hand starts carrying it in,
 /// metres.
 const INSERT_CLEARANCE_M: f32 = 0.03;
 /// Base poses closer than this (metres) to one already tried are not tried again.
-const SAME_BASE_M: f32 = 0.05;
+pub(super) const SAME_BASE_M: f32 = 0.05;
 /// Free spots closer than this (metres) to one already listed are not listed again.
 const SAME_SPOT_M: f32 = 0.05;
 
@@ -42,7 +42,12 @@ pub fn scene_obstacles(view: &SceneView, skip: &[usize]) -> Obstacles {
 }
 
 /// Adds the collision pieces of `links`, each at its pose moved by `moved` (world).
-fn add_links(obstacles: &mut Obstacles, view: &SceneView, links: &[usize], moved: &Affine3A) {
+pub(super) fn add_links(
+    obstacles: &mut Obstacles,
+    view: &SceneView,
+    links: &[usize],
+    moved: &Affine3A,
+) {
     for &l in links {
         let link = &view.tree.links[l];
         for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
@@ -77,7 +82,7 @@ impl AroundObject {
 }
 
 /// The links of `link`'s subtree (an object and what it carries).
-fn subtree(view: &SceneView, link: usize) -> Vec<usize> {
+pub(super) fn subtree(view: &SceneView, link: usize) -> Vec<usize> {
     (0..view.tree.links.len())
         .filter(|&l| view.descends_from(l, link))
         .collect()
@@ -208,6 +213,7 @@ fn first_grasp_that_works(
                     what: format!("{label} of {id}"),
                     reach: to.configurations,
                     retreat: back.configurations,
+                    part: None,
                 };
                 return Ok(vec![motion, attach]);
             }

@@ -14,6 +14,7 @@ use crate::sim::scene_view::{SceneView, TOUCH_M, closed_value, open_value};
 
 mod arm_motion;
 mod error;
+mod part_motion;
 mod reach;
 
 pub use arm_motion::scene_obstacles;
@@ -26,6 +27,8 @@ use reach::{APPROACH_M, approach, approach_point, drive, nav_goal, navigate, wit
 const SWEEP_STEP: f32 = 0.05;
 /// A door opened as far as it goes must be at least this fraction open.
 const MIN_OPEN_FRACTION: f32 = 0.6;
+/// The base stands within this distance (metres) of a place chosen to work a part from.
+const PLACE_TO_STAND_M: f32 = 0.08;
 
 /// One robot action, as task scripts write it (`{"action": "open", "object": "fridge_1"}`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -134,7 +137,19 @@ pub enum Change {
         what: String,
         reach: Vec<Vec<f32>>,
         retreat: Vec<Vec<f32>>,
+        /// Between the reach and the retreat, the hand on a door's or drawer's handle.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        part: Option<PartFollow>,
     },
+}
+
+/// The hand following a part's handle: the joint of link `link` at `values[k]` while the arm
+/// is at `along[k]`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PartFollow {
+    pub link: String,
+    pub values: Vec<f32>,
+    pub along: Vec<Vec<f32>>,
 }
 
 /// The robot as the tree holds it: its base pose and what hangs from its gripper.
@@ -183,9 +198,17 @@ pub fn attempt(
             object,
             part,
             value,
-        } => move_joint(tree, robot, &state, object, part.as_deref(), Some(*value)),
+        } => move_joint(
+            tree,
+            robot,
+            arm,
+            &state,
+            object,
+            part.as_deref(),
+            Some(*value),
+        ),
         Action::Close { object, part } => {
-            move_joint(tree, robot, &state, object, part.as_deref(), None)
+            move_joint(tree, robot, arm, &state, object, part.as_deref(), None)
         }
         Action::Pick { object } => {
             let (changes, moved) = approach(&view, robot, &state, object)?;
@@ -297,10 +320,13 @@ pub fn attempt(
 
 /// Opens (`open` is `Some(value)`; `Some(None)` as far as it goes) or closes (`None`) a door or
 /// drawer of `object`. The base first steps to where it stands for the doors (in front, out of
-/// their swing) when it is not there; the sweep is checked with the base where it ends.
+/// their swing) when it is not there; the sweep is checked with the base where it ends. With an
+/// arm, the base stands where the arm reaches the handle along its whole path (out of the
+/// part's way: the sweep says), and the hand takes the handle and moves the part.
 fn move_joint(
     tree: &KinematicTree,
     robot: &RobotSpec,
+    arm: Option<&ArmRig>,
     state: &RobotInTree,
     object: &str,
     part: Option<&str>,
@@ -308,38 +334,148 @@ fn move_joint(
 ) -> Result<Vec<Change>, ActionError> {
     let view = SceneView::new(tree);
     let joint = joint_of(&view, object, part)?;
-    let own = view.node_link(object).unwrap_or(0);
-    let goal = nav_goal(&view, robot, object, own);
-    let mut changes = Vec::new();
-    let mut moved = tree.clone();
-    if !goal.is_met(state.base.position) {
-        let (change, after) = drive(&view, robot, state, &goal, APPROACH_M)?
-            .ok_or_else(|| ActionError::NoPlaceToWorkDoors(object.to_string()))?;
-        if let Some(base) = view.link(ROBOT_LINK) {
-            moved.links[base].parent_from_link = after.base.world_from_base();
-        }
-        changes.push(change);
-    }
-    let view = SceneView::new(&moved);
     let name = tree.links[joint].name.clone();
     let from = tree.links[joint].value;
-    let to = match open {
+    let Some(rig) = arm else {
+        let own = view.node_link(object).unwrap_or(0);
+        let goal = nav_goal(&view, robot, object, own);
+        let (mut changes, moved, _) = stand_for_part(&view, robot, state, object, &goal)?;
+        let (to, _) = part_target(&SceneView::new(&moved), joint, open, &[])?;
+        changes.push(Change::SetJoint {
+            link: name,
+            from,
+            to,
+        });
+        return Ok(changes);
+    };
+    if let Some(held) = &state.holding {
+        return Err(ActionError::Holds(held.clone()));
+    }
+    let nominal = match open {
+        Some(Some(v)) => tree.links[joint].joint.clamp(v),
+        // Where it is open enough: the arm may not follow it farther from one place.
+        Some(None) => MIN_OPEN_FRACTION * open_value(tree, joint),
+        None => closed_value(tree, joint),
+    };
+    let places = part_motion::places_to_stand(&view, rig, robot, object, joint, nominal)?;
+    if places.is_empty() {
+        return Err(ActionError::ArmCannot {
+            what: format!("work {name}"),
+            attempts: vec![format!(
+                "no place to stand in front of {object} from which the arm reaches the handle \
+                 along its path and the part misses the base"
+            )],
+        });
+    }
+    let (mut first_error, mut attempts, mut tried) = (None, Vec::new(), Vec::<Vec2>::new());
+    for place in places {
+        let goal = crate::sim::navigation::NavGoal {
+            target: place,
+            reach: PLACE_TO_STAND_M,
+            facing: None,
+            keep_out: Vec::new(),
+        };
+        // The stowed hand is not where the hand is while it works the part: the arm's own
+        // check keeps it clear of the part.
+        let stowed_hand: Vec<usize> = view.link(GRIPPER_LINK).into_iter().collect();
+        let stood = stand_for_part(&view, robot, state, object, &goal).and_then(|stood| {
+            let target = part_target(&SceneView::new(&stood.1), joint, open, &stowed_hand)?;
+            Ok((stood, target))
+        });
+        let ((mut changes, moved, after), (to, least)) = match stood {
+            Ok(found) => found,
+            Err(e) => {
+                first_error.get_or_insert(e);
+                continue;
+            }
+        };
+        let p = after.base.position;
+        if tried
+            .iter()
+            .any(|t| t.distance(p) <= arm_motion::SAME_BASE_M)
+        {
+            continue;
+        }
+        tried.push(p);
+        let view = SceneView::new(&moved);
+        match part_motion::work_part(&view, rig, &after, object, joint, to, least) {
+            Ok(work) => {
+                changes.push(work.motion);
+                changes.push(Change::SetJoint {
+                    link: name,
+                    from,
+                    to: work.reached,
+                });
+                return Ok(changes);
+            }
+            Err(ActionError::ArmCannot { attempts: a, .. }) => {
+                attempts.extend(
+                    a.into_iter()
+                        .map(|r| format!("base at ({:.2}, {:.2}), {r}", p.x, p.y)),
+                );
+            }
+            Err(other) => return Err(other),
+        }
+    }
+    match first_error {
+        Some(e) if attempts.is_empty() => Err(e),
+        _ => Err(ActionError::ArmCannot {
+            what: format!("work {name}"),
+            attempts,
+        }),
+    }
+}
+
+/// The base's step to where it meets `goal` for working `object`'s parts, unless it is there:
+/// the drive (if any), the tree with the base moved, and the robot after it.
+fn stand_for_part(
+    view: &SceneView,
+    robot: &RobotSpec,
+    state: &RobotInTree,
+    object: &str,
+    goal: &crate::sim::navigation::NavGoal,
+) -> Result<(Vec<Change>, KinematicTree, RobotInTree), ActionError> {
+    let mut moved = view.tree.clone();
+    if goal.is_met(state.base.position) {
+        return Ok((Vec::new(), moved, state.clone()));
+    }
+    let (change, after) = drive(view, robot, state, goal, APPROACH_M)?
+        .ok_or_else(|| ActionError::NoPlaceToWorkDoors(object.to_string()))?;
+    if let Some(base) = view.link(ROBOT_LINK) {
+        moved.links[base].parent_from_link = after.base.world_from_base();
+    }
+    Ok((vec![change], moved, after))
+}
+
+/// The value part `joint` moves to (`open` as for [`move_joint`]), its sweep checked in `view`,
+/// and for a door opened as far as it goes, the least value that is open enough.
+fn part_target(
+    view: &SceneView,
+    joint: usize,
+    open: Option<Option<f32>>,
+    ignore: &[usize],
+) -> Result<(f32, Option<f32>), ActionError> {
+    let tree = view.tree;
+    let name = tree.links[joint].name.clone();
+    let from = tree.links[joint].value;
+    match open {
         None | Some(Some(_)) => {
             let target = match open {
                 Some(Some(v)) => tree.links[joint].joint.clamp(v),
                 _ => closed_value(tree, joint),
             };
-            sweep(&view, joint, target).map_err(|(hit, at)| ActionError::WouldHit {
+            sweep(view, joint, target, ignore).map_err(|(hit, at)| ActionError::WouldHit {
                 part: name.clone(),
                 hit,
                 at,
             })?;
-            target
+            Ok((target, None))
         }
         Some(None) => {
             let target = open_value(tree, joint);
-            match sweep(&view, joint, target) {
-                Ok(()) => target,
+            let least = Some(MIN_OPEN_FRACTION * target);
+            match sweep(view, joint, target, ignore) {
+                Ok(()) => Ok((target, least)),
                 Err((hit, at)) => {
                     // As far as it goes, if that is open enough to reach in.
                     let last = at - SWEEP_STEP * (target - from).signum();
@@ -350,17 +486,11 @@ fn move_joint(
                             at,
                         });
                     }
-                    last
+                    Ok((last, least))
                 }
             }
         }
-    };
-    changes.push(Change::SetJoint {
-        link: name,
-        from,
-        to,
-    });
-    Ok(changes)
+    }
 }
 
 /// The moving part `part` of `object` (its main one when `None`).
@@ -384,14 +514,25 @@ fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize,
     }
 }
 
-/// Sweeps joint `joint` from its value to `target`; the first thing the moving part (and what
-/// it carries) hits, with the value, or `Ok`.
-fn sweep(view: &SceneView, joint: usize, target: f32) -> Result<(), (String, f32)> {
+/// Sweeps joint `joint` from its value to `target`, `ignore` left out; the first thing the
+/// moving part (and what it carries) hits, with the value, or `Ok`.
+fn sweep(
+    view: &SceneView,
+    joint: usize,
+    target: f32,
+    ignore: &[usize],
+) -> Result<(), (String, f32)> {
     let tree = view.tree;
     let from = tree.links[joint].value;
     let steps = ((target - from).abs() / SWEEP_STEP).ceil().max(1.0) as usize;
     let solids: Vec<LinkSolids> = (0..tree.links.len())
-        .map(|i| LinkSolids::of(tree, i))
+        .map(|i| {
+            if ignore.contains(&i) {
+                LinkSolids::none()
+            } else {
+                LinkSolids::of(tree, i)
+            }
+        })
         .collect();
     let mut pose = SweepPose::new(tree, &solids, joint, &[]);
     // What already touches at the start (a door against its own frame) is contact.

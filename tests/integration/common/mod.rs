@@ -39,6 +39,19 @@ pub fn iscene(args: &[&str], cwd: &Path) -> (i32, String, String) {
     )
 }
 
+/// `iscene simulate GT --task TASK --out OUT [--robot ROBOT]` from the project's root: exit
+/// code, stdout, stderr.
+pub fn simulate(gt: &Path, task: &Path, out: &Path, robot: Option<&Path>) -> (i32, String, String) {
+    let mut args = vec![gt, Path::new("--task"), task, Path::new("--out"), out];
+    if let Some(robot) = robot {
+        args.extend([Path::new("--robot"), robot]);
+    }
+    let args: Vec<&str> = std::iter::once("simulate")
+        .chain(args.iter().map(|a| a.to_str().expect("utf8")))
+        .collect();
+    iscene(&args, &root())
+}
+
 /// The scene specifications shipped in scenes/.
 pub fn scene_specs() -> Vec<PathBuf> {
     let mut specs: Vec<PathBuf> = std::fs::read_dir(root().join("scenes"))
