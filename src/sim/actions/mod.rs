@@ -357,7 +357,12 @@ fn move_joint(
         Some(None) => MIN_OPEN_FRACTION * open_value(tree, joint),
         None => closed_value(tree, joint),
     };
-    let places = part_motion::places_to_stand(&view, rig, robot, object, joint, nominal)?;
+    let farthest = match open {
+        Some(None) => open_value(tree, joint),
+        _ => nominal,
+    };
+    let places =
+        part_motion::places_to_stand(&view, rig, robot, object, joint, (nominal, farthest))?;
     if places.is_empty() {
         return Err(ActionError::ArmCannot {
             what: format!("work {name}"),

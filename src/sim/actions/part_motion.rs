@@ -420,16 +420,18 @@ const MAX_STANDS: usize = 6;
 const COMFORTABLE_SPAN: f32 = 0.85;
 
 /// Where the base may stand (x, y) for the arm to move part `joint` of `object` from its value
-/// to `to`, best first: around the middle of the handle's path, in front of the object, where
-/// the arm's shoulder is comfortably within reach of the handle at the start, the middle and
-/// the end of the path; those nearest to all three first.
+/// to `to`, best first: around the middle of the handle's path, in front of the object, out
+/// of the part's way to `to`, where the arm's shoulder is comfortably within reach of the
+/// handle at the start, the middle and the end of the path. Those out of the part's way on to
+/// `farthest` (a part opened as far as it goes) come first, so that it can open farther; then
+/// those nearest to the handle's whole path.
 pub(super) fn places_to_stand(
     view: &SceneView,
     rig: &ArmRig,
     robot: &RobotSpec,
     object: &str,
     joint: usize,
-    to: f32,
+    (to, farthest): (f32, f32),
 ) -> Result<Vec<glam::Vec2>, ActionError> {
     let (_, [part_from_tool, _]) = part_grip(view, object, joint)?;
     let from = view.tree.links[joint].value;
@@ -451,7 +453,13 @@ pub(super) fn places_to_stand(
     let span = arm_span(rig, shoulder_link);
     let middle = path[1].truncate();
     let swept = swept_footprint(view, joint, to, robot.height);
-    let mut places: Vec<(f32, glam::Vec2)> = STAND_DISTANCES_M
+    let swept_on = swept_footprint(view, joint, farthest, robot.height);
+    let clear_of = |swept: &[glam::Vec2], p: glam::Vec2| {
+        swept
+            .iter()
+            .all(|s| s.distance(p) > robot.radius + SWEEP_CLEARANCE_M)
+    };
+    let mut places: Vec<((bool, f32), glam::Vec2)> = STAND_DISTANCES_M
         .iter()
         .flat_map(|&d| {
             (0..STAND_DIRECTIONS).map(move |k| {
@@ -460,18 +468,14 @@ pub(super) fn places_to_stand(
             })
         })
         .filter(|p| (*p - closed.truncate()).dot(outward) >= robot.radius + 0.1)
-        .filter(|p| {
-            swept
-                .iter()
-                .all(|s| s.distance(*p) > robot.radius + SWEEP_CLEARANCE_M)
-        })
+        .filter(|p| clear_of(&swept, *p))
         .filter_map(|p| {
             let over = shoulder + p.extend(0.0);
-            let farthest = path.iter().map(|h| h.distance(over)).fold(0.0, f32::max);
-            (farthest <= COMFORTABLE_SPAN * span).then_some((farthest, p))
+            let reach = path.iter().map(|h| h.distance(over)).fold(0.0, f32::max);
+            (reach <= COMFORTABLE_SPAN * span).then_some(((!clear_of(&swept_on, p), reach), p))
         })
         .collect();
-    places.sort_by(|a, b| a.0.total_cmp(&b.0));
+    places.sort_by(|a, b| a.0.0.cmp(&b.0.0).then(a.0.1.total_cmp(&b.0.1)));
     Ok(places
         .into_iter()
         .take(MAX_STANDS)
