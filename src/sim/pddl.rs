@@ -80,3 +80,33 @@ pub fn problem(name: &str, scene: &SymbolicScene, goal: &[Fact]) -> String {
         goal.join(" ")
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The operator `name` of `domain`, up to the next one.
+    fn operator<'a>(domain: &'a str, name: &str) -> &'a str {
+        let start = domain
+            .find(&format!("(:action {name}\n"))
+            .expect("operator");
+        let rest = &domain[start + 1..];
+        &domain[start..start + 1 + rest.find("(:action").unwrap_or(rest.len())]
+    }
+
+    #[test]
+    fn open_and_close_need_the_hand_empty_only_when_the_hand_works_them() {
+        for name in ["open", "close"] {
+            assert!(!operator(&domain(false), name).contains("(hand-empty)"));
+            assert!(operator(&domain(true), name).contains("(hand-empty))\n    :effect"));
+        }
+        // Nothing else changes.
+        assert_eq!(
+            domain(true).replace(
+                " (hand-empty))\n    :effect (and (is-",
+                ")\n    :effect (and (is-"
+            ),
+            domain(false)
+        );
+    }
+}
