@@ -9,6 +9,7 @@ use parry3d::shape::ConvexPolyhedron;
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, GraspKind, PREGRASP_M, grasps};
 use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat};
+use crate::sim::actions::error::ArmTries;
 use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
 use crate::sim::navigation::NavGoal;
@@ -399,14 +400,13 @@ pub(super) fn place_on_some_spot(
     ignore: &[usize],
 ) -> Result<Vec<Change>, ActionError> {
     let around = AroundObject::new(view, link);
-    let mut attempts = Vec::new();
-    let mut first_error = None;
+    let mut tries = ArmTries::default();
     for spot in free_spots(view, link, surface, first, ignore) {
         let target = spot.translation.truncate();
         let (changes, moved) = match approach_point(view, robot, state, target, surface) {
             Ok(found) => found,
             Err(e) => {
-                first_error.get_or_insert(e);
+                tries.unreached(e);
                 continue;
             }
         };
@@ -424,21 +424,11 @@ pub(super) fn place_on_some_spot(
         };
         match from_some_base(view, robot, state, (changes, moved), target, &place) {
             Ok(changes) => return Ok(changes),
-            Err(ActionError::ArmCannot { attempts: a, .. }) => attempts.extend(
-                a.into_iter()
-                    .map(|r| format!("spot ({:.2}, {:.2}), {r}", target.x, target.y)),
-            ),
-            Err(other) => return Err(other),
+            Err(e) => tries.failed(&format!("spot ({:.2}, {:.2})", target.x, target.y), e)?,
         }
     }
-    match first_error {
-        // The base reached no spot: that is the reason, not the arm.
-        Some(e) if attempts.is_empty() => Err(e),
-        _ => Err(ActionError::ArmCannot {
-            what: format!("place {object} on {surface}"),
-            attempts,
-        }),
-    }
+    // When the base reached no spot, that is the reason, not the arm.
+    Err(tries.error(Some(format!("place {object} on {surface}"))))
 }
 
 /// Free spots for `link` on `surface`: `first`, then the ones nearest the surface's middle and
@@ -502,27 +492,21 @@ pub(super) fn from_some_base(
             bases.push((vec![change], moved));
         }
     }
-    let mut what = String::new();
-    let mut attempts = Vec::new();
+    let mut tries = ArmTries::default();
     for (mut changes, moved) in bases {
         match motion(&moved) {
             Ok(motion) => {
                 changes.extend(motion);
                 return Ok(changes);
             }
-            Err(ActionError::ArmCannot {
-                what: w,
-                attempts: a,
-            }) => {
-                what = w;
-                let p = moved.base.position;
-                attempts.extend(
-                    a.into_iter()
-                        .map(|r| format!("base at ({:.2}, {:.2}), {r}", p.x, p.y)),
-                );
-            }
-            Err(other) => return Err(other),
+            Err(e) => tries.failed(&base_words(&moved), e)?,
         }
     }
-    Err(ActionError::ArmCannot { what, attempts })
+    Err(tries.error(None))
+}
+
+/// Where the base of `robot` stands, in words for a failure's reason.
+pub(super) fn base_words(robot: &RobotInTree) -> String {
+    let p = robot.base.position;
+    format!("base at ({:.2}, {:.2})", p.x, p.y)
 }

@@ -74,3 +74,45 @@ pub enum ActionError {
     #[error("the arm cannot {what}: {}", attempts.join("; "))]
     ArmCannot { what: String, attempts: Vec<String> },
 }
+
+/// The arm's failures from several places (base poses, spots), each reason with its place, and
+/// the first reason the base got to none of them.
+#[derive(Default)]
+pub(super) struct ArmTries {
+    what: String,
+    attempts: Vec<String>,
+    unreached: Option<ActionError>,
+}
+
+impl ArmTries {
+    /// The base could not get to a place; the first such reason is kept.
+    pub fn unreached(&mut self, e: ActionError) {
+        self.unreached.get_or_insert(e);
+    }
+
+    /// The arm's failure from the place `at` (in words) is recorded; any other error is not the
+    /// arm's and comes back.
+    pub fn failed(&mut self, at: &str, e: ActionError) -> Result<(), ActionError> {
+        match e {
+            ActionError::ArmCannot { what, attempts } => {
+                self.what = what;
+                self.attempts
+                    .extend(attempts.into_iter().map(|r| format!("{at}, {r}")));
+                Ok(())
+            }
+            other => Err(other),
+        }
+    }
+
+    /// Why nothing worked: the base's reason when the arm was tried nowhere, else the arm's
+    /// attempts at `what` (the failures' own words when `None`).
+    pub fn error(self, what: Option<String>) -> ActionError {
+        match self.unreached {
+            Some(e) if self.attempts.is_empty() => e,
+            _ => ActionError::ArmCannot {
+                what: what.unwrap_or(self.what),
+                attempts: self.attempts,
+            },
+        }
+    }
+}

@@ -19,6 +19,7 @@ mod reach;
 
 pub use arm_motion::scene_obstacles;
 pub use error::ActionError;
+use error::ArmTries;
 pub use reach::nav_grid;
 use reach::{APPROACH_M, approach, approach_point, drive, nav_goal, navigate, within_reach};
 
@@ -372,7 +373,7 @@ fn move_joint(
             )],
         });
     }
-    let (mut first_error, mut attempts, mut tried) = (None, Vec::new(), Vec::<Vec2>::new());
+    let (mut tries, mut tried) = (ArmTries::default(), Vec::<Vec2>::new());
     for place in places {
         let goal = crate::sim::navigation::NavGoal {
             target: place,
@@ -390,7 +391,7 @@ fn move_joint(
         let ((mut changes, moved, after), (to, least)) = match stood {
             Ok(found) => found,
             Err(e) => {
-                first_error.get_or_insert(e);
+                tries.unreached(e);
                 continue;
             }
         };
@@ -413,22 +414,10 @@ fn move_joint(
                 });
                 return Ok(changes);
             }
-            Err(ActionError::ArmCannot { attempts: a, .. }) => {
-                attempts.extend(
-                    a.into_iter()
-                        .map(|r| format!("base at ({:.2}, {:.2}), {r}", p.x, p.y)),
-                );
-            }
-            Err(other) => return Err(other),
+            Err(e) => tries.failed(&arm_motion::base_words(&after), e)?,
         }
     }
-    match first_error {
-        Some(e) if attempts.is_empty() => Err(e),
-        _ => Err(ActionError::ArmCannot {
-            what: format!("work {name}"),
-            attempts,
-        }),
-    }
+    Err(tries.error(Some(format!("work {name}"))))
 }
 
 /// The base's step to where it meets `goal` for working `object`'s parts, unless it is there:
