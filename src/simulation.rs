@@ -108,7 +108,7 @@ pub fn simulation_app(
         || (spec.base_from_gripper(), spec.gripper_mesh()),
         |rig| (rig.base_from_stowed_tool(), rig.arm.hand_mesh()),
     );
-    spawn_robot(world, spec, pose, gripper)?;
+    spawn_robot(world, spec, pose, gripper, rig.as_ref())?;
     if let Some(rig) = rig {
         app.insert_resource(RobotArm(std::sync::Arc::new(rig)));
     }
@@ -335,10 +335,15 @@ fn check_steps_name_movable_nodes(task: &Task, graph: &ContactGraph) -> Result<(
     Ok(())
 }
 
-/// The world of the scene in `dir` with the task's robot at its start, and the actions to run
-/// (the task's own steps, or the planner's plan for its goals): what the viewer plays.
-pub fn task_world(dir: &Path, task_path: &Path) -> Result<(Vec<Action>, App), IsceneError> {
-    let (prepared, app) = prepare(dir, task_path, None)?;
+/// The world of the scene in `dir` with the task's robot at its start (carrying `arm`, if
+/// any), and the actions to run (the task's own steps, or the planner's plan for its goals):
+/// what the viewer plays.
+pub fn task_world(
+    dir: &Path,
+    task_path: &Path,
+    arm: Option<&Arm>,
+) -> Result<(Vec<Action>, App), IsceneError> {
+    let (prepared, app) = prepare(dir, task_path, arm)?;
     Ok((prepared.actions, app))
 }
 

@@ -154,6 +154,11 @@ impl ArmRig {
     pub fn base_from_stowed_tool(&self) -> Affine3A {
         self.base_from_root * self.arm.tool_pose(&Affine3A::IDENTITY, &self.stow)
     }
+
+    /// Every link's pose in the base's frame with the arm stowed, fingers open.
+    pub fn stowed_link_poses(&self) -> Vec<Affine3A> {
+        self.arm.link_poses(&self.base_from_root, &self.stow, 1.0)
+    }
 }
 
 /// An object in the hand: its convex pieces in the tool's frame.

@@ -9,8 +9,9 @@
 //! part of its model is a child entity with a `ModelPart`, a `LinkBody`, a `Joint` and the
 //! `ListedPart` the contact graph lists it as. Support
 //! is Bevy's `ChildOf`: the parent supports the child, and the child's `Joint` says how it may
-//! move relative to it. A proximal pair is an entity of its own, related to both ends
-//! (`ProximalEndA`, `ProximalEndB`).
+//! move relative to it. A robot with an arm has a `RobotArmLink` entity per link of the arm.
+//! A proximal pair is an entity of its own, related to both ends (`ProximalEndA`,
+//! `ProximalEndB`).
 
 pub mod cad_candidates;
 pub mod cad_model;
@@ -23,6 +24,7 @@ pub mod oriented_box;
 pub mod panoptic;
 pub mod perceived_front;
 pub mod proximal;
+pub mod robot_arm_link;
 pub mod segment_mesh;
 pub mod sighted_outline;
 pub mod surface_planes;
@@ -41,6 +43,7 @@ pub use proximal::{
     ProximalEndA, ProximalEndB, ProximalPairQuery, ProximalPairsAsA, ProximalPairsAsB,
     proximal_partners,
 };
+pub use robot_arm_link::RobotArmLink;
 pub use segment_mesh::SegmentMesh;
 pub use sighted_outline::SightedOutline;
 pub use surface_planes::SurfacePlanes;

@@ -4,6 +4,7 @@
 //! in the ECS.
 
 pub mod actions;
+pub mod arm_phases;
 pub mod graph_sync;
 pub mod motion_path;
 pub mod navigation;

@@ -67,7 +67,7 @@ pub fn joint_seconds(kind: JointKind, from: f32, to: f32) -> f32 {
 }
 
 /// Seconds a change's motion takes at the robot's speeds (`None` for one without motion: an
-/// attachment happens at once, the arm not being modelled).
+/// attachment happens at once; an arm's motion is timed by `sim::arm_phases`).
 pub fn motion_seconds(tree: &KinematicTree, change: &Change) -> Option<f32> {
     match change {
         Change::MoveBase {

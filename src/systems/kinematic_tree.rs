@@ -18,7 +18,8 @@ use rayon::prelude::*;
 use crate::cad::db::database::CadDatabase;
 use crate::cad::model_parts::{attach_handles, model_parts};
 use crate::components::{
-    CadModel, Joint, LinkBody, ListedPart, ModelPart, Panoptic, PerceivedFront, SceneEntity,
+    CadModel, Joint, LinkBody, ListedPart, ModelPart, Panoptic, PerceivedFront, RobotArmLink,
+    SceneEntity,
 };
 use crate::error::IsceneError;
 use crate::graph::ContactGraph;
@@ -184,7 +185,11 @@ pub fn read_kinematic_tree_entities(
         .next()
         .ok_or(ReadTreeError::NoSceneRoot)?;
     let mut children_of: HashMap<Entity, Vec<(String, Entity)>> = HashMap::new();
-    for (e, parent, name) in world.query::<(Entity, &ChildOf, &Name)>().iter(world) {
+    // The arm's links are the robot's, not the scene's: the trace has their motions.
+    for (e, parent, name) in world
+        .query_filtered::<(Entity, &ChildOf, &Name), Without<RobotArmLink>>()
+        .iter(world)
+    {
         children_of
             .entry(parent.parent())
             .or_default()

@@ -14,6 +14,8 @@ use bevy_rapier3d::prelude::*;
 use glam::Affine3A;
 use serde::Serialize;
 
+use crate::arm::reach::ArmRig;
+use crate::components::RobotArmLink;
 use crate::geometry::mesh::box_corners;
 use crate::kinematics::contact_pieces::contact_pieces;
 use crate::kinematics::rest_test::{
@@ -21,7 +23,8 @@ use crate::kinematics::rest_test::{
 };
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::motion_path::LinkMotion;
-use crate::systems::physics_validation::{attach_bodies, scratch_world};
+use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK};
+use crate::systems::physics_validation::{BodyMaking, attach_bodies, scratch_world};
 use crate::systems::rapier_session::RapierSession;
 
 /// An object moved farther than this (metres) or turned more than `KNOCK_TURN_DEG` was knocked.
@@ -40,6 +43,12 @@ const SWEEP_SAMPLES: usize = 24;
 const MOVER_GROUP: Group = Group::GROUP_2;
 const OWNER_GROUP: Group = Group::GROUP_3;
 
+/// The arm going deeper than this (metres) into the scene refuses the motion.
+pub const MAX_ARM_DEPTH_M: f32 = 0.005;
+
+/// The arm's links' collision group: they touch everything but each other.
+const ARM_GROUP: Group = Group::GROUP_4;
+
 /// An object the motion moved.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Knocked {
@@ -48,10 +57,23 @@ pub struct Knocked {
     pub turned_deg: f32,
 }
 
+/// How deep the arm went into the scene along a motion: rapier's deepest contact between one
+/// of its links and a link of the scene (the robot's own and what moves with the hand left out).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ArmDepth {
+    /// Metres; 0 when nothing of the arm came within rapier's contact distance.
+    pub depth_m: f32,
+    /// The arm's link and the scene's link of that contact.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_link: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub into: Option<String>,
+}
+
 /// What one motion did to the objects around it.
 #[derive(Clone, Debug, Serialize)]
 pub struct MotionCheck {
-    /// The moving link.
+    /// The moving link (or the arm motion's phase).
     pub link: String,
     /// Simulated seconds: the motion and its aftermath.
     pub simulated_s: f32,
@@ -59,7 +81,33 @@ pub struct MotionCheck {
     pub near: Vec<String>,
     /// Those it moved more than 1 cm or turned more than 5 degrees.
     pub knocked: Vec<Knocked>,
+    /// For an arm's motion, how deep it went into the scene.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_depth: Option<ArmDepth>,
     pub wall_ms: f64,
+}
+
+/// What moves in one check: links of the tree driven along world poses (each with what hangs
+/// from it), and the arm's links, all at the same instants `REST_STEP_S` apart.
+pub struct Movers<'a> {
+    /// The motion in words, for the check's record.
+    pub name: String,
+    pub links: &'a [(usize, Vec<Affine3A>)],
+    /// Moving links whose own collision pieces take no part (the gripper's stand-in hand).
+    pub hidden: &'a [usize],
+    /// Links whose bodies are simulated with their hollows (what the hand goes into).
+    pub hollow: &'a [usize],
+    /// The arm and its links' world poses at each instant (`arm.1[k][l]`).
+    pub arm: Option<(&'a ArmRig, &'a [Vec<Affine3A>])>,
+}
+
+impl Movers<'_> {
+    fn instants(&self) -> usize {
+        self.arm
+            .map(|(_, poses)| poses.len())
+            .or(self.links.first().map(|(_, poses)| poses.len()))
+            .unwrap_or(0)
+    }
 }
 
 /// Drives `motion.link` (with everything under it in `tree`) along `motion` in rapier, the
@@ -80,24 +128,70 @@ pub fn simulate_motion_on(
     entities: &[Entity],
     motion: &LinkMotion,
 ) -> MotionCheck {
-    let started = Instant::now();
     debug_assert!((motion.step_s - REST_STEP_S).abs() < 1e-6);
+    let links = [(motion.link, motion.world_from_link.clone())];
+    let movers = Movers {
+        name: tree.links[motion.link].name.clone(),
+        links: &links,
+        hidden: &[],
+        hollow: &[],
+        arm: None,
+    };
+    simulate_movers_on(world, tree, entities, &movers)
+}
+
+/// `movers` driven in rapier among the bodies of `tree` (on `entities` of `world`), the objects
+/// near their paths free; what they moved, and how deep the arm went into the scene. The arm's
+/// links are the world's `RobotArmLink` entities (spawned for the check when the world has
+/// none: a scratch world). The world is left as it was.
+pub fn simulate_movers_on(
+    world: &mut World,
+    tree: &KinematicTree,
+    entities: &[Entity],
+    movers: &Movers,
+) -> MotionCheck {
+    let started = Instant::now();
     let n = tree.links.len();
-    // Links come after their parents: one pass marks the moving subtree.
-    let mut moving = vec![false; n];
-    for i in 0..n {
-        moving[i] = i == motion.link || tree.links[i].parent.is_some_and(|p| moving[p]);
-    }
+    let moving: Vec<bool> = (0..n)
+        .map(|i| movers.links.iter().any(|(l, _)| tree.descends_from(i, *l)))
+        .collect();
     let mut bodies = rest_bodies(tree);
-    let owner = bodies
-        .iter()
-        .position(|b| b.dynamic && b.links.contains(&motion.link))
-        .filter(|&b| !moving[bodies[b].links[0]]);
+    // The dynamic bodies a moving link belongs to without moving themselves (a door's cabinet).
+    let owners: Vec<usize> = (0..bodies.len())
+        .filter(|&b| {
+            bodies[b].dynamic
+                && !moving[bodies[b].links[0]]
+                && movers
+                    .links
+                    .iter()
+                    .any(|(l, _)| bodies[b].links.contains(l))
+        })
+        .collect();
     for body in &mut bodies {
         body.links.retain(|&l| !moving[l]);
     }
     let poses = tree.world_from_links();
-    let swept = swept_bounds(tree, &moving, &poses, motion);
+    let arm_bodies = movers
+        .arm
+        .map(|(rig, _)| arm_colliders(rig))
+        .unwrap_or_default();
+    let swept = movers
+        .links
+        .iter()
+        .map(|(l, path)| {
+            let under: Vec<bool> = (0..n)
+                .map(|i| tree.descends_from(i, *l) && !movers.hidden.contains(&i))
+                .collect();
+            swept_bounds(tree, &under, &poses, *l, path)
+        })
+        .chain(
+            movers
+                .arm
+                .map(|(_, path)| arm_swept_bounds(&arm_bodies, path)),
+        )
+        .fold((Vec3::MAX, Vec3::MIN), |(a, b), (lo, hi)| {
+            (a.min(lo), b.max(hi))
+        });
     let mut body_of = vec![0; n];
     for (b, body) in bodies.iter().enumerate() {
         for &l in &body.links {
@@ -125,37 +219,94 @@ pub fn simulate_motion_on(
 
     let mut session = RapierSession::begin(world);
     let owner_groups = |b: usize| {
-        (Some(b) == owner).then(|| CollisionGroups::new(OWNER_GROUP, Group::ALL ^ MOVER_GROUP))
+        owners
+            .contains(&b)
+            .then(|| CollisionGroups::new(OWNER_GROUP, Group::ALL ^ MOVER_GROUP))
     };
-    let (starts, on) = attach_bodies(
-        &mut session,
-        world,
-        tree,
-        entities,
-        &bodies,
-        &frozen,
-        &owner_groups,
-    );
-    let start = motion.world_from_link[0];
-    let mover = mover_collider(tree, &moving, &poses, start).map(|collider| {
-        let mover = entities[motion.link];
-        session.attach(
-            world,
-            mover,
-            start,
-            (
-                RigidBody::KinematicPositionBased,
-                collider,
-                CollisionGroups::new(MOVER_GROUP, Group::ALL ^ OWNER_GROUP),
-            ),
-        );
-        mover
-    });
-    for pose in &motion.world_from_link[1..] {
-        if let Some(mover) = mover {
-            session.drive(world, mover, *pose);
+    let making = BodyMaking {
+        frozen: &frozen,
+        groups: &owner_groups,
+        hollow: movers.hollow,
+    };
+    let (starts, on) = attach_bodies(&mut session, world, tree, entities, &bodies, &making);
+    let mut driven: Vec<(Entity, &[Affine3A])> = Vec::new();
+    for (l, path) in movers.links {
+        let under: Vec<bool> = (0..n)
+            .map(|i| tree.descends_from(i, *l) && !movers.hidden.contains(&i))
+            .collect();
+        if let Some(collider) = mover_collider(tree, &under, &poses, path[0]) {
+            session.attach(
+                world,
+                entities[*l],
+                path[0],
+                (
+                    RigidBody::KinematicPositionBased,
+                    collider,
+                    CollisionGroups::new(MOVER_GROUP, Group::ALL ^ OWNER_GROUP),
+                ),
+            );
+            driven.push((entities[*l], path));
+        }
+    }
+    let (arm_entities, spawned) = arm_entities(world, &arm_bodies);
+    if let Some((_, path)) = movers.arm {
+        for (body, &entity) in arm_bodies.iter().zip(&arm_entities) {
+            session.attach(
+                world,
+                entity,
+                path[0][body.link],
+                (
+                    RigidBody::KinematicPositionBased,
+                    body.collider.clone(),
+                    CollisionGroups::new(ARM_GROUP, Group::ALL ^ ARM_GROUP),
+                    // Contacts with fixed bodies too: they are what the depth is measured on.
+                    ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_STATIC,
+                ),
+            );
+        }
+    }
+    // What the arm may touch without it counting: the robot's own links and what moves.
+    let not_scene: Vec<Entity> = (0..n)
+        .filter(|&l| {
+            let robot =
+                |l: usize| [ROBOT_LINK, GRIPPER_LINK].contains(&tree.links[l].name.as_str());
+            moving[l] || robot(l) || tree.links[l].parent.is_some_and(robot)
+        })
+        .map(|l| entities[l])
+        .collect();
+    let mut depth = ArmDepth {
+        depth_m: 0.0,
+        arm_link: None,
+        into: None,
+    };
+    let instants = movers.instants();
+    for k in 1..instants {
+        for (entity, path) in &driven {
+            session.drive(world, *entity, path[k]);
+        }
+        let Some((rig, path)) = movers.arm else {
+            session.step(world);
+            continue;
+        };
+        for (body, &entity) in arm_bodies.iter().zip(&arm_entities) {
+            session.drive(world, entity, path[k][body.link]);
         }
         session.step(world);
+        for (arm, other, least) in session.contacts(world, &arm_entities) {
+            if -least <= depth.depth_m || not_scene.contains(&other) {
+                continue;
+            }
+            let name_of = |e: Entity, of: &[Entity], names: &dyn Fn(usize) -> String| {
+                of.iter().position(|&o| o == e).map(names)
+            };
+            depth = ArmDepth {
+                depth_m: -least,
+                arm_link: name_of(arm, &arm_entities, &|b| {
+                    rig.arm.links[arm_bodies[b].link].name.clone()
+                }),
+                into: name_of(other, entities, &|l| tree.links[l].name.clone()),
+            };
+        }
     }
     let aftermath = (AFTERMATH_S / REST_STEP_S).round() as usize;
     for _ in 0..aftermath {
@@ -182,16 +333,82 @@ pub fn simulate_motion_on(
         }
     }
     session.end(world);
+    if spawned {
+        for entity in arm_entities {
+            world.despawn(entity);
+        }
+    }
     knocked.sort_by(|a, b| a.object.cmp(&b.object));
     MotionCheck {
-        link: tree.links[motion.link].name.clone(),
-        simulated_s: (motion.world_from_link.len() - 1 + aftermath) as f32 * REST_STEP_S,
+        link: movers.name.clone(),
+        simulated_s: (instants.saturating_sub(1) + aftermath) as f32 * REST_STEP_S,
         near: (0..bodies.len())
             .filter(|&b| near[b])
             .map(|b| bodies[b].name.clone())
             .collect(),
         knocked,
+        arm_depth: movers.arm.is_some().then_some(depth),
         wall_ms: started.elapsed().as_secs_f64() * 1e3,
+    }
+}
+
+/// One of the arm's links as a body: its pieces as one collider in its frame, and their box.
+struct ArmBody {
+    link: usize,
+    collider: Collider,
+    bounds: (Vec3, Vec3),
+}
+
+/// The arm's links that have collision pieces, as bodies.
+fn arm_colliders(rig: &ArmRig) -> Vec<ArmBody> {
+    rig.arm
+        .links
+        .iter()
+        .enumerate()
+        .filter_map(|(link, l)| {
+            let pieces: Vec<(Vec3, Quat, Collider)> = l
+                .pieces
+                .iter()
+                .filter_map(|piece| Collider::convex_hull(&piece.positions))
+                .map(|c| (Vec3::ZERO, Quat::IDENTITY, c))
+                .collect();
+            let bounds = l
+                .pieces
+                .iter()
+                .flat_map(|piece| piece.positions.iter())
+                .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| {
+                    (lo.min(*p), hi.max(*p))
+                });
+            (!pieces.is_empty()).then(|| ArmBody {
+                link,
+                collider: Collider::compound(pieces),
+                bounds,
+            })
+        })
+        .collect()
+}
+
+/// The world's entities of the arm's links `bodies` (their `RobotArmLink`s), or new ones when
+/// the world has not got them all (a scratch world); whether they were spawned.
+fn arm_entities(world: &mut World, bodies: &[ArmBody]) -> (Vec<Entity>, bool) {
+    let own: Vec<(Entity, usize)> = world
+        .query::<(Entity, &RobotArmLink)>()
+        .iter(world)
+        .map(|(e, l)| (e, l.0))
+        .collect();
+    let found: Option<Vec<Entity>> = bodies
+        .iter()
+        .map(|b| own.iter().find(|(_, o)| *o == b.link).map(|(e, _)| *e))
+        .collect();
+    match found {
+        Some(entities) => (entities, false),
+        None => (
+            bodies
+                .iter()
+                .map(|b| world.spawn(RobotArmLink(b.link)).id())
+                .collect(),
+            true,
+        ),
     }
 }
 
@@ -257,9 +474,10 @@ fn swept_bounds(
     tree: &KinematicTree,
     moving: &[bool],
     poses: &[Affine3A],
-    motion: &LinkMotion,
+    link: usize,
+    path: &[Affine3A],
 ) -> (Vec3, Vec3) {
-    let mover_from_world = poses[motion.link].inverse();
+    let mover_from_world = poses[link].inverse();
     let local: Vec<(Affine3A, Vec3, Vec3)> = (0..tree.links.len())
         .filter(|&l| moving[l])
         .filter_map(|l| {
@@ -267,13 +485,9 @@ fn swept_bounds(
             Some((mover_from_world * poses[l], lo, hi))
         })
         .collect();
-    let last = motion.world_from_link.len() - 1;
-    let stride = (last / SWEEP_SAMPLES).max(1);
-    (0..=last)
-        .step_by(stride)
-        .chain(std::iter::once(last))
+    sampled(path.len())
         .flat_map(|k| {
-            let world_from_mover = motion.world_from_link[k];
+            let world_from_mover = path[k];
             local.iter().map(move |(mover_from_link, lo, hi)| {
                 world_box(world_from_mover * *mover_from_link, *lo, *hi)
             })
@@ -281,6 +495,27 @@ fn swept_bounds(
         .fold((Vec3::MAX, Vec3::MIN), |(a, b), (lo, hi)| {
             (a.min(lo), b.max(hi))
         })
+}
+
+/// The world box the arm's links `bodies` pass through along `path` (`path[k][l]`).
+fn arm_swept_bounds(bodies: &[ArmBody], path: &[Vec<Affine3A>]) -> (Vec3, Vec3) {
+    sampled(path.len())
+        .flat_map(|k| {
+            bodies
+                .iter()
+                .map(move |b| world_box(path[k][b.link], b.bounds.0, b.bounds.1))
+        })
+        .fold((Vec3::MAX, Vec3::MIN), |(a, b), (lo, hi)| {
+            (a.min(lo), b.max(hi))
+        })
+}
+
+/// The instants of a path of `len` at which its swept volume is sampled: [`SWEEP_SAMPLES`]
+/// spread along it, and its end.
+fn sampled(len: usize) -> impl Iterator<Item = usize> {
+    let last = len.saturating_sub(1);
+    let stride = (last / SWEEP_SAMPLES).max(1);
+    (0..=last).step_by(stride).chain(std::iter::once(last))
 }
 
 /// Whether two boxes come within `margin` of each other.
@@ -392,6 +627,82 @@ mod tests {
         let far = scene(Vec3::new(-0.3, -1.0, 0.0));
         let check = simulate_motion(&far, &slide(&far, Vec3::X * 1.2));
         assert!(!check.near.contains(&"bottle_1".to_string()), "{check:?}");
+    }
+
+    /// A two-link arm whose forearm is a 1 m bar 10 cm thick, and a path of that forearm
+    /// (the other links have no pieces) from `from` to `to` in one second.
+    fn bar_arm() -> ArmRig {
+        let mut arm = crate::arm::tests::two_link_arm();
+        arm.links[2].pieces = vec![TriMesh::cuboid(
+            Vec3::new(0.0, -0.05, -0.05),
+            Vec3::new(1.0, 0.05, 0.05),
+        )];
+        ArmRig::new(arm, 0.5)
+    }
+
+    fn bar_path(rig: &ArmRig, from: Vec3, to: Vec3) -> Vec<Vec<Affine3A>> {
+        let steps = (1.0 / REST_STEP_S).round() as usize;
+        (0..=steps)
+            .map(|k| {
+                let mut poses = vec![Affine3A::IDENTITY; rig.arm.links.len()];
+                poses[2] = Affine3A::from_translation(from.lerp(to, k as f32 / steps as f32));
+                poses
+            })
+            .collect()
+    }
+
+    fn arm_check(tree: &KinematicTree, rig: &ArmRig, path: &[Vec<Affine3A>]) -> MotionCheck {
+        let (mut world, entities) = scratch_world(tree);
+        let movers = Movers {
+            name: "arm".into(),
+            links: &[],
+            hidden: &[],
+            hollow: &[],
+            arm: Some((rig, path)),
+        };
+        let check = simulate_movers_on(&mut world, tree, &entities, &movers);
+        // The arm's bodies were spawned for the check and are gone again.
+        assert_eq!(world.query::<&RobotArmLink>().iter(&world).count(), 0);
+        check
+    }
+
+    #[test]
+    fn an_arm_link_lowered_into_the_floor_goes_in_as_deep_as_it_went_and_one_above_it_does_not() {
+        let tree = scene(Vec3::new(1.5, 1.5, 0.0));
+        let rig = bar_arm();
+        // The bar's underside from 25 cm down to 1 cm into the floor, away from everything.
+        let into = bar_path(&rig, Vec3::new(0.5, -2.0, 0.3), Vec3::new(0.5, -2.0, 0.04));
+        let check = arm_check(&tree, &rig, &into);
+        let depth = check
+            .arm_depth
+            .clone()
+            .expect("an arm's check measures depth");
+        assert!((depth.depth_m - 0.01).abs() < 0.002, "{check:?}");
+        assert_eq!(depth.arm_link.as_deref(), Some("fore"));
+        assert_eq!(depth.into.as_deref(), Some("floor"));
+        assert!(check.knocked.is_empty(), "{check:?}");
+        // Stopped 5 cm above it: no contact.
+        let above = bar_path(&rig, Vec3::new(0.5, -2.0, 0.3), Vec3::new(0.5, -2.0, 0.1));
+        let check = arm_check(&tree, &rig, &above);
+        assert_eq!(check.arm_depth.map(|d| d.depth_m), Some(0.0));
+    }
+
+    #[test]
+    fn an_arm_link_swept_through_a_bottle_knocks_it() {
+        let tree = scene(Vec3::new(1.5, 1.5, 0.0));
+        let rig = bar_arm();
+        // Along y at 10 cm, its length over x = 0..1: through the bottle at (0.5, 0).
+        let through = bar_path(&rig, Vec3::new(0.0, -0.5, 0.1), Vec3::new(0.0, 0.5, 0.1));
+        let check = arm_check(&tree, &rig, &through);
+        assert!(check.near.contains(&"bottle_1".to_string()), "{check:?}");
+        assert!(
+            check.knocked.iter().any(|k| k.object == "bottle_1"),
+            "{check:?}"
+        );
+        // 30 cm above it: untouched.
+        let over = bar_path(&rig, Vec3::new(0.0, -0.5, 0.6), Vec3::new(0.0, 0.5, 0.6));
+        let check = arm_check(&tree, &rig, &over);
+        assert!(check.knocked.is_empty(), "{check:?}");
     }
 
     #[test]

@@ -37,12 +37,27 @@ pub struct PhysicsReport {
     pub rest_wall_s: f64,
 }
 
-/// The collider of a dynamic body: a compound of the convex pieces of all its links, with the
-/// links' own mass properties summed in the body's frame.
+/// How a check's bodies are made: which are fixed where they stand (`frozen`: they start inside
+/// another body, already judged penetrating, and their overlap must not throw their neighbours
+/// about), a body's collision groups where it has its own, and the bodies whose shape is their
+/// collision pieces, hollows decomposed (`hollow`, bodies of these links: what the arm's hand
+/// goes into, a bowl it takes by the rim, the microwave it places into), instead of the hulls
+/// of their components (resting and being knocked depend on the outside only, and the hulls
+/// simulate several times faster).
+pub(crate) struct BodyMaking<'a> {
+    pub frozen: &'a [bool],
+    pub groups: &'a dyn Fn(usize) -> Option<CollisionGroups>,
+    pub hollow: &'a [usize],
+}
+
+/// The collider of a dynamic body: a compound of the convex pieces of all its links (their
+/// hulls, or with `hollow` their collision pieces), with the links' own mass properties summed
+/// in the body's frame.
 pub(crate) fn dynamic_collider(
     tree: &KinematicTree,
     body: &RestBody,
     body_from_links: &[Affine3A],
+    hollow: bool,
 ) -> Option<(Collider, ColliderMassProperties, f32)> {
     let mut pieces: Vec<(Vec3, Quat, Collider)> = Vec::new();
     let mut mass: Option<ParryMassProperties> = None;
@@ -53,8 +68,9 @@ pub(crate) fn dynamic_collider(
         };
         let (_, rotation, translation) = body_from_link.to_scale_rotation_translation();
         let rotation = rotation.normalize();
+        let shape = if hollow { &g.collision } else { &g.hulls };
         pieces.extend(
-            g.hulls
+            shape
                 .iter()
                 .flat_map(|piece| contact_pieces(&piece.positions))
                 .filter_map(|points| Collider::convex_hull(&points))
@@ -86,20 +102,22 @@ pub(crate) fn dynamic_collider(
 
 /// The rest test's bodies on the entities of their links (`entities[l]` is link `l`'s): a
 /// dynamic body on the entity of its own link, carrying the pieces of every link locked to it; a
-/// fixed body with its exact triangle mesh on each link of the static body. Those in `frozen`
-/// (they start inside another body, already judged penetrating) are fixed where they stand, so
-/// their overlap does not throw their neighbours about. `groups` gives a body's collision
-/// groups where it has its own. Returns each body's world pose at the start; the entity each
-/// dynamic body went on, `None` for the rest.
+/// fixed body with its exact triangle mesh on each link of the static body; made as `making`
+/// says. Returns each body's world pose at the start; the entity each dynamic body went on,
+/// `None` for the rest.
 pub(crate) fn attach_bodies(
     session: &mut RapierSession,
     world: &mut World,
     tree: &KinematicTree,
     entities: &[Entity],
     bodies: &[RestBody],
-    frozen: &[bool],
-    groups: &dyn Fn(usize) -> Option<CollisionGroups>,
+    making: &BodyMaking,
 ) -> (Vec<Affine3A>, Vec<Option<Entity>>) {
+    let BodyMaking {
+        frozen,
+        groups,
+        hollow,
+    } = *making;
     let poses = tree.world_from_links();
     let mut starts = Vec::with_capacity(bodies.len());
     let mut on = vec![None; bodies.len()];
@@ -113,8 +131,12 @@ pub(crate) fn attach_bodies(
                 .iter()
                 .map(|&l| body_from_world * poses[l])
                 .collect();
-            let Some((collider, mass, friction)) = dynamic_collider(tree, body, &body_from_links)
-            else {
+            let Some((collider, mass, friction)) = dynamic_collider(
+                tree,
+                body,
+                &body_from_links,
+                body.links.iter().any(|l| hollow.contains(l)),
+            ) else {
                 continue;
             };
             let kind = if frozen[b] {
@@ -271,9 +293,12 @@ fn simulate(
     follow: Option<usize>,
 ) -> Simulated {
     let mut session = RapierSession::begin(world);
-    let (starts, on) = attach_bodies(&mut session, world, tree, entities, bodies, frozen, &|_| {
-        None
-    });
+    let making = BodyMaking {
+        frozen,
+        groups: &|_| None,
+        hollow: &[],
+    };
+    let (starts, on) = attach_bodies(&mut session, world, tree, entities, bodies, &making);
     let started = std::time::Instant::now();
     let steps = (seconds / REST_STEP_S).round() as usize;
     let followed = follow.and_then(|b| on[b]);

@@ -23,9 +23,10 @@ use bevy_rapier3d::plugin::{
     RapierPhysicsPlugin, RapierTransformPropagateSet, TimestepMode,
 };
 use bevy_rapier3d::prelude::{
-    CollisionEvent, ContactForceEvent, MassModifiedEvent, RapierContextSimulation,
-    RapierRigidBodyHandle, RapierRigidBodySet,
+    CollisionEvent, ContactForceEvent, MassModifiedEvent, RapierColliderHandle,
+    RapierContextColliders, RapierContextSimulation, RapierRigidBodyHandle, RapierRigidBodySet,
 };
+use bevy_rapier3d::rapier::prelude::ColliderHandle;
 use bevy_rapier3d::rapier::prelude::IntegrationParameters;
 use glam::Affine3A;
 
@@ -187,6 +188,42 @@ impl RapierSession {
             t.rotation,
             t.translation,
         ))
+    }
+
+    /// For each pair in contact (or about to be) of a collider on one of `entities` with
+    /// another collider, the other collider's entity and the least signed distance between
+    /// them: negative when they overlap. Rapier computes contacts only for the pairs of body
+    /// kinds their `ActiveCollisionTypes` allow.
+    pub fn contacts(&self, world: &World, entities: &[Entity]) -> Vec<(Entity, Entity, f32)> {
+        let (Some(simulation), Some(colliders)) = (
+            world.get::<RapierContextSimulation>(self.context),
+            world.get::<RapierContextColliders>(self.context),
+        ) else {
+            return Vec::new();
+        };
+        let handles: Vec<(Entity, ColliderHandle)> = entities
+            .iter()
+            .filter_map(|&e| Some((e, world.get::<RapierColliderHandle>(e)?.0)))
+            .collect();
+        let mut found = Vec::new();
+        for &(entity, handle) in &handles {
+            for pair in simulation.narrow_phase.contact_pairs_with(handle) {
+                let other = if pair.collider1 == handle {
+                    pair.collider2
+                } else {
+                    pair.collider1
+                };
+                let least = pair
+                    .manifolds
+                    .iter()
+                    .flat_map(|m| m.points.iter().map(|p| p.dist))
+                    .fold(f32::INFINITY, f32::min);
+                if let (true, Some(other)) = (least.is_finite(), colliders.collider_entity(other)) {
+                    found.push((entity, other, least));
+                }
+            }
+        }
+        found
     }
 
     /// Takes every component the session added away from its entities (bevy_rapier's handles

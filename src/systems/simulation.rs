@@ -2,28 +2,33 @@
 //! system that performs them. Each action is checked against the kinematic tree as it stands
 //! (`sim::actions`), its changes are applied to the transform hierarchy (pick re-parents to the
 //! gripper, place to the new support, open sets the joint value), and the rest test confirms
-//! the world still stands. Before any of that, its motions (the drive, the door's swing) are
-//! simulated in rapier; one that would knock an object refuses the action. A refused action
-//! changes nothing.
+//! the world still stands. Before any of that, its motions (the drive, the door's swing, the
+//! arm's reach and retreat) are simulated in rapier; one that would knock an object, or take the
+//! arm into the scene, refuses the action. A refused action changes nothing. A robot with an arm
+//! has an entity per link of the arm, posed for the arm's configuration.
 
 use std::time::Instant;
 
 use bevy::prelude::*;
 use serde::Serialize;
 
-use crate::components::{Joint, LinkBody, Panoptic};
+use crate::arm::reach::ArmRig;
+use crate::components::{Joint, LinkBody, Panoptic, RobotArmLink};
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::LinkGeometry;
 use crate::kinematics::rest_test::{ObjectVerdict, REST_STEP_S, Verdict};
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
+use crate::sim::arm_phases::arm_phases;
 use crate::sim::motion_path::{apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::systems::kinematic_tree::{
     ReadTreeError, read_kinematic_tree, read_kinematic_tree_entities,
 };
-use crate::systems::motion_physics::{MotionCheck, simulate_motion, simulate_motion_on};
-use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics};
+use crate::systems::motion_physics::{
+    MAX_ARM_DEPTH_M, MotionCheck, Movers, simulate_motion, simulate_motion_on, simulate_movers_on,
+};
+use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics, scratch_world};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 
 /// The robot's base entity: its figures and the place it last navigated to (for the planner).
@@ -95,6 +100,7 @@ pub fn spawn_robot(
     spec: RobotSpec,
     pose: BasePose,
     (base_from_gripper, gripper_mesh): (glam::Affine3A, crate::geometry::TriMesh),
+    arm: Option<&ArmRig>,
 ) -> Result<Entity, ReadTreeError> {
     let root = world
         .query_filtered::<Entity, With<SceneRoot>>()
@@ -134,7 +140,47 @@ pub fn spawn_robot(
         transform_of(base_from_gripper),
         ChildOf(base),
     ));
+    if let Some(rig) = arm {
+        let stowed = rig.stowed_link_poses();
+        for (l, (link, pose)) in rig.arm.links.iter().zip(stowed).enumerate() {
+            let mut entity = world.spawn((
+                Name::new(link.name.clone()),
+                RobotArmLink(l),
+                transform_of(pose),
+                ChildOf(base),
+            ));
+            // Its collision pieces are its look (the viewer draws link bodies).
+            if !link.pieces.is_empty() {
+                let mut mesh = crate::geometry::TriMesh::default();
+                for piece in &link.pieces {
+                    mesh.append(piece);
+                }
+                entity.insert(LinkBody(std::sync::Arc::new(LinkGeometry::new(
+                    mesh, ARM_COLOR, ROBOT_LINK,
+                ))));
+            }
+        }
+    }
     Ok(base)
+}
+
+/// The arm's links' colour: the Panda's white.
+const ARM_COLOR: [f32; 3] = [0.85, 0.85, 0.82];
+
+/// Puts the arm's link entities where configuration `q` holds them (fingers open).
+fn pose_arm_links(world: &mut World, q: &[f32]) {
+    let Some(rig) = world.get_resource::<RobotArm>().map(|a| a.0.clone()) else {
+        return;
+    };
+    let poses = rig.arm.link_poses(&rig.base_from_root, q, 1.0);
+    for (link, mut transform) in world
+        .query::<(&RobotArmLink, &mut Transform)>()
+        .iter_mut(world)
+    {
+        if let Some(pose) = poses.get(link.0) {
+            *transform = transform_of(*pose);
+        }
+    }
 }
 
 /// Performs `action` on the world: checks it, applies its changes, checks the physics; records
@@ -152,8 +198,8 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
             let arm = world.get_resource::<RobotArm>().map(|a| a.0.clone());
             let changes =
                 attempt(&tree, &spec, arm.as_deref(), action).map_err(|e| e.to_string())?;
-            motion = simulate_motions(world, &tree, &entities, &changes);
-            if let Some(why) = knocked_reason(&motion) {
+            motion = simulate_motions(world, &tree, &entities, &changes, arm.as_deref());
+            if let Some(why) = motion.iter().find_map(refusal) {
                 return Err(why);
             }
             Ok(changes)
@@ -205,30 +251,58 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
     record
 }
 
-/// The motions of `changes` (a drive, a door) simulated in rapier one after another from
-/// `tree`, the scene in `world` as it stands (`entities[l]` is link `l`'s entity), up to the
-/// first attachment (which happens at once) or the first that knocks something. The first
-/// motion runs on the scene's own entities; those after it start from a state the scene is not
-/// in yet, and run in a scratch world of the tree as the motions before left it.
+/// The motions of `changes` (a drive, a door, the arm's reach, follow and retreat) simulated in
+/// rapier one after another from `tree`, the scene in `world` as it stands (`entities[l]` is
+/// link `l`'s entity), up to the first attachment (which happens at once), the arm's motion (the
+/// last the action makes) or the first that knocks something or takes the arm into the scene.
+/// The first motion runs on the scene's own entities (the arm's on its link entities); those
+/// after it start from a state the scene is not in yet, and run in a scratch world of the tree
+/// as the motions before left it.
 fn simulate_motions(
     world: &mut World,
     tree: &KinematicTree,
     entities: &[Entity],
     changes: &[Change],
+    arm: Option<&ArmRig>,
 ) -> Vec<MotionCheck> {
     let mut tree = tree.clone();
     let mut checks = Vec::new();
     let mut as_the_scene_stands = true;
-    for change in changes {
+    for (k, change) in changes.iter().enumerate() {
+        if let (Change::ArmMotion { .. }, Some(rig)) = (change, arm) {
+            let handover = changes.get(k + 1);
+            for phase in arm_phases(&tree, rig, change, handover, REST_STEP_S) {
+                let movers = Movers {
+                    name: format!("{ROBOT_LINK} ({})", phase.what),
+                    links: &phase.links,
+                    hidden: &phase.hidden,
+                    hollow: &phase.hollow,
+                    arm: Some((rig, &phase.arm)),
+                };
+                let check = if as_the_scene_stands {
+                    simulate_movers_on(world, &phase.tree, entities, &movers)
+                } else {
+                    let (mut scratch, own) = scratch_world(&phase.tree);
+                    simulate_movers_on(&mut scratch, &phase.tree, &own, &movers)
+                };
+                let refused = refusal(&check).is_some();
+                checks.push(check);
+                if refused {
+                    break;
+                }
+                as_the_scene_stands = false;
+            }
+            break;
+        }
         if let Some(motion) = link_motion(&tree, change, REST_STEP_S) {
             let check = if as_the_scene_stands {
                 simulate_motion_on(world, &tree, entities, &motion)
             } else {
                 simulate_motion(&tree, &motion)
             };
-            let knocked = !check.knocked.is_empty();
+            let refused = refusal(&check).is_some();
             checks.push(check);
-            if knocked {
+            if refused {
                 break;
             }
         }
@@ -240,9 +314,25 @@ fn simulate_motions(
     checks
 }
 
-/// Why the action is refused when one of its motions knocked something.
-fn knocked_reason(checks: &[MotionCheck]) -> Option<String> {
-    let check = checks.iter().find(|c| !c.knocked.is_empty())?;
+/// Why a motion refuses its action, if it does: it knocked something, or took the arm more than
+/// [`MAX_ARM_DEPTH_M`] into the scene.
+fn refusal(check: &MotionCheck) -> Option<String> {
+    if let Some(depth) = check
+        .arm_depth
+        .as_ref()
+        .filter(|d| d.depth_m > MAX_ARM_DEPTH_M)
+    {
+        return Some(format!(
+            "moving {} would take {} {:.1} mm into {} (simulated in rapier)",
+            check.link,
+            depth.arm_link.as_deref().unwrap_or("the arm"),
+            1000.0 * depth.depth_m,
+            depth.into.as_deref().unwrap_or("the scene"),
+        ));
+    }
+    if check.knocked.is_empty() {
+        return None;
+    }
     let what = check
         .knocked
         .iter()
@@ -341,8 +431,12 @@ pub fn apply_change(world: &mut World, change: &Change) {
                 },
             ));
         }
-        // The arm's links are not entities of the world yet: its motions are the trace's.
-        Change::ArmMotion { .. } => {}
+        // The arm ends where its last configuration holds it (stowed, after a whole action).
+        Change::ArmMotion { reach, retreat, .. } => {
+            if let Some(q) = retreat.last().or(reach.last()) {
+                pose_arm_links(world, q);
+            }
+        }
     }
 }
 

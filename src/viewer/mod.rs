@@ -40,7 +40,7 @@ use crate::graph::ContactGraph;
 use crate::replay::{Replay, load_replay};
 use crate::sim::scene_view::{SceneView, open_value};
 use crate::sim::task::Task;
-use crate::simulation::{simulation_app, task_world};
+use crate::simulation::{read_arm, simulation_app, task_world};
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::apply_change;
 
@@ -77,6 +77,8 @@ pub struct ViewOptions {
     pub replay: bool,
     /// A task script to run step by step (N) or play (P) in the window.
     pub task: Option<PathBuf>,
+    /// The URDF of an arm on the robot's base.
+    pub robot: Option<PathBuf>,
     /// Screenshots of a replay, evenly spaced from its first frame to its last.
     pub shots: u32,
     /// Follow a running `reconstruct --live --out DIR` session: the world is rebuilt each time
@@ -124,8 +126,9 @@ impl Plugin for ViewerPlugin {
 /// The scene world of `options.dir` with the robot, doors opened as asked, and the viewer's
 /// plugins; `offscreen` renders into an image of that size instead of a window.
 pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneError> {
+    let arm = options.robot.as_deref().map(read_arm).transpose()?;
     let (actions, mut app) = match &options.task {
-        Some(task) => task_world(&options.dir, task)?,
+        Some(task) => task_world(&options.dir, task, arm.as_ref())?,
         None => {
             let graph = if options.live {
                 live_scene::first_graph(&options.dir, LIVE_WAIT)?.1
@@ -133,7 +136,7 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
                 ContactGraph::load(&options.dir.join("contact_graph.json"))?
             };
             let db = CadDatabase::for_scene(&options.dir)?;
-            let app = simulation_app(&graph, &Task::default(), &db, None)?;
+            let app = simulation_app(&graph, &Task::default(), &db, arm.as_ref())?;
             (Vec::new(), app)
         }
     };

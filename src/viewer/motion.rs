@@ -4,17 +4,23 @@
 //! door or drawer turns or slides from its old value to its new. Only transforms are animated:
 //! the joints keep their new values, and when the motion ends every transform is the tree's.
 //! Attachments (a pick, a place) happen at once, and what the gripper holds rides along. An
-//! object dropped by dragging follows the path rapier let it fall and settle along.
+//! arm's motion moves its links along its configurations, the part its hand follows with it,
+//! and the object it takes or sets down from the instant the hand has it or to the instant it
+//! lets go. An object dropped by dragging follows the path rapier let it fall and settle along.
 
 use bevy::prelude::*;
 use glam::Affine3A;
 
 use crate::components::Joint;
+use crate::components::RobotArmLink;
 use crate::kinematics::JointSpec;
 use crate::sim::actions::Change;
+use crate::sim::arm_phases::{ArmInstant, arm_timeline};
 use crate::sim::motion_path::{along, drive_path, drive_seconds, joint_seconds, shortest_turn};
-use crate::sim::robot::ROBOT_LINK;
-use crate::systems::scene_graph::transform_of;
+use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK};
+use crate::systems::kinematic_tree::read_kinematic_tree;
+use crate::systems::scene_graph::{SceneRoot, transform_of};
+use crate::systems::simulation::RobotArm;
 
 /// The viewer shows no drive longer than this (seconds); longer ones play faster.
 const MAX_DRIVE_S: f32 = 2.5;
@@ -108,6 +114,10 @@ struct Leg {
 pub struct Motion {
     legs: Vec<Leg>,
     elapsed_s: f32,
+    /// Entities shown under another parent while the motion runs (an object an arm hands over
+    /// moves in a frame of its own until the hand has it or lets go of it), with the parent
+    /// and transform they go back to when it ends.
+    parents: Vec<(Entity, Entity, Transform)>,
 }
 
 impl Motion {
@@ -135,7 +145,28 @@ fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
     };
     let mut legs = Vec::new();
     let mut start_s = 0.0;
-    for change in changes {
+    // (entity, parent while shown, parent and transform at the end)
+    let mut parents: Vec<(Entity, Entity, Entity, Transform)> = Vec::new();
+    // A part the arm's hand moved is shown moving with the hand, not again after it.
+    let followed: Vec<&str> = changes
+        .iter()
+        .filter_map(|c| match c {
+            Change::ArmMotion { part: Some(p), .. } => Some(p.link.as_str()),
+            _ => None,
+        })
+        .collect();
+    for (k, change) in changes.iter().enumerate() {
+        if let Change::ArmMotion { .. } = change {
+            let (arm, duration_s) = arm_legs(world, changes, k, start_s, &mut parents);
+            legs.extend(arm);
+            start_s += duration_s;
+            continue;
+        }
+        if let Change::SetJoint { link, .. } = change
+            && followed.contains(&link.as_str())
+        {
+            continue;
+        }
         let leg = match change {
             Change::MoveBase {
                 from,
@@ -181,10 +212,183 @@ fn motion_of(world: &mut World, changes: &[Change]) -> Motion {
             start_s += duration_s;
         }
     }
+    for &(entity, shown_under, ..) in &parents {
+        world.entity_mut(entity).insert(ChildOf(shown_under));
+    }
     Motion {
         legs,
         elapsed_s: 0.0,
+        parents: parents
+            .into_iter()
+            .map(|(e, _, end, transform)| (e, end, transform))
+            .collect(),
     }
+}
+
+/// Seconds between the poses of an arm motion's legs.
+const ARM_FRAME_S: f32 = 1.0 / 30.0;
+
+/// The legs of the arm motion `changes[k]`, already applied, all from `start_s`: the arm's
+/// links along its configurations, the gripper (what it holds rides with it) along the tool,
+/// the part the hand follows, and the object handed over by the attachment after it (a pick's
+/// stays where it stood until the hand has it, a place's rides in the hand until it is set
+/// down); and how long it takes.
+fn arm_legs(
+    world: &mut World,
+    changes: &[Change],
+    k: usize,
+    start_s: f32,
+    parents: &mut Vec<(Entity, Entity, Entity, Transform)>,
+) -> (Vec<Leg>, f32) {
+    let Some(rig) = world.get_resource::<RobotArm>().map(|a| a.0.clone()) else {
+        return (Vec::new(), 0.0);
+    };
+    let change = &changes[k];
+    let part = match change {
+        Change::ArmMotion { part: Some(p), .. } => Some(p.link.as_str()),
+        _ => None,
+    };
+    let part_from = changes
+        .iter()
+        .find_map(|c| match c {
+            Change::SetJoint { link, from, .. } if Some(link.as_str()) == part => Some(*from),
+            _ => None,
+        })
+        .unwrap_or(0.0);
+    let instants = arm_timeline(&rig, change, part_from, ARM_FRAME_S);
+    if instants.len() < 2 {
+        return (Vec::new(), 0.0);
+    }
+    let duration_s = (instants.len() - 1) as f32 * ARM_FRAME_S;
+    let leg = |entity: Entity, poses: Vec<Transform>| Leg {
+        entity,
+        tween: Tween::Path { poses },
+        start_s,
+        duration_s,
+    };
+    let link_poses: Vec<Vec<Affine3A>> = instants
+        .iter()
+        .map(|i| rig.arm.link_poses(&rig.base_from_root, &i.q, 1.0))
+        .collect();
+    let tool: Vec<Affine3A> = instants
+        .iter()
+        .map(|i| rig.arm.tool_pose(&rig.base_from_root, &i.q))
+        .collect();
+    let mut legs: Vec<Leg> = world
+        .query::<(Entity, &RobotArmLink)>()
+        .iter(world)
+        .map(|(e, l)| (e, l.0))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .map(|(e, l)| leg(e, link_poses.iter().map(|p| transform_of(p[l])).collect()))
+        .collect();
+    if let Some(gripper) = entity_named(world, GRIPPER_LINK) {
+        legs.push(leg(
+            gripper.0,
+            tool.iter().map(|p| transform_of(*p)).collect(),
+        ));
+    }
+    if let Some((entity, now)) = part.and_then(|p| entity_named(world, p))
+        && let Some(joint) = world.get::<Joint>(entity).copied()
+    {
+        // The link's transform at a value: its transform now, turned back from the value now.
+        let at = |v: f32| {
+            transform_of(now * joint.spec.motion(joint.value).inverse() * joint.spec.motion(v))
+        };
+        legs.push(leg(
+            entity,
+            instants
+                .iter()
+                .map(|i| at(i.part.unwrap_or(joint.value)))
+                .collect(),
+        ));
+    }
+    if let Some(Change::Attach { link, to, .. }) = changes.get(k + 1)
+        && let Some((object, now)) = entity_named(world, link)
+        && let Some(shown) = handed_over(world, &instants, &tool, to, now)
+    {
+        legs.push(leg(object, shown.poses));
+        parents.push((object, shown.parent, shown.end_parent, transform_of(now)));
+    }
+    (legs, duration_s)
+}
+
+/// An object handed over during an arm motion, as shown: the parent it moves under while the
+/// motion runs, its transforms there, and the parent it ends under.
+struct HandedOver {
+    parent: Entity,
+    poses: Vec<Transform>,
+    end_parent: Entity,
+}
+
+/// How the object attached to `to` at `now` (its transform there) by an arm motion through
+/// `instants` (the tool at `tool`, in the base's frame) is shown. Taken by the hand (`to` is
+/// the gripper), it stands in the world where it stood until the hand has it; set down, it
+/// rides in the hand (through the base's drive before) until the hand lets go of it.
+fn handed_over(
+    world: &mut World,
+    instants: &[ArmInstant],
+    tool: &[Affine3A],
+    to: &str,
+    now: Affine3A,
+) -> Option<HandedOver> {
+    let tree = read_kinematic_tree(world).ok()?;
+    let poses = tree.world_from_links();
+    let world_of = |name: &str| {
+        let l = tree.links.iter().position(|l| l.name == name)?;
+        Some(poses[l])
+    };
+    let base = world_of(ROBOT_LINK)?;
+    let reached = instants.iter().position(|i| i.reached).unwrap_or(0);
+    let hand_at_grip = base * tool[reached.saturating_sub(1)];
+    let end_parent = entity_named(world, to)?.0;
+    let gripper = entity_named(world, GRIPPER_LINK)?.0;
+    let shown = |pose: Affine3A| transform_of(pose);
+    if to == GRIPPER_LINK {
+        let root = world
+            .query_filtered::<Entity, With<SceneRoot>>()
+            .iter(world)
+            .next()?;
+        let stood = hand_at_grip * now;
+        let poses = instants
+            .iter()
+            .zip(tool)
+            .map(|(i, t)| shown(if i.reached { base * *t * now } else { stood }))
+            .collect();
+        Some(HandedOver {
+            parent: root,
+            poses,
+            end_parent,
+        })
+    } else {
+        let set_down = world_of(to)? * now;
+        let in_hand = hand_at_grip.inverse() * set_down;
+        let poses = instants
+            .iter()
+            .zip(tool)
+            .map(|(i, t)| {
+                shown(if i.reached {
+                    (base * *t).inverse() * set_down
+                } else {
+                    in_hand
+                })
+            })
+            .collect();
+        Some(HandedOver {
+            parent: gripper,
+            poses,
+            end_parent,
+        })
+    }
+}
+
+/// The entity named `name` and its transform.
+fn entity_named(world: &mut World, name: &str) -> Option<(Entity, Affine3A)> {
+    world
+        .query::<(Entity, &Name, &Transform)>()
+        .iter(world)
+        .find(|(_, n, _)| n.as_str() == name)
+        .map(|(e, _, t)| (e, t.compute_affine()))
 }
 
 /// Ends the motion under way at once: every transform is the tree's again. Called before the
@@ -196,6 +400,11 @@ pub fn finish_motion(world: &mut World) {
         if let Some(mut transform) = world.get_mut::<Transform>(leg.entity) {
             *transform = leg.tween.at(1.0);
         }
+    }
+    for &(entity, parent, transform) in &running.parents {
+        world
+            .entity_mut(entity)
+            .insert((ChildOf(parent), transform));
     }
 }
 
@@ -236,12 +445,14 @@ pub fn show_fall(world: &mut World, link: &str, path: &[Affine3A], step_s: f32) 
             duration_s,
         }],
         elapsed_s: 0.0,
+        parents: Vec::new(),
     });
 }
 
 /// Poses every animated entity for the time elapsed: a leg not started stands at its start, a
 /// finished one at its end; once all have finished the motion is over.
 pub(crate) fn animate(
+    mut commands: Commands,
     time: Res<Time>,
     mut motion: ResMut<Motion>,
     mut transforms: Query<&mut Transform>,
@@ -271,6 +482,9 @@ pub(crate) fn animate(
     }
     if over {
         motion.legs.clear();
+        for (entity, parent, transform) in motion.parents.drain(..) {
+            commands.entity(entity).insert((ChildOf(parent), transform));
+        }
     }
 }
 

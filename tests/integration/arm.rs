@@ -201,6 +201,36 @@ fn panda_plans_around_a_post() {
 /// whole task replayed in MuJoCo (`replay.xml` with `trajectory.csv`) keeps the arm and what it
 /// holds within 5 mm of the scene at every sample, and a held object stays where the fingers
 /// took it. A robot file that is no URDF is refused, naming it, before anything is written.
+/// The step's arm motion ran in rapier phase by phase (`phases`, in order) before it was made:
+/// the arm's links kinematic bodies on their entities, nothing knocked, and no link of the arm
+/// more than 5 mm into the scene.
+fn assert_arm_ran_in_rapier(step: &serde_json::Value, phases: &[&str]) {
+    let checks: Vec<&serde_json::Value> = step["motion"]
+        .as_array()
+        .expect("motion checks")
+        .iter()
+        .filter(|m| m.get("arm_depth").is_some())
+        .collect();
+    let names: Vec<String> = phases.iter().map(|p| format!("robot ({p})")).collect();
+    assert_eq!(
+        checks
+            .iter()
+            .map(|m| m["link"].as_str().unwrap_or(""))
+            .collect::<Vec<_>>(),
+        names,
+        "{step}"
+    );
+    for check in checks {
+        assert!(
+            check["simulated_s"].as_f64().is_some_and(|s| s > 0.5),
+            "{check}"
+        );
+        assert_eq!(check["knocked"], serde_json::json!([]), "{check}");
+        let depth = check["arm_depth"]["depth_m"].as_f64().expect("depth");
+        assert!(depth <= 0.005, "{check}");
+    }
+}
+
 #[test]
 fn panda_picks_and_places_in_the_kitchen() {
     let tmp = tempfile::tempdir().expect("tempdir");
@@ -233,6 +263,7 @@ fn panda_picks_and_places_in_the_kitchen() {
                 assert!(rig.arm.within_limits(&q), "{q:?} outside the limits");
             }
         }
+        assert_arm_ran_in_rapier(step, &["reach", "retreat"]);
         motions += 1;
     }
     assert_eq!(motions, 6);
@@ -254,7 +285,7 @@ fn panda_picks_and_places_in_the_kitchen() {
         .find(|c| c["change"] == "arm_motion")
         .map(|c| serde_json::from_value(c["reach"].clone()).expect("reach"))
         .expect("arm motion");
-    let (_, mut app) = iscene::simulation::task_world(&gt, &task).expect("the task's world");
+    let (_, mut app) = iscene::simulation::task_world(&gt, &task, None).expect("the task's world");
     let tree = iscene::systems::kinematic_tree::read_kinematic_tree(app.world_mut()).expect("tree");
     let view = iscene::sim::scene_view::SceneView::new(&tree);
     let cup = view.node_link("cup_2").expect("cup_2");
@@ -394,6 +425,7 @@ fn panda_opens_and_closes_a_door_and_a_drawer_by_their_handles() {
     assert_eq!(steps.len(), parts.len());
     for (k, (step, link)) in steps.iter().zip(parts).enumerate() {
         assert_eq!(step["success"], true, "{step}");
+        assert_arm_ran_in_rapier(step, &["reach", "handle", "retreat"]);
         let changes = step["changes"].as_array().expect("changes");
         let motion = changes
             .iter()

@@ -136,6 +136,7 @@ fn view_options(dir: PathBuf, size: (u32, u32)) -> ViewOptions {
         replay: false,
         shots: 1,
         task: None,
+        robot: None,
         live: false,
     }
 }
@@ -505,6 +506,81 @@ fn a_task_runs_step_by_step_and_plays_from_the_keyboard() {
         .expect("the fridge door");
     assert!(fridge_door.abs() < 1e-3, "fridge door at {fridge_door}");
     assert!(!app.world().resource::<TaskPlayer>().playing);
+}
+
+#[test]
+fn the_arm_is_shown_taking_a_cup_from_the_table_and_stowing_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gt = kitchen_truth(dir.path());
+    let task = dir.path().join("pick.json");
+    std::fs::write(
+        &task,
+        r#"{"steps": [{"action": "pick", "object": "cup_2"}]}"#,
+    )
+    .expect("task");
+    let mut app = offscreen_app(&ViewOptions {
+        task: Some(task),
+        robot: Some(common::panda_urdf()),
+        ..view_options(gt, (320, 240))
+    });
+    app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
+        std::time::Duration::from_millis(100),
+    ));
+    app.update();
+    // The arm is in the world, drawn: one entity per link of the Panda with collision pieces.
+    let world = app.world_mut();
+    let drawn = world
+        .query_filtered::<(), (With<iscene::components::RobotArmLink>, With<Mesh3d>)>()
+        .iter(world)
+        .count();
+    assert!(drawn >= 8, "{drawn} arm links drawn");
+    let pose_of = |app: &mut App, name: &str| {
+        let world = app.world_mut();
+        world
+            .query::<(&Name, &GlobalTransform)>()
+            .iter(world)
+            .find(|(n, _)| n.as_str() == name)
+            .map(|(_, t)| t.translation())
+            .unwrap_or_else(|| panic!("no {name}"))
+    };
+    let cup_before = pose_of(&mut app, "cup_2");
+
+    press(&mut app, KeyCode::KeyN, "n");
+    let trace = app
+        .world()
+        .resource::<iscene::systems::simulation::SimulationTrace>()
+        .0
+        .clone();
+    assert!(trace[0].success, "{:?}", trace[0].failed_precondition);
+    let running = |app: &App| {
+        app.world()
+            .resource::<iscene::viewer::Motion>()
+            .is_running()
+    };
+    // Frame by frame: the hand comes to the cup, which stands where it stood until the hand
+    // has it, then rides in the hand.
+    let (mut nearest, mut cup_left_at, mut frames) = (f32::MAX, None, 0);
+    while running(&app) && frames < 2000 {
+        let hand = pose_of(&mut app, iscene::sim::robot::GRIPPER_LINK);
+        let cup = pose_of(&mut app, "cup_2");
+        nearest = nearest.min(hand.distance(cup_before));
+        if cup_left_at.is_none() && cup.distance(cup_before) > 1e-3 {
+            cup_left_at = Some(hand.distance(cup_before));
+        }
+        app.update();
+        frames += 1;
+    }
+    assert!(!running(&app), "the motion ends");
+    assert!(frames > 20, "the pick is shown over {frames} frames");
+    assert!(nearest < 0.15, "the hand came {nearest} m from the cup");
+    let left_at = cup_left_at.expect("the cup was taken");
+    assert!(
+        left_at < 0.15,
+        "the cup left the table with the hand {left_at} m away"
+    );
+    // At the end the world is the tree's: the cup in the stowed hand.
+    let stowed = pose_of(&mut app, iscene::sim::robot::GRIPPER_LINK);
+    assert!(pose_of(&mut app, "cup_2").distance(stowed) < 0.2);
 }
 
 /// The viewer's camera and where it is.

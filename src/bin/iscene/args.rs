@@ -179,6 +179,10 @@ pub(crate) struct ViewArgs {
     /// plays them; with --screenshot, the picture is taken after the last action.
     #[arg(long)]
     pub(crate) task: Option<PathBuf>,
+    /// The URDF of an arm on the robot's base, as `iscene simulate --robot`: the task's picks,
+    /// places, opens and closes are the arm's motions, shown moving.
+    #[arg(long, conflicts_with_all = ["replay", "live"])]
+    pub(crate) robot: Option<PathBuf>,
     /// With --replay and --screenshot: this many pictures from the first frame to the last
     /// (FILE.gif: one animated GIF; otherwise numbered PNGs FILE_00.png ...).
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=200))]

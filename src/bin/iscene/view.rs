@@ -30,6 +30,7 @@ pub(crate) fn view(args: ViewArgs, interactive: bool) -> Result<(), IsceneError>
             replay,
             shots,
             task,
+            robot,
             live,
         } = args;
         let dir = if replay && !dir.join("report.json").is_file() {
@@ -48,6 +49,7 @@ pub(crate) fn view(args: ViewArgs, interactive: bool) -> Result<(), IsceneError>
                 replay,
                 shots,
                 task,
+                robot,
                 live,
             },
             &layer,

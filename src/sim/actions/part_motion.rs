@@ -448,7 +448,7 @@ pub(super) fn places_to_stand(
         .normalize_or_zero();
     // The shoulder (the chain's second joint) over the base, and how far the tool gets from it.
     let shoulder_link = rig.arm.chain.get(1).copied().unwrap_or(0);
-    let stowed = rig.arm.link_poses(&rig.base_from_root, &rig.stow, 1.0);
+    let stowed = rig.stowed_link_poses();
     let shoulder = Vec3::from(stowed[shoulder_link].translation);
     let span = arm_span(rig, shoulder_link);
     let middle = path[1].truncate();

@@ -1,0 +1,425 @@
+//! An arm motion as the physics check sees it: its phases (the reach, the hand on a door's or
+//! drawer's handle, the retreat), each the world poses of the arm's links and of the scene's
+//! links that move with the hand, at times `step_s` apart and at the arm's speed
+//! ([`ARM_SPEED`], as the trajectory times them).
+//!
+//! What moves with the hand changes between phases, so each phase starts from the scene as the
+//! phase before left it: an object picked rides in the hand from the retreat on; an object
+//! placed stays where the reach put it (held there, not yet free: the rest test after the
+//! action judges whether it stands); a part followed by the hand stays where the hand let go.
+
+use glam::Affine3A;
+
+use crate::arm::reach::ArmRig;
+use crate::arm::rrt::distance;
+use crate::kinematics::tree::KinematicTree;
+use crate::sim::actions::{Change, PartFollow};
+use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK};
+use crate::sim::trajectory::ARM_SPEED;
+
+/// One phase of an arm motion.
+#[derive(Clone, Debug)]
+pub struct ArmPhase {
+    /// The phase in words ("reach", "handle", "retreat").
+    pub what: &'static str,
+    /// The scene as the phase starts.
+    pub tree: KinematicTree,
+    /// Links of `tree` driven along their world poses, each with what hangs from it.
+    pub links: Vec<(usize, Vec<Affine3A>)>,
+    /// Links of `tree` whose own collision pieces take no part: the gripper link, which stands
+    /// for the stowed hand where the arm's own hand is a body.
+    pub hidden: Vec<usize>,
+    /// Links of `tree` whose insides the hand goes into (the object it takes or sets down, and
+    /// what it sets it on or in): their bodies are simulated with their hollows.
+    pub hollow: Vec<usize>,
+    /// The arm's links' world poses at each instant: `arm[k][l]` is link `l`'s at instant `k`.
+    pub arm: Vec<Vec<Affine3A>>,
+}
+
+/// The phases of `change` (an arm motion) from the scene `tree`, the robot carrying `rig`;
+/// `handover` is the attachment that follows it in the action (a pick's take, a place's
+/// release). Empty for any other change, or a tree without the robot.
+pub fn arm_phases(
+    tree: &KinematicTree,
+    rig: &ArmRig,
+    change: &Change,
+    handover: Option<&Change>,
+    step_s: f32,
+) -> Vec<ArmPhase> {
+    let Change::ArmMotion {
+        reach,
+        retreat,
+        part,
+        ..
+    } = change
+    else {
+        return Vec::new();
+    };
+    let link_named = |name: &str| tree.links.iter().position(|l| l.name == name);
+    let (Some(robot), Some(gripper)) = (link_named(ROBOT_LINK), link_named(GRIPPER_LINK)) else {
+        return Vec::new();
+    };
+    let root = tree.world_from_links()[robot] * rig.base_from_root;
+    let hidden = vec![gripper];
+    let holds = tree.links.iter().any(|l| l.parent == Some(gripper));
+    let hollow: Vec<usize> = match handover {
+        Some(Change::Attach { link, to, .. }) => [link_named(link), link_named(to)]
+            .into_iter()
+            .flatten()
+            .filter(|&l| l != gripper)
+            .collect(),
+        _ => Vec::new(),
+    };
+    let tool = |q: &[f32]| rig.arm.tool_pose(&root, q);
+    let arm_poses = |instants: &[(Vec<f32>, f32)]| -> Vec<Vec<Affine3A>> {
+        instants
+            .iter()
+            .map(|(q, _)| rig.arm.link_poses(&root, q, 1.0))
+            .collect()
+    };
+    let mut phases = Vec::new();
+    let mut tree = tree.clone();
+    let mut last = rig.stow.clone();
+
+    // The reach: what the hand holds (a place's object) rides with it.
+    let instants = timed(&last, reach, None, step_s);
+    let links = if holds {
+        vec![(gripper, instants.iter().map(|(q, _)| tool(q)).collect())]
+    } else {
+        Vec::new()
+    };
+    phases.push(ArmPhase {
+        what: "reach",
+        tree: tree.clone(),
+        links,
+        hidden: hidden.clone(),
+        hollow: hollow.clone(),
+        arm: arm_poses(&instants),
+    });
+    if let Some(q) = reach.last() {
+        last.clone_from(q);
+    }
+
+    // The hand on a part's handle: the part follows it.
+    if let Some(PartFollow {
+        link,
+        values,
+        along,
+    }) = part
+        && let Some(l) = link_named(link)
+        && !along.is_empty()
+    {
+        let start = tree.links[l].value;
+        let instants = timed(&last, along, Some((start, values)), step_s);
+        let parent = tree.links[l]
+            .parent
+            .map_or(Affine3A::IDENTITY, |p| tree.world_from_links()[p]);
+        let link = &tree.links[l];
+        let part_poses = instants
+            .iter()
+            .map(|(_, v)| parent * link.parent_from_link * link.joint.motion(*v))
+            .collect();
+        phases.push(ArmPhase {
+            what: "handle",
+            tree: tree.clone(),
+            links: vec![(l, part_poses)],
+            hidden: hidden.clone(),
+            hollow: hollow.clone(),
+            arm: arm_poses(&instants),
+        });
+        if let (Some(q), Some(&v)) = (along.last(), values.last()) {
+            last.clone_from(q);
+            tree.links[l].value = v;
+        }
+    }
+
+    // The retreat: a picked object rides in the hand; a placed one stays where it was set.
+    let instants = timed(&last, retreat, None, step_s);
+    let links = match handover {
+        Some(Change::Attach {
+            link,
+            to,
+            parent_from_link,
+            ..
+        }) if to == GRIPPER_LINK => link_named(link)
+            .map(|l| {
+                let poses = instants
+                    .iter()
+                    .map(|(q, _)| tool(q) * *parent_from_link)
+                    .collect();
+                vec![(l, poses)]
+            })
+            .unwrap_or_default(),
+        Some(Change::Attach { .. }) if holds => {
+            let set_down = tool(&last);
+            vec![(gripper, vec![set_down; instants.len()])]
+        }
+        _ => Vec::new(),
+    };
+    phases.push(ArmPhase {
+        what: "retreat",
+        tree,
+        links,
+        hidden,
+        hollow,
+        arm: arm_poses(&instants),
+    });
+    phases.retain(|p| p.arm.len() > 1);
+    phases
+}
+
+/// One instant of an arm motion as the viewer shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmInstant {
+    pub q: Vec<f32>,
+    /// The followed part's value, when the motion follows one.
+    pub part: Option<f32>,
+    /// Whether the reach is over (a pick's object is in the hand, a place's is set down).
+    pub reached: bool,
+}
+
+/// The whole of `change` (an arm motion) from the stowed arm at instants `step_s` apart: the
+/// reach, the hand on the part's handle (from the part's value `part_from`), the retreat.
+pub fn arm_timeline(rig: &ArmRig, change: &Change, part_from: f32, step_s: f32) -> Vec<ArmInstant> {
+    let Change::ArmMotion {
+        reach,
+        retreat,
+        part,
+        ..
+    } = change
+    else {
+        return Vec::new();
+    };
+    let followed = part.as_ref().filter(|p| !p.along.is_empty());
+    let mut part_value = followed.map(|_| part_from);
+    let mut instants: Vec<ArmInstant> = timed(&rig.stow, reach, None, step_s)
+        .into_iter()
+        .map(|(q, _)| ArmInstant {
+            q,
+            part: part_value,
+            reached: false,
+        })
+        .collect();
+    let mut last = reach.last().unwrap_or(&rig.stow).clone();
+    if let Some(p) = followed {
+        let along = timed(&last, &p.along, Some((part_from, &p.values)), step_s);
+        instants.extend(along.into_iter().skip(1).map(|(q, v)| ArmInstant {
+            q,
+            part: Some(v),
+            reached: true,
+        }));
+        if let Some(q) = p.along.last() {
+            last.clone_from(q);
+        }
+        part_value = p.values.last().copied();
+    }
+    instants.extend(
+        timed(&last, retreat, None, step_s)
+            .into_iter()
+            .skip(1)
+            .map(|(q, _)| ArmInstant {
+                q,
+                part: part_value,
+                reached: true,
+            }),
+    );
+    instants
+}
+
+/// The configurations of `path` (from `start`) at instants `step_s` apart, the arm's fastest
+/// joint at [`ARM_SPEED`], evenly spread so the last instant is the path's end; with
+/// `values` (a part's value at `start` and at each configuration), the value at each instant.
+/// The first instant is `start`.
+fn timed(
+    start: &[f32],
+    path: &[Vec<f32>],
+    values: Option<(f32, &[f32])>,
+    step_s: f32,
+) -> Vec<(Vec<f32>, f32)> {
+    let mut points: Vec<(&[f32], f32)> = vec![(start, values.map_or(0.0, |v| v.0))];
+    for (k, q) in path.iter().enumerate() {
+        let v = values.and_then(|(_, vs)| vs.get(k).copied()).unwrap_or(0.0);
+        points.push((q, v));
+    }
+    let mut at = vec![0.0f32];
+    for w in points.windows(2) {
+        let last = at[at.len() - 1];
+        at.push(last + distance(w[0].0, w[1].0) / ARM_SPEED);
+    }
+    let total = at[at.len() - 1];
+    let steps = (total / step_s).ceil() as usize;
+    let mut instants = Vec::with_capacity(steps + 1);
+    let mut segment = 0;
+    for k in 0..=steps {
+        let t = if steps == 0 {
+            0.0
+        } else {
+            total * k as f32 / steps as f32
+        };
+        while segment + 2 < points.len() && at[segment + 1] < t {
+            segment += 1;
+        }
+        let (a, b) = (
+            &points[segment],
+            &points[(segment + 1).min(points.len() - 1)],
+        );
+        let span = at[(segment + 1).min(at.len() - 1)] - at[segment];
+        let f = if span > 0.0 {
+            ((t - at[segment]) / span).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let q = a.0.iter().zip(b.0).map(|(x, y)| x + (y - x) * f).collect();
+        instants.push((q, a.1 + (b.1 - a.1) * f));
+    }
+    instants
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::TriMesh;
+    use crate::kinematics::JointSpec;
+    use crate::kinematics::tree::TreeLink;
+    use glam::Vec3;
+
+    /// The root, a floor, the robot at (1, 0) with its gripper, and a cup on the floor (or in
+    /// the gripper when `held`).
+    fn tree(held: bool) -> KinematicTree {
+        let at = Affine3A::from_translation;
+        let cube = TriMesh::cuboid(Vec3::splat(-0.05), Vec3::splat(0.05));
+        let mut robot = TreeLink::body(
+            ROBOT_LINK,
+            "robot",
+            0,
+            JointSpec::FIXED,
+            at(Vec3::X),
+            cube.clone(),
+        );
+        robot.node = None;
+        let mut gripper = TreeLink::body(
+            GRIPPER_LINK,
+            "robot",
+            2,
+            JointSpec::FIXED,
+            at(Vec3::Z),
+            cube.clone(),
+        );
+        gripper.node = None;
+        let cup = if held {
+            TreeLink::body(
+                "cup_1",
+                "cup",
+                3,
+                JointSpec::FIXED,
+                Affine3A::IDENTITY,
+                cube.clone(),
+            )
+        } else {
+            TreeLink::body(
+                "cup_1",
+                "cup",
+                1,
+                JointSpec::FLOATING,
+                at(Vec3::Y),
+                cube.clone(),
+            )
+        };
+        KinematicTree {
+            links: vec![
+                TreeLink::root(),
+                TreeLink::body(
+                    "floor",
+                    "floor",
+                    0,
+                    JointSpec::FIXED,
+                    Affine3A::IDENTITY,
+                    cube,
+                ),
+                robot,
+                gripper,
+                cup,
+            ],
+        }
+    }
+
+    fn motion() -> Change {
+        Change::ArmMotion {
+            what: "pick cup_1".into(),
+            reach: vec![vec![0.5, 0.0], vec![1.0, 0.0]],
+            retreat: vec![vec![0.5, 0.0], vec![0.0, 0.0]],
+            part: None,
+        }
+    }
+
+    #[test]
+    fn a_picked_object_rides_in_the_hand_from_the_retreat_on_and_a_placed_one_stays_set_down() {
+        let rig = ArmRig::new(crate::arm::tests::two_link_arm(), 0.5);
+        let grip = Affine3A::from_translation(Vec3::new(0.0, 0.0, 0.05));
+        let take = Change::Attach {
+            link: "cup_1".into(),
+            from: "floor".into(),
+            to: GRIPPER_LINK.into(),
+            parent_from_link: grip,
+        };
+        let phases = arm_phases(&tree(false), &rig, &motion(), Some(&take), 0.1);
+        assert_eq!(
+            phases.iter().map(|p| p.what).collect::<Vec<_>>(),
+            ["reach", "retreat"]
+        );
+        // The reach moves only the arm; the cup, untouched until then, is simulated hollow.
+        assert!(phases[0].links.is_empty());
+        assert_eq!(phases[0].hollow, vec![4]);
+        assert_eq!(phases[0].hidden, vec![3]);
+        // The retreat carries the cup at the tool's pose with its grip.
+        let (cup, poses) = &phases[1].links[0];
+        assert_eq!(*cup, 4);
+        let root = Affine3A::from_translation(Vec3::X) * rig.base_from_root;
+        let last = phases[1].arm.len() - 1;
+        let expected = rig.arm.tool_pose(&root, &[0.0, 0.0]) * grip;
+        assert!(
+            poses[last]
+                .translation
+                .abs_diff_eq(expected.translation, 1e-5)
+        );
+        assert_eq!(poses.len(), phases[1].arm.len());
+
+        // A place: the gripper carries the cup on the reach, then holds still where it let go.
+        let set = Change::Attach {
+            link: "cup_1".into(),
+            from: GRIPPER_LINK.into(),
+            to: "floor".into(),
+            parent_from_link: Affine3A::IDENTITY,
+        };
+        let phases = arm_phases(&tree(true), &rig, &motion(), Some(&set), 0.1);
+        let (gripper, reach) = &phases[0].links[0];
+        assert_eq!(*gripper, 3);
+        let let_go = rig.arm.tool_pose(&root, &[1.0, 0.0]);
+        assert!(reach.last().expect("poses").abs_diff_eq(let_go, 1e-5));
+        let (_, retreat) = &phases[1].links[0];
+        assert!(retreat.iter().all(|p| p.abs_diff_eq(let_go, 1e-5)));
+        assert_eq!(phases[1].hollow, vec![4, 1]);
+    }
+
+    #[test]
+    fn a_path_is_timed_at_the_arm_speed_and_ends_where_it_ends() {
+        let start = [0.0, 0.0];
+        let path = vec![vec![0.5, 0.0], vec![0.5, 1.0]];
+        // 1.5 rad at 1 rad/s in steps of 0.1 s: 15 steps, 16 instants.
+        let instants = timed(&start, &path, Some((0.0, &[0.1, 0.3])), 0.1);
+        assert_eq!(instants.len(), 16);
+        assert_eq!(instants[0], (vec![0.0, 0.0], 0.0));
+        let (q, v) = &instants[15];
+        assert!(
+            (q[0] - 0.5).abs() < 1e-6 && (q[1] - 1.0).abs() < 1e-6,
+            "{q:?}"
+        );
+        assert!((v - 0.3).abs() < 1e-6);
+        // At 0.5 s, the end of the first segment.
+        let (q, v) = &instants[5];
+        assert!((q[0] - 0.5).abs() < 1e-5 && q[1].abs() < 1e-5, "{q:?}");
+        assert!((v - 0.1).abs() < 1e-5);
+        // Nothing to do: the start alone.
+        assert_eq!(timed(&start, &[], None, 0.1).len(), 1);
+    }
+}
