@@ -32,6 +32,10 @@ pub struct ArmPhase {
     /// Links of `tree` whose insides the hand goes into (the object it takes or sets down, and
     /// what it sets it on or in): their bodies are simulated with their hollows.
     pub hollow: Vec<usize>,
+    /// Links of `tree` that hold still, the arm's contacts with them measured: the object the
+    /// hand comes to take, which it must not go into (nor push: simulating its hollow free
+    /// cost ten times the rest of the check).
+    pub still: Vec<usize>,
     /// The arm's links' world poses at each instant: `arm[k][l]` is link `l`'s at instant `k`.
     pub arm: Vec<Vec<Affine3A>>,
 }
@@ -88,12 +92,19 @@ pub fn arm_phases(
     } else {
         Vec::new()
     };
+    let taken: Vec<usize> = match handover {
+        Some(Change::Attach { link, to, .. }) if to == GRIPPER_LINK => {
+            link_named(link).into_iter().collect()
+        }
+        _ => Vec::new(),
+    };
     phases.push(ArmPhase {
         what: "reach",
         tree: tree.clone(),
         links,
         hidden: hidden.clone(),
         hollow: hollow.clone(),
+        still: taken,
         arm: arm_poses(&instants),
     });
     if let Some(q) = reach.last() {
@@ -125,6 +136,7 @@ pub fn arm_phases(
             links: vec![(l, part_poses)],
             hidden: hidden.clone(),
             hollow: hollow.clone(),
+            still: Vec::new(),
             arm: arm_poses(&instants),
         });
         if let (Some(q), Some(&v)) = (along.last(), values.last()) {
@@ -162,6 +174,7 @@ pub fn arm_phases(
         links,
         hidden,
         hollow,
+        still: Vec::new(),
         arm: arm_poses(&instants),
     });
     phases.retain(|p| p.arm.len() > 1);
@@ -367,9 +380,10 @@ mod tests {
             phases.iter().map(|p| p.what).collect::<Vec<_>>(),
             ["reach", "retreat"]
         );
-        // The reach moves only the arm; the cup, untouched until then, is simulated hollow.
+        // The reach moves only the arm; the cup holds still until then, simulated hollow.
         assert!(phases[0].links.is_empty());
         assert_eq!(phases[0].hollow, vec![4]);
+        assert_eq!(phases[0].still, vec![4]);
         assert_eq!(phases[0].hidden, vec![3]);
         // The retreat carries the cup at the tool's pose with its grip.
         let (cup, poses) = &phases[1].links[0];

@@ -43,6 +43,9 @@ const SWEEP_SAMPLES: usize = 24;
 const MOVER_GROUP: Group = Group::GROUP_2;
 const OWNER_GROUP: Group = Group::GROUP_3;
 
+/// A box holding nothing: the start of a union.
+const EMPTY_BOX: (Vec3, Vec3) = (Vec3::MAX, Vec3::MIN);
+
 /// The arm going deeper than this (metres) into the scene refuses the motion.
 pub const MAX_ARM_DEPTH_M: f32 = 0.005;
 
@@ -97,6 +100,9 @@ pub struct Movers<'a> {
     pub hidden: &'a [usize],
     /// Links whose bodies are simulated with their hollows (what the hand goes into).
     pub hollow: &'a [usize],
+    /// Links whose bodies hold still, the arm's contacts with them measured (what the hand
+    /// comes to take: it must not go into it).
+    pub still: &'a [usize],
     /// The arm and its links' world poses at each instant (`arm.1[k][l]`).
     pub arm: Option<(&'a ArmRig, &'a [Vec<Affine3A>])>,
 }
@@ -135,6 +141,7 @@ pub fn simulate_motion_on(
         links: &links,
         hidden: &[],
         hollow: &[],
+        still: &[],
         arm: None,
     };
     simulate_movers_on(world, tree, entities, &movers)
@@ -167,14 +174,21 @@ pub fn simulate_movers_on(
                     .any(|(l, _)| bodies[b].links.contains(l))
         })
         .collect();
+    // The robot's own links take no part in an arm's motion: its base is no obstacle to its arm,
+    // and the gripper link stands for the stowed hand, which is the arm's own hand now.
+    let robot = |l: usize| [ROBOT_LINK, GRIPPER_LINK].contains(&tree.links[l].name.as_str());
+    let left_out = |l: usize| moving[l] || (movers.arm.is_some() && robot(l));
     for body in &mut bodies {
-        body.links.retain(|&l| !moving[l]);
+        body.links.retain(|&l| !left_out(l));
     }
     let poses = tree.world_from_links();
     let arm_bodies = movers
         .arm
         .map(|(rig, _)| arm_colliders(rig))
         .unwrap_or_default();
+    let arm_swept = movers
+        .arm
+        .map_or(EMPTY_BOX, |(_, path)| arm_swept_bounds(&arm_bodies, path));
     let swept = movers
         .links
         .iter()
@@ -184,14 +198,7 @@ pub fn simulate_movers_on(
                 .collect();
             swept_bounds(tree, &under, &poses, *l, path)
         })
-        .chain(
-            movers
-                .arm
-                .map(|(_, path)| arm_swept_bounds(&arm_bodies, path)),
-        )
-        .fold((Vec3::MAX, Vec3::MIN), |(a, b), (lo, hi)| {
-            (a.min(lo), b.max(hi))
-        });
+        .fold(arm_swept, |(a, b), (lo, hi)| (a.min(lo), b.max(hi)));
     let mut body_of = vec![0; n];
     for (b, body) in bodies.iter().enumerate() {
         for &l in &body.links {
@@ -213,8 +220,9 @@ pub fn simulate_movers_on(
                     .is_some_and(|(lo, hi)| overlaps((lo, hi), swept, NEAR_M)));
     }
     let penetrations = start_penetrations(tree, &bodies);
+    let held_still = |b: usize| bodies[b].links.iter().any(|l| movers.still.contains(l));
     let frozen: Vec<bool> = (0..bodies.len())
-        .map(|b| !near[b] || penetrations[b].0 > MAX_START_PENETRATION_M)
+        .map(|b| !near[b] || penetrations[b].0 > MAX_START_PENETRATION_M || held_still(b))
         .collect();
 
     let mut session = RapierSession::begin(world);
@@ -223,10 +231,28 @@ pub fn simulate_movers_on(
             .contains(&b)
             .then(|| CollisionGroups::new(OWNER_GROUP, Group::ALL ^ MOVER_GROUP))
     };
+    // The fixed scene the arm comes near: its contacts with the arm are what the depth is
+    // measured on (the rest cannot be touched, and computing its contacts every step cost more
+    // than the whole check).
+    let touchable: Vec<usize> = match movers.arm {
+        Some(_) => bodies[0]
+            .links
+            .iter()
+            .copied()
+            .filter(|&l| {
+                link_bounds(tree, l).is_some_and(|(lo, hi)| {
+                    overlaps(world_box(poses[l], lo, hi), arm_swept, NEAR_M)
+                })
+            })
+            .chain(movers.still.iter().copied())
+            .collect(),
+        None => Vec::new(),
+    };
     let making = BodyMaking {
         frozen: &frozen,
         groups: &owner_groups,
         hollow: movers.hollow,
+        touchable: &touchable,
     };
     let (starts, on) = attach_bodies(&mut session, world, tree, entities, &bodies, &making);
     let mut driven: Vec<(Entity, &[Affine3A])> = Vec::new();
@@ -259,19 +285,14 @@ pub fn simulate_movers_on(
                     RigidBody::KinematicPositionBased,
                     body.collider.clone(),
                     CollisionGroups::new(ARM_GROUP, Group::ALL ^ ARM_GROUP),
-                    // Contacts with fixed bodies too: they are what the depth is measured on.
-                    ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_STATIC,
                 ),
             );
         }
     }
-    // What the arm may touch without it counting: the robot's own links and what moves.
+    // What the arm may touch without it counting: what the robot holds (it moves with the hand,
+    // or stays in the stowed one).
     let not_scene: Vec<Entity> = (0..n)
-        .filter(|&l| {
-            let robot =
-                |l: usize| [ROBOT_LINK, GRIPPER_LINK].contains(&tree.links[l].name.as_str());
-            moving[l] || robot(l) || tree.links[l].parent.is_some_and(robot)
-        })
+        .filter(|&l| tree.links[l].parent.is_some_and(robot))
         .map(|l| entities[l])
         .collect();
     let mut depth = ArmDepth {
@@ -658,6 +679,7 @@ mod tests {
             links: &[],
             hidden: &[],
             hollow: &[],
+            still: &[],
             arm: Some((rig, path)),
         };
         let check = simulate_movers_on(&mut world, tree, &entities, &movers);

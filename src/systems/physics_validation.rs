@@ -48,6 +48,10 @@ pub(crate) struct BodyMaking<'a> {
     pub frozen: &'a [bool],
     pub groups: &'a dyn Fn(usize) -> Option<CollisionGroups>,
     pub hollow: &'a [usize],
+    /// Links of fixed bodies whose contacts with kinematic bodies rapier computes (the fixed
+    /// scene the arm passes near, an object held still while the hand comes to it): rapier
+    /// skips those pairs by default.
+    pub touchable: &'a [usize],
 }
 
 /// The collider of a dynamic body: a compound of the convex pieces of all its links (their
@@ -117,6 +121,7 @@ pub(crate) fn attach_bodies(
         frozen,
         groups,
         hollow,
+        touchable,
     } = *making;
     let poses = tree.world_from_links();
     let mut starts = Vec::with_capacity(bodies.len());
@@ -145,7 +150,12 @@ pub(crate) fn attach_bodies(
                 RigidBody::Dynamic
             };
             let entity = entities[body.links[0]];
-            let rapier_body = (kind, collider, mass, Friction::coefficient(friction));
+            let kinds = if frozen[b] && body.links.iter().any(|l| touchable.contains(l)) {
+                ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_STATIC
+            } else {
+                ActiveCollisionTypes::default()
+            };
+            let rapier_body = (kind, collider, mass, Friction::coefficient(friction), kinds);
             match groups(b) {
                 Some(g) => session.attach(world, entity, world_from_body, (rapier_body, g)),
                 None => session.attach(world, entity, world_from_body, rapier_body),
@@ -162,16 +172,18 @@ pub(crate) fn attach_bodies(
             else {
                 continue;
             };
-            session.attach(
-                world,
-                entities[l],
-                poses[l],
-                (
-                    RigidBody::Fixed,
-                    collider,
-                    Friction::coefficient(g.friction),
-                ),
+            let fixed = (
+                RigidBody::Fixed,
+                collider,
+                Friction::coefficient(g.friction),
             );
+            if touchable.contains(&l) {
+                let kinds =
+                    ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_STATIC;
+                session.attach(world, entities[l], poses[l], (fixed, kinds));
+            } else {
+                session.attach(world, entities[l], poses[l], fixed);
+            }
         }
     }
     (starts, on)
@@ -297,6 +309,7 @@ fn simulate(
         frozen,
         groups: &|_| None,
         hollow: &[],
+        touchable: &[],
     };
     let (starts, on) = attach_bodies(&mut session, world, tree, entities, bodies, &making);
     let started = std::time::Instant::now();

@@ -277,6 +277,7 @@ fn simulate_motions(
                     links: &phase.links,
                     hidden: &phase.hidden,
                     hollow: &phase.hollow,
+                    still: &phase.still,
                     arm: Some((rig, &phase.arm)),
                 };
                 let check = if as_the_scene_stands {
