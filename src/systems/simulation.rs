@@ -20,7 +20,7 @@ use crate::kinematics::rest_test::{ObjectVerdict, REST_STEP_S, Verdict};
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
 use crate::sim::arm_phases::arm_phases;
-use crate::sim::motion_path::{apply_motion, link_motion};
+use crate::sim::motion_path::{LinkMotion, apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::systems::kinematic_tree::{
     ReadTreeError, read_kinematic_tree, read_kinematic_tree_entities,
@@ -280,12 +280,8 @@ fn simulate_motions(
                     still: &phase.still,
                     arm: Some((rig, &phase.arm)),
                 };
-                let check = if as_the_scene_stands {
-                    simulate_movers_on(world, &phase.tree, entities, &movers)
-                } else {
-                    let (mut scratch, own) = scratch_world(&phase.tree);
-                    simulate_movers_on(&mut scratch, &phase.tree, &own, &movers)
-                };
+                let check =
+                    check_movers(world, &phase.tree, entities, &movers, as_the_scene_stands);
                 let refused = refusal(&check).is_some();
                 checks.push(check);
                 if refused {
@@ -296,10 +292,12 @@ fn simulate_motions(
             break;
         }
         if let Some(motion) = link_motion(&tree, change, REST_STEP_S) {
-            let check = if as_the_scene_stands {
-                simulate_motion_on(world, &tree, entities, &motion)
-            } else {
-                simulate_motion(&tree, &motion)
+            let check = match (change, arm) {
+                (Change::MoveBase { .. }, Some(rig)) => {
+                    check_drive_with_arm(world, &tree, entities, &motion, rig, as_the_scene_stands)
+                }
+                _ if as_the_scene_stands => simulate_motion_on(world, &tree, entities, &motion),
+                _ => simulate_motion(&tree, &motion),
             };
             let refused = refusal(&check).is_some();
             checks.push(check);
@@ -313,6 +311,58 @@ fn simulate_motions(
         as_the_scene_stands = false;
     }
     checks
+}
+
+/// `movers` checked in rapier on the scene's own entities when `tree` is the scene as it stands
+/// (`on_world`), else in a scratch world of `tree`.
+fn check_movers(
+    world: &mut World,
+    tree: &KinematicTree,
+    entities: &[Entity],
+    movers: &Movers,
+    on_world: bool,
+) -> MotionCheck {
+    if on_world {
+        simulate_movers_on(world, tree, entities, movers)
+    } else {
+        let (mut scratch, own) = scratch_world(tree);
+        simulate_movers_on(&mut scratch, tree, &own, movers)
+    }
+}
+
+/// The base's drive `motion` checked with the stowed arm of `rig` riding on it: the arm must
+/// not knock what the base passes, nor go into it.
+fn check_drive_with_arm(
+    world: &mut World,
+    tree: &KinematicTree,
+    entities: &[Entity],
+    motion: &LinkMotion,
+    rig: &ArmRig,
+    on_world: bool,
+) -> MotionCheck {
+    let stowed = rig.stowed_link_poses();
+    let arm_path: Vec<Vec<glam::Affine3A>> = motion
+        .world_from_link
+        .iter()
+        .map(|base| stowed.iter().map(|p| *base * *p).collect())
+        .collect();
+    let links = [(motion.link, motion.world_from_link.clone())];
+    // The gripper link stands for the stowed hand, which the arm's own hand is here.
+    let hidden: Vec<usize> = tree
+        .links
+        .iter()
+        .position(|l| l.name == GRIPPER_LINK)
+        .into_iter()
+        .collect();
+    let movers = Movers {
+        name: ROBOT_LINK.into(),
+        links: &links,
+        hidden: &hidden,
+        hollow: &[],
+        still: &[],
+        arm: Some((rig, &arm_path)),
+    };
+    check_movers(world, tree, entities, &movers, on_world)
 }
 
 /// Why a motion refuses its action, if it does: it knocked something, or took the arm more than
