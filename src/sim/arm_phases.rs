@@ -36,6 +36,9 @@ pub struct ArmPhase {
     /// hand comes to take, which it must not go into (nor push: simulating its hollow free
     /// cost ten times the rest of the check).
     pub still: Vec<usize>,
+    /// Links of `tree` the object in the hand is set down on (its new support, for a place's
+    /// reach): touching them is the set-down.
+    pub set_on: Vec<usize>,
     /// The arm's links' world poses at each instant: `arm[k][l]` is link `l`'s at instant `k`.
     pub arm: Vec<Vec<Affine3A>>,
 }
@@ -92,6 +95,11 @@ pub fn arm_phases(
     } else {
         Vec::new()
     };
+    // A place's object touches its new support from the set-down on.
+    let set_on: Vec<usize> = match handover {
+        Some(Change::Attach { to, .. }) if holds => link_named(to).into_iter().collect(),
+        _ => Vec::new(),
+    };
     let taken: Vec<usize> = match handover {
         Some(Change::Attach { link, to, .. }) if to == GRIPPER_LINK => {
             link_named(link).into_iter().collect()
@@ -105,6 +113,7 @@ pub fn arm_phases(
         hidden: hidden.clone(),
         hollow: hollow.clone(),
         still: taken,
+        set_on: set_on.clone(),
         arm: arm_poses(&instants),
     });
     if let Some(q) = reach.last() {
@@ -137,6 +146,7 @@ pub fn arm_phases(
             hidden: hidden.clone(),
             hollow: hollow.clone(),
             still: Vec::new(),
+            set_on: Vec::new(),
             arm: arm_poses(&instants),
         });
         if let (Some(q), Some(&v)) = (along.last(), values.last()) {
@@ -175,6 +185,7 @@ pub fn arm_phases(
         hidden,
         hollow,
         still: Vec::new(),
+        set_on,
         arm: arm_poses(&instants),
     });
     phases.retain(|p| p.arm.len() > 1);
@@ -413,6 +424,9 @@ mod tests {
         let (_, retreat) = &phases[1].links[0];
         assert!(retreat.iter().all(|p| p.abs_diff_eq(let_go, 1e-5)));
         assert_eq!(phases[1].hollow, vec![4, 1]);
+        // The cup touching the floor it is set on is the set-down, not a knock.
+        assert_eq!(phases[0].set_on, vec![1]);
+        assert_eq!(phases[1].set_on, vec![1]);
     }
 
     #[test]

@@ -278,6 +278,7 @@ fn simulate_motions(
                     hidden: &phase.hidden,
                     hollow: &phase.hollow,
                     still: &phase.still,
+                    set_on: &phase.set_on,
                     arm: Some((rig, &phase.arm)),
                 };
                 let check =
@@ -360,6 +361,7 @@ fn check_drive_with_arm(
         hidden: &hidden,
         hollow: &[],
         still: &[],
+        set_on: &[],
         arm: Some((rig, &arm_path)),
     };
     check_movers(world, tree, entities, &movers, on_world)
