@@ -310,58 +310,27 @@ mod tests {
     /// The root, a floor, the robot at (1, 0) with its gripper, and a cup on the floor (or in
     /// the gripper when `held`).
     fn tree(held: bool) -> KinematicTree {
-        let at = Affine3A::from_translation;
         let cube = TriMesh::cuboid(Vec3::splat(-0.05), Vec3::splat(0.05));
-        let mut robot = TreeLink::body(
-            ROBOT_LINK,
-            "robot",
-            0,
-            JointSpec::FIXED,
-            at(Vec3::X),
-            cube.clone(),
-        );
-        robot.node = None;
-        let mut gripper = TreeLink::body(
-            GRIPPER_LINK,
-            "robot",
-            2,
-            JointSpec::FIXED,
-            at(Vec3::Z),
-            cube.clone(),
-        );
-        gripper.node = None;
+        let link = |name: &str, class: &str, parent: usize, joint: JointSpec, at: Vec3| {
+            let at = Affine3A::from_translation(at);
+            TreeLink::body(name, class, parent, joint, at, cube.clone())
+        };
+        // The robot's links are no scene nodes.
+        let robot_link = |name: &str, parent: usize, at: Vec3| TreeLink {
+            node: None,
+            ..link(name, "robot", parent, JointSpec::FIXED, at)
+        };
         let cup = if held {
-            TreeLink::body(
-                "cup_1",
-                "cup",
-                3,
-                JointSpec::FIXED,
-                Affine3A::IDENTITY,
-                cube.clone(),
-            )
+            link("cup_1", "cup", 3, JointSpec::FIXED, Vec3::ZERO)
         } else {
-            TreeLink::body(
-                "cup_1",
-                "cup",
-                1,
-                JointSpec::FLOATING,
-                at(Vec3::Y),
-                cube.clone(),
-            )
+            link("cup_1", "cup", 1, JointSpec::FLOATING, Vec3::Y)
         };
         KinematicTree {
             links: vec![
                 TreeLink::root(),
-                TreeLink::body(
-                    "floor",
-                    "floor",
-                    0,
-                    JointSpec::FIXED,
-                    Affine3A::IDENTITY,
-                    cube,
-                ),
-                robot,
-                gripper,
+                link("floor", "floor", 0, JointSpec::FIXED, Vec3::ZERO),
+                robot_link(ROBOT_LINK, 0, Vec3::X),
+                robot_link(GRIPPER_LINK, 2, Vec3::Z),
                 cup,
             ],
         }

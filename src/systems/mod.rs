@@ -1,6 +1,7 @@
 //! Pipeline stages as ECS systems: thin wrappers that read components, call a bevy-free
 //! algorithm, and write components. `stages` fixes their order.
 
+pub mod arm_bodies;
 pub mod cad_replacement;
 pub mod contact_graph;
 pub mod export;

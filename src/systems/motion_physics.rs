@@ -15,7 +15,6 @@ use glam::Affine3A;
 use serde::Serialize;
 
 use crate::arm::reach::ArmRig;
-use crate::components::RobotArmLink;
 use crate::geometry::mesh::box_corners;
 use crate::kinematics::contact_pieces::contact_pieces;
 use crate::kinematics::rest_test::{
@@ -24,6 +23,7 @@ use crate::kinematics::rest_test::{
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::motion_path::LinkMotion;
 use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK};
+use crate::systems::arm_bodies::{arm_colliders, arm_entities, arm_swept_bounds};
 use crate::systems::physics_validation::{BodyMaking, attach_bodies, scratch_world};
 use crate::systems::rapier_session::RapierSession;
 
@@ -112,7 +112,20 @@ pub struct Movers<'a> {
     pub arm: Option<(&'a ArmRig, &'a [Vec<Affine3A>])>,
 }
 
-impl Movers<'_> {
+impl<'a> Movers<'a> {
+    /// Nothing moving yet, named `name`: the base the other fields are set on.
+    pub fn named(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            links: &[],
+            hidden: &[],
+            hollow: &[],
+            still: &[],
+            set_on: &[],
+            arm: None,
+        }
+    }
+
     fn instants(&self) -> usize {
         self.arm
             .map(|(_, poses)| poses.len())
@@ -142,13 +155,8 @@ pub fn simulate_motion_on(
     debug_assert!((motion.step_s - REST_STEP_S).abs() < 1e-6);
     let links = [(motion.link, motion.world_from_link.clone())];
     let movers = Movers {
-        name: tree.links[motion.link].name.clone(),
         links: &links,
-        hidden: &[],
-        hollow: &[],
-        still: &[],
-        set_on: &[],
-        arm: None,
+        ..Movers::named(tree.links[motion.link].name.clone())
     };
     simulate_movers_on(world, tree, entities, &movers)
 }
@@ -194,18 +202,24 @@ pub fn simulate_movers_on(
         .arm
         .map(|(rig, _)| arm_colliders(rig))
         .unwrap_or_default();
+    // Each driven link's subtree, its hidden links left out: what its body carries.
+    let carried: Vec<Vec<bool>> = movers
+        .links
+        .iter()
+        .map(|(l, _)| {
+            (0..n)
+                .map(|i| tree.descends_from(i, *l) && !movers.hidden.contains(&i))
+                .collect()
+        })
+        .collect();
     let arm_swept = movers
         .arm
         .map_or(EMPTY_BOX, |(_, path)| arm_swept_bounds(&arm_bodies, path));
     let swept = movers
         .links
         .iter()
-        .map(|(l, path)| {
-            let under: Vec<bool> = (0..n)
-                .map(|i| tree.descends_from(i, *l) && !movers.hidden.contains(&i))
-                .collect();
-            swept_bounds(tree, &under, &poses, *l, path)
-        })
+        .zip(&carried)
+        .map(|((l, path), under)| swept_bounds(tree, under, &poses, *l, path))
         .fold(arm_swept, |(a, b), (lo, hi)| (a.min(lo), b.max(hi)));
     let mut body_of = vec![0; n];
     for (b, body) in bodies.iter().enumerate() {
@@ -264,11 +278,8 @@ pub fn simulate_movers_on(
     };
     let (starts, on) = attach_bodies(&mut session, world, tree, entities, &bodies, &making);
     let mut driven: Vec<(Entity, &[Affine3A])> = Vec::new();
-    for (l, path) in movers.links {
-        let under: Vec<bool> = (0..n)
-            .map(|i| tree.descends_from(i, *l) && !movers.hidden.contains(&i))
-            .collect();
-        if let Some(collider) = mover_collider(tree, &under, &poses, path[0]) {
+    for ((l, path), under) in movers.links.iter().zip(&carried) {
+        if let Some(collider) = mover_collider(tree, under, &poses, path[0]) {
             session.attach(
                 world,
                 entities[*l],
@@ -381,66 +392,6 @@ pub fn simulate_movers_on(
     }
 }
 
-/// One of the arm's links as a body: its pieces as one collider in its frame, and their box.
-struct ArmBody {
-    link: usize,
-    collider: Collider,
-    bounds: (Vec3, Vec3),
-}
-
-/// The arm's links that have collision pieces, as bodies.
-fn arm_colliders(rig: &ArmRig) -> Vec<ArmBody> {
-    rig.arm
-        .links
-        .iter()
-        .enumerate()
-        .filter_map(|(link, l)| {
-            let pieces: Vec<(Vec3, Quat, Collider)> = l
-                .pieces
-                .iter()
-                .filter_map(|piece| Collider::convex_hull(&piece.positions))
-                .map(|c| (Vec3::ZERO, Quat::IDENTITY, c))
-                .collect();
-            let bounds = l
-                .pieces
-                .iter()
-                .flat_map(|piece| piece.positions.iter())
-                .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| {
-                    (lo.min(*p), hi.max(*p))
-                });
-            (!pieces.is_empty()).then(|| ArmBody {
-                link,
-                collider: Collider::compound(pieces),
-                bounds,
-            })
-        })
-        .collect()
-}
-
-/// The world's entities of the arm's links `bodies` (their `RobotArmLink`s), or new ones when
-/// the world has not got them all (a scratch world); whether they were spawned.
-fn arm_entities(world: &mut World, bodies: &[ArmBody]) -> (Vec<Entity>, bool) {
-    let own: Vec<(Entity, usize)> = world
-        .query::<(Entity, &RobotArmLink)>()
-        .iter(world)
-        .map(|(e, l)| (e, l.0))
-        .collect();
-    let found: Option<Vec<Entity>> = bodies
-        .iter()
-        .map(|b| own.iter().find(|(_, o)| *o == b.link).map(|(e, _)| *e))
-        .collect();
-    match found {
-        Some(entities) => (entities, false),
-        None => (
-            bodies
-                .iter()
-                .map(|b| world.spawn(RobotArmLink(b.link)).id())
-                .collect(),
-            true,
-        ),
-    }
-}
-
 /// The moving links' convex collision pieces as one compound, in the frame of the moving link
 /// at `world_from_mover`.
 fn mover_collider(
@@ -491,7 +442,7 @@ fn link_bounds(tree: &KinematicTree, link: usize) -> Option<(Vec3, Vec3)> {
 }
 
 /// The world box of the local box `lo..hi` at `world_from_local`.
-fn world_box(world_from_local: Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+pub(crate) fn world_box(world_from_local: Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
     box_corners(lo, hi)
         .iter()
         .map(|c| world_from_local.transform_point3(*c))
@@ -526,22 +477,9 @@ fn swept_bounds(
         })
 }
 
-/// The world box the arm's links `bodies` pass through along `path` (`path[k][l]`).
-fn arm_swept_bounds(bodies: &[ArmBody], path: &[Vec<Affine3A>]) -> (Vec3, Vec3) {
-    sampled(path.len())
-        .flat_map(|k| {
-            bodies
-                .iter()
-                .map(move |b| world_box(path[k][b.link], b.bounds.0, b.bounds.1))
-        })
-        .fold((Vec3::MAX, Vec3::MIN), |(a, b), (lo, hi)| {
-            (a.min(lo), b.max(hi))
-        })
-}
-
 /// The instants of a path of `len` at which its swept volume is sampled: [`SWEEP_SAMPLES`]
 /// spread along it, and its end.
-fn sampled(len: usize) -> impl Iterator<Item = usize> {
+pub(crate) fn sampled(len: usize) -> impl Iterator<Item = usize> {
     let last = len.saturating_sub(1);
     let stride = (last / SWEEP_SAMPLES).max(1);
     (0..=last).step_by(stride).chain(std::iter::once(last))
@@ -555,6 +493,7 @@ fn overlaps(a: (Vec3, Vec3), b: (Vec3, Vec3), margin: f32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::components::RobotArmLink;
     use crate::geometry::TriMesh;
     use crate::kinematics::JointSpec;
     use crate::kinematics::tree::TreeLink;
@@ -683,13 +622,8 @@ mod tests {
     fn arm_check(tree: &KinematicTree, rig: &ArmRig, path: &[Vec<Affine3A>]) -> MotionCheck {
         let (mut world, entities) = scratch_world(tree);
         let movers = Movers {
-            name: "arm".into(),
-            links: &[],
-            hidden: &[],
-            hollow: &[],
-            still: &[],
-            set_on: &[],
             arm: Some((rig, path)),
+            ..Movers::named("arm")
         };
         let check = simulate_movers_on(&mut world, tree, &entities, &movers);
         // The arm's bodies were spawned for the check and are gone again.
@@ -733,13 +667,8 @@ mod tests {
         let before = world.entity(fore).archetype().components().len();
         let into = bar_path(&rig, Vec3::new(0.5, -2.0, 0.3), Vec3::new(0.5, -2.0, 0.04));
         let movers = Movers {
-            name: "arm".into(),
-            links: &[],
-            hidden: &[],
-            hollow: &[],
-            still: &[],
-            set_on: &[],
             arm: Some((&rig, &into)),
+            ..Movers::named("arm")
         };
         let check = simulate_movers_on(&mut world, &tree, &entities, &movers);
         assert!(check.arm_depth.is_some_and(|d| d.depth_m > 0.008));

@@ -273,13 +273,13 @@ fn simulate_motions(
             let handover = changes.get(k + 1);
             for phase in arm_phases(&tree, rig, change, handover, REST_STEP_S) {
                 let movers = Movers {
-                    name: format!("{ROBOT_LINK} ({})", phase.what),
                     links: &phase.links,
                     hidden: &phase.hidden,
                     hollow: &phase.hollow,
                     still: &phase.still,
                     set_on: &phase.set_on,
                     arm: Some((rig, &phase.arm)),
+                    ..Movers::named(format!("{ROBOT_LINK} ({})", phase.what))
                 };
                 let check =
                     check_movers(world, &phase.tree, entities, &movers, as_the_scene_stands);
@@ -356,13 +356,10 @@ fn check_drive_with_arm(
         .into_iter()
         .collect();
     let movers = Movers {
-        name: ROBOT_LINK.into(),
         links: &links,
         hidden: &hidden,
-        hollow: &[],
-        still: &[],
-        set_on: &[],
         arm: Some((rig, &arm_path)),
+        ..Movers::named(ROBOT_LINK)
     };
     check_movers(world, tree, entities, &movers, on_world)
 }
