@@ -28,6 +28,8 @@ const ALWAYS_TOUCHING: f32 = 0.5;
 pub struct Obstacle {
     /// What it belongs to (a link of the scene's kinematic tree), for the reasons a plan fails.
     pub name: String,
+    /// Part of the object being grasped: the fingers may touch it, the rest of the arm not.
+    pub fingers_may_touch: bool,
     hull: ConvexPolyhedron,
     pose: Pose,
     lo: Vec3,
@@ -44,6 +46,21 @@ impl Obstacles {
     /// Adds `piece` (a convex mesh in its own frame) placed at `world_from_piece`; a piece that
     /// spans no volume is skipped.
     pub fn add(&mut self, name: &str, piece: &TriMesh, world_from_piece: &Affine3A) {
+        self.add_piece(name, piece, world_from_piece, false);
+    }
+
+    /// [`Self::add`] for a piece of the object being grasped: only the fingers may touch it.
+    pub fn add_grasped(&mut self, name: &str, piece: &TriMesh, world_from_piece: &Affine3A) {
+        self.add_piece(name, piece, world_from_piece, true);
+    }
+
+    fn add_piece(
+        &mut self,
+        name: &str,
+        piece: &TriMesh,
+        world_from_piece: &Affine3A,
+        fingers_may_touch: bool,
+    ) {
         let Some(hull) = ConvexPolyhedron::from_convex_hull(&piece.positions) else {
             return;
         };
@@ -53,6 +70,7 @@ impl Obstacles {
         };
         self.items.push(Obstacle {
             name: name.to_string(),
+            fingers_may_touch,
             hull,
             pose,
             lo,
@@ -78,6 +96,8 @@ pub struct ArmCollider {
     pieces: Vec<Vec<(ConvexPolyhedron, Vec3, Vec3)>>,
     /// Pairs of links checked against each other.
     pub self_pairs: Vec<(usize, usize)>,
+    /// Per link: whether it is a finger (it may touch what is being grasped).
+    fingers: Vec<bool>,
 }
 
 impl ArmCollider {
@@ -98,6 +118,11 @@ impl ArmCollider {
         let mut collider = Self {
             pieces,
             self_pairs: Vec::new(),
+            fingers: arm
+                .motion
+                .iter()
+                .map(|m| *m == LinkMotion::Finger)
+                .collect(),
         };
         let candidates: Vec<(usize, usize)> = (0..arm.links.len())
             .flat_map(|a| (a + 1..arm.links.len()).map(move |b| (a, b)))
@@ -144,7 +169,8 @@ impl ArmCollider {
     }
 
     /// The first link of the arm, but those in `skip`, that comes within `margin` of an
-    /// obstacle, with the obstacle (the arm's own links not checked).
+    /// obstacle, with the obstacle (the arm's own links not checked; a finger not against
+    /// what is being grasped).
     pub fn touching_obstacles(
         &self,
         poses: &[Affine3A],
@@ -160,7 +186,9 @@ impl ArmCollider {
             for (hull, lo, hi) in pieces {
                 let (wlo, whi) = world_bounds(&poses[l], *lo, *hi);
                 for (o, obstacle) in obstacles.items.iter().enumerate() {
-                    if !boxes_within(wlo, whi, obstacle.lo, obstacle.hi, margin) {
+                    if (obstacle.fingers_may_touch && self.fingers[l])
+                        || !boxes_within(wlo, whi, obstacle.lo, obstacle.hi, margin)
+                    {
                         continue;
                     }
                     if within(&pose, hull, &obstacle.pose, &obstacle.hull, margin) {

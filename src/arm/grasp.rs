@@ -4,7 +4,8 @@
 //! fingers close along +-y (the Panda's `panda_grasptarget`). A top grasp comes down with the
 //! fingers across a horizontal side of the box that fits between them; a side grasp comes in
 //! horizontally at the box's middle height, across the other horizontal side or across the
-//! height (a book lying flat). Grasps facing the robot come first.
+//! height (a book lying flat). Grasps facing the robot come first. No grasp takes the tool so
+//! deep into the object that the palm behind the fingers would meet it.
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
@@ -23,6 +24,9 @@ const FINGER_CLEARANCE_M: f32 = 0.002;
 /// the fingers close on it, metres.
 const RIM_WIDTH_M: f32 = 0.01;
 const RIM_INSET_M: f32 = 0.006;
+/// Room left between the object and the palm, metres: more than the planner's clearance on
+/// the last stretch (`reach::STRETCH_MARGIN_M`, 4 mm).
+const PALM_CLEARANCE_M: f32 = 0.006;
 /// How far back along its approach the hand starts its straight last stretch, metres.
 pub const PREGRASP_M: f32 = 0.1;
 
@@ -34,6 +38,22 @@ pub enum GraspKind {
     Side,
     /// The grasp an object is already held by (set down as it was picked).
     Held,
+}
+
+/// What of the hand decides a grasp, metres.
+#[derive(Clone, Copy, Debug)]
+pub struct Hand {
+    /// How wide the fingers open.
+    pub opening: f32,
+    /// How far the palm lies behind the tool point (`Arm::palm_depth`).
+    pub palm_depth: f32,
+}
+
+impl Hand {
+    /// How far past the object's near face the tool may go.
+    fn reach_in(&self) -> f32 {
+        (self.palm_depth - PALM_CLEARANCE_M).max(0.0)
+    }
 }
 
 /// One way to hold an object.
@@ -56,14 +76,13 @@ impl Grasp {
 }
 
 /// The grasps of an object whose collision vertices are `points` (its frame, z up) placed at
-/// `world_from_object`, for fingers that open to `max_width`, best first for a robot standing
-/// at `robot` (x, y). A top grasp measures the object where the fingers close (a bottle's
+/// `world_from_object`, for `hand`, best first for a robot standing at `robot` (x, y). A top grasp measures the object where the fingers close (a bottle's
 /// neck, not its body). An open vessel (`rim`: a cup, a bowl) too wide for the fingers is also
 /// held by its rim, the fingers across the wall at the middle of each side of its top.
 pub fn grasps(
     world_from_object: &Affine3A,
     points: &[Vec3],
-    max_width: f32,
+    hand: Hand,
     robot: Vec2,
     rim: bool,
 ) -> Vec<Grasp> {
@@ -75,11 +94,11 @@ pub fn grasps(
     let axis_x = world_from_object.transform_vector3(Vec3::X).normalize();
     let axis_y = world_from_object.transform_vector3(Vec3::Y).normalize();
     // A tenth of a millimetre for rounding: 7.6 cm fits the 8 cm hand.
-    let fits = |width: f32| width + 2.0 * FINGER_CLEARANCE_M <= max_width + 1e-4;
+    let fits = |width: f32| width + 2.0 * FINGER_CLEARANCE_M <= hand.opening + 1e-4;
     let to_robot = (robot - centre.truncate()).normalize_or_zero().extend(0.0);
     let mut out = Vec::new();
     // Top grasps: down onto the top, the fingers closing across x or y.
-    let depth = TOP_GRASP_DEPTH_M.min(0.5 * size.z);
+    let depth = TOP_GRASP_DEPTH_M.min(0.5 * size.z).min(hand.reach_in());
     let top = centre + Vec3::Z * (0.5 * size.z - depth);
     let band: Vec<Vec3> = points
         .iter()
@@ -122,17 +141,19 @@ pub fn grasps(
     }
     // Side grasps: in from each horizontal side, across the other horizontal side or the height.
     let mut sides = Vec::new();
-    for (inward, across, across_width) in [
-        (axis_x, axis_y, size.y),
-        (-axis_x, axis_y, size.y),
-        (axis_y, axis_x, size.x),
-        (-axis_y, axis_x, size.x),
+    for (inward, across, across_width, deep) in [
+        (axis_x, axis_y, size.y, size.x),
+        (-axis_x, axis_y, size.y, size.x),
+        (axis_y, axis_x, size.x, size.y),
+        (-axis_y, axis_x, size.x, size.y),
     ] {
+        // At the middle, or as far in as the palm allows.
+        let at = centre - inward * (0.5 * deep - hand.reach_in()).max(0.0);
         for (closing, width) in [(across, across_width), (Vec3::Z, size.z)] {
             if fits(width) {
                 sides.push(Grasp {
                     kind: GraspKind::Side,
-                    world_from_tool: tool_pose(centre, inward, closing),
+                    world_from_tool: tool_pose(at, inward, closing),
                     approach: inward,
                     width,
                 });
@@ -159,7 +180,17 @@ fn tool_pose(at: Vec3, approach: Vec3, closing: Vec3) -> Affine3A {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3A;
+
     use super::*;
+
+    /// A hand opening to `opening` whose palm lies far behind the tool point.
+    fn hand(opening: f32) -> Hand {
+        Hand {
+            opening,
+            palm_depth: 0.2,
+        }
+    }
 
     #[test]
     fn a_cup_gets_top_and_side_grasps_and_a_tray_none() {
@@ -167,7 +198,7 @@ mod tests {
         let cup = grasps(
             &Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.75)),
             &cuboid(Vec3::new(-0.04, -0.04, 0.0), Vec3::new(0.04, 0.04, 0.1)),
-            0.1,
+            hand(0.1),
             Vec2::ZERO,
             false,
         );
@@ -187,7 +218,7 @@ mod tests {
         let tray = grasps(
             &Affine3A::IDENTITY,
             &cuboid(Vec3::new(-0.2, -0.2, 0.0), Vec3::new(0.2, 0.2, 0.2)),
-            0.08,
+            hand(0.08),
             Vec2::ZERO,
             false,
         );
@@ -196,7 +227,7 @@ mod tests {
         let bowl = grasps(
             &Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.75)),
             &cuboid(Vec3::new(-0.07, -0.07, 0.0), Vec3::new(0.07, 0.07, 0.07)),
-            0.08,
+            hand(0.08),
             Vec2::ZERO,
             true,
         );
@@ -208,8 +239,62 @@ mod tests {
             Vec3::new(-0.015, -0.015, 0.2),
             Vec3::new(0.015, 0.015, 0.3),
         ));
-        let taken = grasps(&Affine3A::IDENTITY, &bottle, 0.08, Vec2::X, false);
+        let taken = grasps(&Affine3A::IDENTITY, &bottle, hand(0.08), Vec2::X, false);
         assert_eq!(taken[0].kind, GraspKind::Top);
         assert!((taken[0].width - 0.03).abs() < 1e-5);
+    }
+
+    #[test]
+    fn the_palm_stays_clear_of_the_object() {
+        // The Panda's palm lies 3.9 cm behind its tool point: 3.3 cm with the clearance.
+        let panda = Hand {
+            opening: 0.08,
+            palm_depth: 0.039,
+        };
+        let reach_in = 0.039 - PALM_CLEARANCE_M;
+        // A box 6 cm across and 16 cm long, 5 cm high: taken from the side across its 6 cm,
+        // the tool stops 3.3 cm in from the end it comes in at, not at the middle 8 cm in.
+        let long = crate::geometry::mesh::box_corners(
+            Vec3::new(-0.08, -0.03, 0.0),
+            Vec3::new(0.08, 0.03, 0.05),
+        );
+        let found = grasps(
+            &Affine3A::IDENTITY,
+            &long,
+            panda,
+            Vec2::new(-1.0, 0.0),
+            false,
+        );
+        let side = found
+            .iter()
+            .find(|g| g.kind == GraspKind::Side && g.approach.x > 0.9)
+            .expect("a side grasp along x");
+        assert!((side.world_from_tool.translation.x - (-0.08 + reach_in)).abs() < 1e-5);
+        // Across its 16 cm it does not fit; from its long side the middle is 3 cm in: as asked.
+        let across = found
+            .iter()
+            .find(|g| g.kind == GraspKind::Side && g.approach.y > 0.9)
+            .expect("a side grasp along y");
+        assert!(across.world_from_tool.translation.y.abs() < 1e-5);
+        // A palm 2 cm behind the tool: a top grasp goes 1.4 cm below the top, not 3 cm.
+        let short = Hand {
+            opening: 0.08,
+            palm_depth: 0.02,
+        };
+        let top = grasps(&Affine3A::IDENTITY, &long, short, Vec2::ZERO, false)
+            .into_iter()
+            .find(|g| g.kind == GraspKind::Top)
+            .expect("a top grasp");
+        assert!((top.world_from_tool.translation.z - (0.05 - 0.014)).abs() < 1e-5);
+        // The palm clears every corner of the box, at each grasp.
+        for grasp in grasps(&Affine3A::IDENTITY, &long, panda, Vec2::ZERO, false) {
+            let deepest = long
+                .iter()
+                .map(|p| {
+                    (grasp.world_from_tool.translation - Vec3A::from(*p)).dot(grasp.approach.into())
+                })
+                .fold(f32::NEG_INFINITY, f32::max);
+            assert!(deepest <= reach_in + 1e-5, "{grasp:?}: {deepest}");
+        }
     }
 }

@@ -213,6 +213,28 @@ impl Arm {
         hand
     }
 
+    /// How far the hand's palm (every piece past the chain's last joint but the fingers) lies
+    /// behind the tool point along the tool's +z, metres: how deep into an object the tool may
+    /// go before the palm meets it. Infinite for a hand with no pieces but its fingers.
+    pub fn palm_depth(&self) -> f32 {
+        let poses = self.link_poses(&Affine3A::IDENTITY, &self.middle(), 1.0);
+        let tool_from_root = poses[self.tool].inverse();
+        let nearest = self
+            .hand_links()
+            .into_iter()
+            .filter(|&l| self.motion[l] != LinkMotion::Finger)
+            .flat_map(|l| {
+                let tool_from_link = tool_from_root * poses[l];
+                self.links[l].pieces.iter().flat_map(move |p| {
+                    p.positions
+                        .iter()
+                        .map(move |v| tool_from_link.transform_point3(*v).z)
+                })
+            })
+            .fold(f32::NEG_INFINITY, f32::max);
+        (-nearest).max(0.0)
+    }
+
     /// The links past the chain's last joint: the hand, its fingers and the tool.
     pub fn hand_links(&self) -> Vec<usize> {
         let last = self.chain.last().copied().unwrap_or(0);

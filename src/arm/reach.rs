@@ -41,6 +41,8 @@ pub struct ArmRig {
     pub base_from_root: Affine3A,
     /// How wide its fingers open, metres.
     pub max_opening: f32,
+    /// How far the palm lies behind the tool point, metres (`Arm::palm_depth`).
+    pub palm_depth: f32,
     pub plan: PlanSettings,
     pub ik: IkSettings,
 }
@@ -61,6 +63,7 @@ impl ArmRig {
             .map(|j| j.limits.1 - j.limits.0)
             .sum();
         Self {
+            palm_depth: arm.palm_depth(),
             arm,
             collider,
             stow,

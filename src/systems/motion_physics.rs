@@ -87,6 +87,10 @@ pub struct MotionCheck {
     /// For an arm's motion, how deep it went into the scene.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arm_depth: Option<ArmDepth>,
+    /// Objects near the path that the last rest test found falling on their own: held still
+    /// here and not judged (their fall is not the motion's doing; the rest test reports it).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub falls_at_rest: Vec<String>,
     pub wall_ms: f64,
 }
 
@@ -108,6 +112,9 @@ pub struct Movers<'a> {
     /// free one that stands on the floor throws it about in rapier, where MuJoCo's replay of the
     /// same motion finds 0.1 mm).
     pub set_on: &'a [usize],
+    /// Links of objects the last rest test found falling on their own (`FallsAtRest`): held
+    /// still, as `still`, so that a fall that happens without the motion is not blamed on it.
+    pub falling: &'a [usize],
     /// The arm and its links' world poses at each instant (`arm.1[k][l]`).
     pub arm: Option<(&'a ArmRig, &'a [Vec<Affine3A>])>,
 }
@@ -122,6 +129,7 @@ impl<'a> Movers<'a> {
             hollow: &[],
             still: &[],
             set_on: &[],
+            falling: &[],
             arm: None,
         }
     }
@@ -242,7 +250,9 @@ pub fn simulate_movers_on(
                     .is_some_and(|(lo, hi)| overlaps((lo, hi), swept, NEAR_M)));
     }
     let penetrations = start_penetrations(tree, &bodies);
-    let held_still = |b: usize| bodies[b].links.iter().any(|l| movers.still.contains(l));
+    let falling = |b: usize| bodies[b].links.iter().any(|l| movers.falling.contains(l));
+    let held_still =
+        |b: usize| falling(b) || bodies[b].links.iter().any(|l| movers.still.contains(l));
     let frozen: Vec<bool> = (0..bodies.len())
         .map(|b| !near[b] || penetrations[b].0 > MAX_START_PENETRATION_M || held_still(b))
         .collect();
@@ -267,6 +277,7 @@ pub fn simulate_movers_on(
                 })
             })
             .chain(movers.still.iter().copied())
+            .chain(movers.falling.iter().copied())
             .collect(),
         None => Vec::new(),
     };
@@ -388,6 +399,10 @@ pub fn simulate_movers_on(
             .collect(),
         knocked,
         arm_depth: movers.arm.is_some().then_some(depth),
+        falls_at_rest: (0..bodies.len())
+            .filter(|&b| near[b] && falling(b))
+            .map(|b| bodies[b].name.clone())
+            .collect(),
         wall_ms: started.elapsed().as_secs_f64() * 1e3,
     }
 }
@@ -573,6 +588,33 @@ mod tests {
                 .collect(),
             step_s: REST_STEP_S,
         }
+    }
+
+    #[test]
+    fn a_bottle_that_falls_on_its_own_is_held_still_and_not_blamed_on_the_motion() {
+        // The bottle hangs 30 cm above the floor beside the pusher's path: it falls, pushed or
+        // not.
+        let mut hanging = scene(Vec3::new(-0.3, 0.21, 0.0));
+        hanging.links[2].parent_from_link =
+            Affine3A::from_translation(Vec3::Z * 0.3) * hanging.links[2].parent_from_link;
+        let motion = slide(&hanging, Vec3::X * 1.2);
+        let check = simulate_motion(&hanging, &motion);
+        assert!(
+            check.knocked.iter().any(|k| k.object == "bottle_1"),
+            "{check:?}"
+        );
+        assert!(check.falls_at_rest.is_empty());
+        // The last rest test found it falling: held still, and said so.
+        let links = [(motion.link, motion.world_from_link.clone())];
+        let movers = Movers {
+            links: &links,
+            falling: &[2],
+            ..Movers::named("pusher")
+        };
+        let (mut world, entities) = scratch_world(&hanging);
+        let check = simulate_movers_on(&mut world, &hanging, &entities, &movers);
+        assert!(check.knocked.is_empty(), "{check:?}");
+        assert_eq!(check.falls_at_rest, ["bottle_1"]);
     }
 
     #[test]

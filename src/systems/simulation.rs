@@ -25,9 +25,7 @@ use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::systems::kinematic_tree::{
     ReadTreeError, read_kinematic_tree, read_kinematic_tree_entities,
 };
-use crate::systems::motion_physics::{
-    MAX_ARM_DEPTH_M, MotionCheck, Movers, simulate_motion, simulate_motion_on, simulate_movers_on,
-};
+use crate::systems::motion_physics::{MAX_ARM_DEPTH_M, MotionCheck, Movers, simulate_movers_on};
 use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics, scratch_world};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 
@@ -41,6 +39,26 @@ pub struct Robot {
 /// The robot's gripper entity (a child of the base); a held object is its child.
 #[derive(Component, Clone, Copy, Debug)]
 pub struct Gripper;
+
+/// The objects the last rest test found falling on their own (unstable at rest, not for starting
+/// inside something): the motion checks hold them still rather than blame their fall on the
+/// robot. The rest tests before and after each action report them.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct FallsAtRest(pub Vec<String>);
+
+/// The rest test of the scene in `world` as it stands, its falling objects recorded in
+/// [`FallsAtRest`] for the next motions' checks.
+pub fn rest_physics(world: &mut World) -> Result<PhysicsReport, ReadTreeError> {
+    let report = scene_rest_physics(world)?;
+    let falling = report
+        .objects
+        .iter()
+        .filter(|o| o.verdict == Verdict::Unstable)
+        .map(|o| o.object.clone())
+        .collect();
+    world.insert_resource(FallsAtRest(falling));
+    Ok(report)
+}
 
 /// Asks the robot to perform an action.
 #[derive(Message, Clone, Debug)]
@@ -226,7 +244,7 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
                 }
             }
             let physics_started = Instant::now();
-            let physics = scene_rest_physics(world)
+            let physics = rest_physics(world)
                 .inspect_err(|e| tracing::warn!("no rest test after step {step}: {e}"))
                 .ok()
                 .map(step_physics);
@@ -268,6 +286,12 @@ fn simulate_motions(
     let mut tree = tree.clone();
     let mut checks = Vec::new();
     let mut as_the_scene_stands = true;
+    let falling: Vec<usize> = world
+        .get_resource::<FallsAtRest>()
+        .map_or(&[][..], |f| &f.0)
+        .iter()
+        .filter_map(|id| tree.links.iter().position(|l| l.name == *id))
+        .collect();
     for (k, change) in changes.iter().enumerate() {
         if let (Change::ArmMotion { .. }, Some(rig)) = (change, arm) {
             let handover = changes.get(k + 1);
@@ -278,6 +302,7 @@ fn simulate_motions(
                     hollow: &phase.hollow,
                     still: &phase.still,
                     set_on: &phase.set_on,
+                    falling: &falling,
                     arm: Some((rig, &phase.arm)),
                     ..Movers::named(format!("{ROBOT_LINK} ({})", phase.what))
                 };
@@ -294,11 +319,23 @@ fn simulate_motions(
         }
         if let Some(motion) = link_motion(&tree, change, REST_STEP_S) {
             let check = match (change, arm) {
-                (Change::MoveBase { .. }, Some(rig)) => {
-                    check_drive_with_arm(world, &tree, entities, &motion, rig, as_the_scene_stands)
+                (Change::MoveBase { .. }, Some(rig)) => check_drive_with_arm(
+                    world,
+                    &tree,
+                    entities,
+                    (&motion, &falling),
+                    rig,
+                    as_the_scene_stands,
+                ),
+                _ => {
+                    let links = [(motion.link, motion.world_from_link.clone())];
+                    let movers = Movers {
+                        links: &links,
+                        falling: &falling,
+                        ..Movers::named(tree.links[motion.link].name.clone())
+                    };
+                    check_movers(world, &tree, entities, &movers, as_the_scene_stands)
                 }
-                _ if as_the_scene_stands => simulate_motion_on(world, &tree, entities, &motion),
-                _ => simulate_motion(&tree, &motion),
             };
             let refused = refusal(&check).is_some();
             checks.push(check);
@@ -332,12 +369,12 @@ fn check_movers(
 }
 
 /// The base's drive `motion` checked with the stowed arm of `rig` riding on it: the arm must
-/// not knock what the base passes, nor go into it.
+/// not knock what the base passes, nor go into it (`falling` held still).
 fn check_drive_with_arm(
     world: &mut World,
     tree: &KinematicTree,
     entities: &[Entity],
-    motion: &LinkMotion,
+    (motion, falling): (&LinkMotion, &[usize]),
     rig: &ArmRig,
     on_world: bool,
 ) -> MotionCheck {
@@ -358,6 +395,7 @@ fn check_drive_with_arm(
     let movers = Movers {
         links: &links,
         hidden: &hidden,
+        falling,
         arm: Some((rig, &arm_path)),
         ..Movers::named(ROBOT_LINK)
     };

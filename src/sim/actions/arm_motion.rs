@@ -7,7 +7,7 @@ use glam::{Affine3A, Vec3};
 use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
-use crate::arm::grasp::{Grasp, GraspKind, PREGRASP_M, grasps};
+use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps};
 use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat};
 use crate::sim::actions::error::ArmTries;
 use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
@@ -57,6 +57,16 @@ pub(super) fn add_links(
     }
 }
 
+/// Adds the collision pieces of `links` where they stand, as what the fingers grasp.
+fn add_grasped_links(obstacles: &mut Obstacles, view: &SceneView, links: &[usize]) {
+    for &l in links {
+        let link = &view.tree.links[l];
+        for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
+            obstacles.add_grasped(&link.name, piece, &view.poses[l]);
+        }
+    }
+}
+
 /// The scene's obstacles around an object the arm takes or sets down, built once per action
 /// (every base pose and spot tried shares them).
 pub(super) struct AroundObject {
@@ -66,6 +76,9 @@ pub(super) struct AroundObject {
     with_object: Obstacles,
     /// Everything but the robot and the object.
     without_object: Obstacles,
+    /// Everything but the robot, the object as what the fingers grasp: the palm and the rest
+    /// of the arm keep clear of it on a pick's last stretch.
+    grasped: Obstacles,
 }
 
 impl AroundObject {
@@ -74,10 +87,13 @@ impl AroundObject {
         let without_object = scene_obstacles(view, &links);
         let mut with_object = without_object.clone();
         add_links(&mut with_object, view, &links, &Affine3A::IDENTITY);
+        let mut grasped = without_object.clone();
+        add_grasped_links(&mut grasped, view, &links);
         Self {
             links,
             with_object,
             without_object,
+            grasped,
         }
     }
 }
@@ -114,7 +130,8 @@ fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &Affine3A) ->
     Held { pieces }
 }
 
-/// The grasps of node `id`'s link `link` at the world pose `world_from_link`.
+/// The grasps of node `id`'s link `link` at the world pose `world_from_link`, from the
+/// collision pieces of the node's links (its own and its parts', such as a bottle's cap).
 fn grasps_of(
     view: &SceneView,
     rig: &ArmRig,
@@ -123,11 +140,24 @@ fn grasps_of(
     link: usize,
     world_from_link: &Affine3A,
 ) -> Result<Vec<Grasp>, ActionError> {
-    let points: Vec<Vec3> = view.tree.links[link]
-        .geometry
-        .iter()
-        .flat_map(|g| g.collision.iter())
-        .flat_map(|piece| piece.positions.iter().copied())
+    let node = &view.tree.links[link].node;
+    let link_from_world = view.poses[link].inverse();
+    let points: Vec<Vec3> = subtree(view, link)
+        .into_iter()
+        .filter(|&l| view.tree.links[l].node == *node)
+        .flat_map(|l| {
+            let link_from_part = link_from_world * view.poses[l];
+            view.tree.links[l]
+                .geometry
+                .iter()
+                .flat_map(|g| g.collision.iter())
+                .flat_map(move |piece| {
+                    piece
+                        .positions
+                        .iter()
+                        .map(move |p| link_from_part.transform_point3(*p))
+                })
+        })
         .collect();
     if points.is_empty() {
         return Err(ActionError::NoGeometry(id.to_string()));
@@ -136,7 +166,10 @@ fn grasps_of(
     let found = grasps(
         world_from_link,
         &points,
-        rig.max_opening,
+        Hand {
+            opening: rig.max_opening,
+            palm_depth: rig.palm_depth,
+        },
         state.base.position,
         rim,
     );
@@ -160,7 +193,7 @@ pub(super) fn pick_motion(
     around: &AroundObject,
 ) -> Result<Vec<Change>, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
-    let (transit, near) = (&around.with_object, &around.without_object);
+    let (transit, near) = (&around.with_object, &around.grasped);
     let candidates = grasps_of(view, rig, state, id, link, &view.poses[link])?;
     let from = view.support_of(id).map_or(String::new(), String::from);
     first_grasp_that_works(
@@ -184,7 +217,8 @@ pub(super) fn pick_motion(
             let world_from_tool = rig.arm.tool_pose(&root, to.last());
             let held = held_pieces(view, &around.links, &world_from_tool);
             let up = Vec3::Z * LIFT_M;
-            let back = retreat(rig, &root, to.last(), up, near, near, &held)?;
+            let scene = &around.without_object;
+            let back = retreat(rig, &root, to.last(), up, scene, scene, &held)?;
             let in_hand = Change::Attach {
                 link: id.to_string(),
                 from: from.clone(),
