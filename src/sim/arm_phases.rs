@@ -36,8 +36,8 @@ pub struct ArmPhase {
     /// hand comes to take, which it must not go into (nor push: simulating its hollow free
     /// cost ten times the rest of the check).
     pub still: Vec<usize>,
-    /// Links of `tree` the object in the hand is set down on (its new support, for a place's
-    /// reach): touching them is the set-down.
+    /// Links of `tree` the object in the hand is set down on or lifted from (a place's new
+    /// support, a pick's old one): touching them is the set-down or the lift, not a knock.
     pub set_on: Vec<usize>,
     /// The arm's links' world poses at each instant: `arm[k][l]` is link `l`'s at instant `k`.
     pub arm: Vec<Vec<Affine3A>>,
@@ -95,9 +95,13 @@ pub fn arm_phases(
     } else {
         Vec::new()
     };
-    // A place's object touches its new support from the set-down on.
+    // A place's object touches its new support from the set-down on; a picked one its old
+    // support until the lift has taken it off.
     let set_on: Vec<usize> = match handover {
         Some(Change::Attach { to, .. }) if holds => link_named(to).into_iter().collect(),
+        Some(Change::Attach { from, to, .. }) if to == GRIPPER_LINK => {
+            link_named(from).into_iter().collect()
+        }
         _ => Vec::new(),
     };
     let taken: Vec<usize> = match handover {
@@ -377,6 +381,8 @@ mod tests {
                 .abs_diff_eq(expected.translation, 1e-5)
         );
         assert_eq!(poses.len(), phases[1].arm.len());
+        // The cup leaving the floor it stood on is the lift, not a knock.
+        assert_eq!(phases[1].set_on, vec![1]);
 
         // A place: the gripper carries the cup on the reach, then holds still where it let go.
         let set = Change::Attach {

@@ -107,10 +107,10 @@ pub struct Movers<'a> {
     /// Links whose bodies hold still, the arm's contacts with them measured (what the hand
     /// comes to take: it must not go into it).
     pub still: &'a [usize],
-    /// Links whose bodies the moving links (not the arm) are set down on: the held object
-    /// touching its new support is the set-down, not a knock (pressing a kinematic body onto a
-    /// free one that stands on the floor throws it about in rapier, where MuJoCo's replay of the
-    /// same motion finds 0.1 mm).
+    /// Links whose bodies the moving links (not the arm) are set down on or lifted from: the
+    /// held object touching its new or old support is the set-down or the lift, not a knock
+    /// (pressing a kinematic body onto a free one that stands on the floor throws it about in
+    /// rapier, where MuJoCo's replay of the same motion finds 0.1 mm).
     pub set_on: &'a [usize],
     /// Links of objects the last rest test found falling on their own (`FallsAtRest`): held
     /// still, as `still`, so that a fall that happens without the motion is not blamed on it.
