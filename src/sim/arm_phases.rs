@@ -110,13 +110,23 @@ pub fn arm_phases(
         }
         _ => Vec::new(),
     };
+    // The object whose door or drawer the hand works holds still while the hand comes to the
+    // handle and leaves it, as an object to be taken does: the fingers end round the handle.
+    // Free, a cabinet was thrown back by the fingers arriving 7 mm from its drawer's front
+    // (and the bottle on it launched) where MuJoCo's replay finds no contact.
+    let worked: Vec<usize> = part
+        .iter()
+        .filter_map(|p| link_named(&p.link))
+        .filter_map(|l| tree.links[l].node.as_deref())
+        .filter_map(link_named)
+        .collect();
     phases.push(ArmPhase {
         what: "reach",
         tree: tree.clone(),
         links,
         hidden: hidden.clone(),
         hollow: hollow.clone(),
-        still: taken,
+        still: [taken, worked.clone()].concat(),
         set_on: set_on.clone(),
         arm: arm_poses(&instants),
     });
@@ -188,7 +198,7 @@ pub fn arm_phases(
         links,
         hidden,
         hollow,
-        still: Vec::new(),
+        still: worked,
         set_on,
         arm: arm_poses(&instants),
     });
@@ -402,6 +412,46 @@ mod tests {
         // The cup touching the floor it is set on is the set-down, not a knock.
         assert_eq!(phases[0].set_on, vec![1]);
         assert_eq!(phases[1].set_on, vec![1]);
+    }
+
+    #[test]
+    fn the_object_whose_door_the_hand_works_holds_still_while_the_hand_comes_and_goes() {
+        let rig = ArmRig::new(crate::arm::tests::two_link_arm(), 0.5);
+        let mut scene = tree(false);
+        let cabinet = scene.links[4].clone();
+        scene.links[4] = TreeLink {
+            name: "cabinet_1".into(),
+            node: Some("cabinet_1".into()),
+            ..cabinet.clone()
+        };
+        scene.links.push(TreeLink {
+            name: "cabinet_1_door".into(),
+            node: Some("cabinet_1".into()),
+            parent: Some(4),
+            joint: JointSpec::revolute(Vec3::Z, 0.0, 1.5),
+            parent_from_link: Affine3A::IDENTITY,
+            ..cabinet
+        });
+        let open = Change::ArmMotion {
+            what: "open cabinet_1_door".into(),
+            reach: vec![vec![0.5, 0.0], vec![1.0, 0.0]],
+            retreat: vec![vec![0.5, 0.0], vec![0.0, 0.0]],
+            part: Some(PartFollow {
+                link: "cabinet_1_door".into(),
+                values: vec![0.5, 1.0],
+                along: vec![vec![1.0, 0.5], vec![1.0, 1.0]],
+            }),
+        };
+        let phases = arm_phases(&scene, &rig, &open, None, 0.1);
+        assert_eq!(
+            phases.iter().map(|p| p.what).collect::<Vec<_>>(),
+            ["reach", "handle", "retreat"]
+        );
+        assert_eq!(phases[0].still, vec![4]);
+        // The door turns with the hand, its cabinet its owner; the hand then lets go.
+        assert_eq!(phases[1].links[0].0, 5);
+        assert!(phases[1].still.is_empty());
+        assert_eq!(phases[2].still, vec![4]);
     }
 
     #[test]
