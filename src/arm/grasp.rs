@@ -76,9 +76,10 @@ impl Grasp {
 }
 
 /// The grasps of an object whose collision vertices are `points` (its frame, z up) placed at
-/// `world_from_object`, for `hand`, best first for a robot standing at `robot` (x, y). A top grasp measures the object where the fingers close (a bottle's
-/// neck, not its body). An open vessel (`rim`: a cup, a bowl) too wide for the fingers is also
-/// held by its rim, the fingers across the wall at the middle of each side of its top.
+/// `world_from_object`, for `hand`, best first for a robot standing at `robot` (x, y). A top grasp
+/// measures the object where the fingers close (a bottle's neck, not its body). An open vessel
+/// (`rim`: a cup, a bowl) too wide for the fingers is also held by its rim, the fingers across the
+/// wall at the middle of each side of its top.
 pub fn grasps(
     world_from_object: &Affine3A,
     points: &[Vec3],
