@@ -17,6 +17,7 @@ use crate::geometry::TriMesh;
 use crate::geometry::convex_depth::rigid_pose;
 use crate::geometry::mesh::points_bounds;
 use crate::kinematics::joint_sweep::world_bounds;
+use crate::kinematics::motion_bounds::overlaps;
 
 /// Random configurations drawn to find the pairs of links that always touch.
 const SELF_SAMPLES: usize = 200;
@@ -46,21 +47,6 @@ impl Obstacles {
     /// Adds `piece` (a convex mesh in its own frame) placed at `world_from_piece`; a piece that
     /// spans no volume is skipped.
     pub fn add(&mut self, name: &str, piece: &TriMesh, world_from_piece: &Affine3A) {
-        self.add_piece(name, piece, world_from_piece, false);
-    }
-
-    /// [`Self::add`] for a piece of the object being grasped: only the fingers may touch it.
-    pub fn add_grasped(&mut self, name: &str, piece: &TriMesh, world_from_piece: &Affine3A) {
-        self.add_piece(name, piece, world_from_piece, true);
-    }
-
-    fn add_piece(
-        &mut self,
-        name: &str,
-        piece: &TriMesh,
-        world_from_piece: &Affine3A,
-        fingers_may_touch: bool,
-    ) {
         let Some(hull) = ConvexPolyhedron::from_convex_hull(&piece.positions) else {
             return;
         };
@@ -70,12 +56,20 @@ impl Obstacles {
         };
         self.items.push(Obstacle {
             name: name.to_string(),
-            fingers_may_touch,
+            fingers_may_touch: false,
             hull,
             pose,
             lo,
             hi,
         });
+    }
+
+    /// These obstacles as the object being grasped: only the fingers may touch them.
+    pub fn grasped(mut self) -> Self {
+        for item in &mut self.items {
+            item.fingers_may_touch = true;
+        }
+        self
     }
 }
 
@@ -187,7 +181,7 @@ impl ArmCollider {
                 let (wlo, whi) = world_bounds(&poses[l], *lo, *hi);
                 for (o, obstacle) in obstacles.items.iter().enumerate() {
                     if (obstacle.fingers_may_touch && self.fingers[l])
-                        || !boxes_within(wlo, whi, obstacle.lo, obstacle.hi, margin)
+                        || !overlaps((wlo, whi), (obstacle.lo, obstacle.hi), margin)
                     {
                         continue;
                     }
@@ -218,7 +212,7 @@ impl ArmCollider {
             let (lo, hi) = hull_bounds(hull);
             let (wlo, whi) = world_bounds(&poses[tool], lo, hi);
             for (o, obstacle) in obstacles.items.iter().enumerate() {
-                if boxes_within(wlo, whi, obstacle.lo, obstacle.hi, margin)
+                if overlaps((wlo, whi), (obstacle.lo, obstacle.hi), margin)
                     && within(&pose, hull, &obstacle.pose, &obstacle.hull, margin)
                 {
                     return Some((tool, Touching::Held(o)));
@@ -234,7 +228,7 @@ impl ArmCollider {
             let (wlo_a, whi_a) = world_bounds(pa, *alo, *ahi);
             self.pieces[b].iter().any(|(hb, blo, bhi)| {
                 let (wlo_b, whi_b) = world_bounds(pb, *blo, *bhi);
-                boxes_within(wlo_a, whi_a, wlo_b, whi_b, margin) && within(&ra, ha, &rb, hb, margin)
+                overlaps((wlo_a, whi_a), (wlo_b, whi_b), margin) && within(&ra, ha, &rb, hb, margin)
             })
         })
     }
@@ -267,10 +261,6 @@ fn within(pa: &Pose, a: &ConvexPolyhedron, pb: &Pose, b: &ConvexPolyhedron, marg
         return parry3d::query::intersection_test(pa, a, pb, b).unwrap_or(true);
     }
     parry3d::query::distance(pa, a, pb, b).map_or(true, |d| d < margin)
-}
-
-fn boxes_within(alo: Vec3, ahi: Vec3, blo: Vec3, bhi: Vec3, margin: f32) -> bool {
-    (alo - margin).cmple(bhi).all() && (blo - margin).cmple(ahi).all()
 }
 
 fn hull_bounds(hull: &ConvexPolyhedron) -> (Vec3, Vec3) {

@@ -4,6 +4,7 @@ pub mod contact_pieces;
 pub mod inertial;
 pub mod joint_sweep;
 pub mod link;
+pub mod motion_bounds;
 pub mod ray_pick;
 pub mod rest_test;
 pub mod tree;

@@ -8,7 +8,8 @@ use glam::Affine3A;
 
 use crate::arm::reach::ArmRig;
 use crate::components::RobotArmLink;
-use crate::systems::motion_physics::{sampled, world_box};
+use crate::kinematics::joint_sweep::world_bounds;
+use crate::kinematics::motion_bounds::sampled;
 
 /// One of the arm's links as a body: its pieces as one collider in its frame, and their box.
 pub(crate) struct ArmBody {
@@ -76,7 +77,7 @@ pub(crate) fn arm_swept_bounds(bodies: &[ArmBody], path: &[Vec<Affine3A>]) -> (V
         .flat_map(|k| {
             bodies
                 .iter()
-                .map(move |b| world_box(path[k][b.link], b.bounds.0, b.bounds.1))
+                .map(move |b| world_bounds(&path[k][b.link], b.bounds.0, b.bounds.1))
         })
         .fold((Vec3::MAX, Vec3::MIN), |(a, b), (lo, hi)| {
             (a.min(lo), b.max(hi))

@@ -3,9 +3,10 @@
 //! along its path, step by step, among the rest test's bodies on the scene's own entities (a
 //! `RapierSession`, which leaves them where they were: the check comes before the action is
 //! made), and the objects near its path are free to be pushed, tipped or knocked down. A motion
-//! that starts from a state the scene is not in yet runs in a scratch world of the tree. The grid search and the joint sweeps plan
-//! motions that touch nothing; this is the check that the physics agrees, and it catches what
-//! they cannot see (a chair nudged by the base's corner falls against the table).
+//! that starts from a state the scene is not in yet runs in a scratch world of the tree. The
+//! grid search and the joint sweeps plan motions that touch nothing; this is the check that the
+//! physics agrees, and it catches what they cannot see (a chair nudged by the base's corner falls
+//! against the table). Which objects are near a motion: `kinematics::motion_bounds`.
 
 use std::time::Instant;
 
@@ -15,8 +16,11 @@ use glam::Affine3A;
 use serde::Serialize;
 
 use crate::arm::reach::ArmRig;
-use crate::geometry::mesh::box_corners;
 use crate::kinematics::contact_pieces::contact_pieces;
+use crate::kinematics::joint_sweep::world_bounds;
+use crate::kinematics::motion_bounds::{
+    EMPTY_BOX, body_bounds, link_bounds, overlaps, swept_bounds,
+};
 use crate::kinematics::rest_test::{
     MAX_START_PENETRATION_M, REST_STEP_S, rest_bodies, start_penetrations,
 };
@@ -35,16 +39,11 @@ const AFTERMATH_S: f32 = 0.5;
 /// Objects within this distance (metres) of where the moving links pass are simulated, with
 /// what stands on them; the others hold still.
 const NEAR_M: f32 = 0.05;
-/// The swept volume is sampled at this many poses along the path (and its end).
-const SWEEP_SAMPLES: usize = 24;
 
 /// The moving links' collision group, and that of the rest of their own object (a door turns
 /// about hinges flush with its cabinet: the joint, not contact, holds them together).
 const MOVER_GROUP: Group = Group::GROUP_2;
 const OWNER_GROUP: Group = Group::GROUP_3;
-
-/// A box holding nothing: the start of a union.
-const EMPTY_BOX: (Vec3, Vec3) = (Vec3::MAX, Vec3::MIN);
 
 /// The arm going deeper than this (metres) into the scene refuses the motion.
 pub const MAX_ARM_DEPTH_M: f32 = 0.005;
@@ -273,7 +272,7 @@ pub fn simulate_movers_on(
             .copied()
             .filter(|&l| {
                 link_bounds(tree, l).is_some_and(|(lo, hi)| {
-                    overlaps(world_box(poses[l], lo, hi), arm_swept, NEAR_M)
+                    overlaps(world_bounds(&poses[l], lo, hi), arm_swept, NEAR_M)
                 })
             })
             .chain(movers.still.iter().copied())
@@ -432,77 +431,6 @@ fn mover_collider(
         );
     }
     (!pieces.is_empty()).then(|| Collider::compound(pieces))
-}
-
-/// The world box of `links`' collision pieces at `poses`.
-fn body_bounds(tree: &KinematicTree, links: &[usize], poses: &[Affine3A]) -> Option<(Vec3, Vec3)> {
-    links
-        .iter()
-        .filter_map(|&l| {
-            let (lo, hi) = link_bounds(tree, l)?;
-            Some(world_box(poses[l], lo, hi))
-        })
-        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
-}
-
-/// The box, in the link's frame, of its collision pieces.
-fn link_bounds(tree: &KinematicTree, link: usize) -> Option<(Vec3, Vec3)> {
-    let g = tree.links[link].geometry.as_ref()?;
-    g.collision
-        .iter()
-        .flat_map(|piece| piece.positions.iter())
-        .fold(None, |acc: Option<(Vec3, Vec3)>, p| {
-            Some(acc.map_or((*p, *p), |(lo, hi)| (lo.min(*p), hi.max(*p))))
-        })
-}
-
-/// The world box of the local box `lo..hi` at `world_from_local`.
-pub(crate) fn world_box(world_from_local: Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
-    box_corners(lo, hi)
-        .iter()
-        .map(|c| world_from_local.transform_point3(*c))
-        .fold((Vec3::MAX, Vec3::MIN), |(a, b), c| (a.min(c), b.max(c)))
-}
-
-/// The world box the moving links pass through along `motion`.
-fn swept_bounds(
-    tree: &KinematicTree,
-    moving: &[bool],
-    poses: &[Affine3A],
-    link: usize,
-    path: &[Affine3A],
-) -> (Vec3, Vec3) {
-    let mover_from_world = poses[link].inverse();
-    let local: Vec<(Affine3A, Vec3, Vec3)> = (0..tree.links.len())
-        .filter(|&l| moving[l])
-        .filter_map(|l| {
-            let (lo, hi) = link_bounds(tree, l)?;
-            Some((mover_from_world * poses[l], lo, hi))
-        })
-        .collect();
-    sampled(path.len())
-        .flat_map(|k| {
-            let world_from_mover = path[k];
-            local.iter().map(move |(mover_from_link, lo, hi)| {
-                world_box(world_from_mover * *mover_from_link, *lo, *hi)
-            })
-        })
-        .fold((Vec3::MAX, Vec3::MIN), |(a, b), (lo, hi)| {
-            (a.min(lo), b.max(hi))
-        })
-}
-
-/// The instants of a path of `len` at which its swept volume is sampled: [`SWEEP_SAMPLES`]
-/// spread along it, and its end.
-pub(crate) fn sampled(len: usize) -> impl Iterator<Item = usize> {
-    let last = len.saturating_sub(1);
-    let stride = (last / SWEEP_SAMPLES).max(1);
-    (0..=last).step_by(stride).chain(std::iter::once(last))
-}
-
-/// Whether two boxes come within `margin` of each other.
-fn overlaps(a: (Vec3, Vec3), b: (Vec3, Vec3), margin: f32) -> bool {
-    (a.0 - margin).cmple(b.1).all() && (b.0 - margin).cmple(a.1).all()
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ use parry3d::shape::ConvexPolyhedron;
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps};
 use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat};
+use crate::geometry::TriMesh;
 use crate::sim::actions::error::ArmTries;
 use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
@@ -42,6 +43,20 @@ pub fn scene_obstacles(view: &SceneView, skip: &[usize]) -> Obstacles {
     obstacles
 }
 
+/// The collision pieces of `links`, each with its link's name and world pose.
+fn collision_pieces<'a>(
+    view: &'a SceneView,
+    links: &'a [usize],
+) -> impl Iterator<Item = (&'a str, &'a TriMesh, Affine3A)> + 'a {
+    links.iter().flat_map(move |&l| {
+        let link = &view.tree.links[l];
+        link.geometry
+            .iter()
+            .flat_map(|g| g.collision.iter())
+            .map(move |piece| (link.name.as_str(), piece, view.poses[l]))
+    })
+}
+
 /// Adds the collision pieces of `links`, each at its pose moved by `moved` (world).
 pub(super) fn add_links(
     obstacles: &mut Obstacles,
@@ -49,21 +64,8 @@ pub(super) fn add_links(
     links: &[usize],
     moved: &Affine3A,
 ) {
-    for &l in links {
-        let link = &view.tree.links[l];
-        for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
-            obstacles.add(&link.name, piece, &(*moved * view.poses[l]));
-        }
-    }
-}
-
-/// Adds the collision pieces of `links` where they stand, as what the fingers grasp.
-fn add_grasped_links(obstacles: &mut Obstacles, view: &SceneView, links: &[usize]) {
-    for &l in links {
-        let link = &view.tree.links[l];
-        for piece in link.geometry.iter().flat_map(|g| g.collision.iter()) {
-            obstacles.add_grasped(&link.name, piece, &view.poses[l]);
-        }
+    for (name, piece, pose) in collision_pieces(view, links) {
+        obstacles.add(name, piece, &(*moved * pose));
     }
 }
 
@@ -85,10 +87,12 @@ impl AroundObject {
     pub(super) fn new(view: &SceneView, link: usize) -> Self {
         let links = subtree(view, link);
         let without_object = scene_obstacles(view, &links);
+        let mut object = Obstacles::default();
+        add_links(&mut object, view, &links, &Affine3A::IDENTITY);
         let mut with_object = without_object.clone();
-        add_links(&mut with_object, view, &links, &Affine3A::IDENTITY);
+        with_object.items.extend(object.items.iter().cloned());
         let mut grasped = without_object.clone();
-        add_grasped_links(&mut grasped, view, &links);
+        grasped.items.extend(object.grasped().items);
         Self {
             links,
             with_object,
@@ -108,23 +112,15 @@ pub(super) fn subtree(view: &SceneView, link: usize) -> Vec<usize> {
 /// The object's convex pieces in the tool's frame when the tool is at `world_from_tool`.
 fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &Affine3A) -> Held {
     let tool_from_world = world_from_tool.inverse();
-    let pieces = links
-        .iter()
-        .flat_map(|&l| {
-            let tool_from_link = tool_from_world * view.poses[l];
-            view.tree.links[l]
-                .geometry
+    let pieces = collision_pieces(view, links)
+        .filter_map(|(_, piece, pose)| {
+            let tool_from_piece = tool_from_world * pose;
+            let points: Vec<Vec3> = piece
+                .positions
                 .iter()
-                .flat_map(|g| g.collision.iter())
-                .filter_map(move |piece| {
-                    let points: Vec<Vec3> = piece
-                        .positions
-                        .iter()
-                        .map(|p| tool_from_link.transform_point3(*p))
-                        .collect();
-                    ConvexPolyhedron::from_convex_hull(&points)
-                })
-                .collect::<Vec<_>>()
+                .map(|p| tool_from_piece.transform_point3(*p))
+                .collect();
+            ConvexPolyhedron::from_convex_hull(&points)
         })
         .collect();
     Held { pieces }
@@ -141,22 +137,18 @@ fn grasps_of(
     world_from_link: &Affine3A,
 ) -> Result<Vec<Grasp>, ActionError> {
     let node = &view.tree.links[link].node;
-    let link_from_world = view.poses[link].inverse();
-    let points: Vec<Vec3> = subtree(view, link)
+    let own: Vec<usize> = subtree(view, link)
         .into_iter()
         .filter(|&l| view.tree.links[l].node == *node)
-        .flat_map(|l| {
-            let link_from_part = link_from_world * view.poses[l];
-            view.tree.links[l]
-                .geometry
+        .collect();
+    let link_from_world = view.poses[link].inverse();
+    let points: Vec<Vec3> = collision_pieces(view, &own)
+        .flat_map(|(_, piece, pose)| {
+            let link_from_piece = link_from_world * pose;
+            piece
+                .positions
                 .iter()
-                .flat_map(|g| g.collision.iter())
-                .flat_map(move |piece| {
-                    piece
-                        .positions
-                        .iter()
-                        .map(move |p| link_from_part.transform_point3(*p))
-                })
+                .map(move |p| link_from_piece.transform_point3(*p))
         })
         .collect();
     if points.is_empty() {
