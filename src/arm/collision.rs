@@ -145,6 +145,20 @@ impl ArmCollider {
         collider
     }
 
+    /// This collider for the arm on a lift (`Arm::on_lift`): the lift moves every link alike and
+    /// has no pieces, so the pairs checked are the arm's, one index further on.
+    pub fn on_lift(self) -> Self {
+        Self {
+            pieces: std::iter::once(Vec::new()).chain(self.pieces).collect(),
+            self_pairs: self
+                .self_pairs
+                .into_iter()
+                .map(|(a, b)| (a + 1, b + 1))
+                .collect(),
+            fingers: std::iter::once(false).chain(self.fingers).collect(),
+        }
+    }
+
     /// The first thing a link of the arm (at `poses`) comes within `margin` of: an obstacle, or
     /// a link of a checked pair; `None` when the configuration is free.
     pub fn touching(

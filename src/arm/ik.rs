@@ -103,30 +103,51 @@ pub fn solve(
     settings: &IkSettings,
     accept: &dyn Fn(&[f32]) -> bool,
 ) -> Option<Vec<f32>> {
-    let limits = arm.limits();
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     let mut start = arm.clamped(seed_q);
+    // A lift first holds the seed's height: the arm alone, as if it had no lift (the same runs
+    // from the same draws), so that the lift moves only for what the arm cannot reach there.
+    let held = arm.limits_between(&start, &start);
     for _ in 0..=settings.restarts {
-        if let Some(q) = descend(arm, world_from_root, target, start.clone(), settings)
+        if let Some(q) = descend(arm, world_from_root, target, start.clone(), settings, false)
             && accept(&q)
         {
             return Some(q);
         }
+        start = random_configuration(&held, &mut rng);
+    }
+    arm.lift()?;
+    let limits = arm.limits();
+    for _ in 0..settings.restarts / 2 {
         start = random_configuration(&limits, &mut rng);
+        if let Some(q) = descend(arm, world_from_root, target, start.clone(), settings, true)
+            && accept(&q)
+        {
+            return Some(q);
+        }
     }
     None
 }
 
-/// One damped-least-squares run from `q`; the configuration when it reaches the target.
+/// How much a free lift's joint (`Arm::on_lift`) takes part in a step, against 1 for the arm's
+/// own joints: the least-squares step is weighted (the weighted pseudoinverse with
+/// `W = diag(LIFT_WEIGHT^2, 1, ...)`), so the lift moves where the arm alone does not reach;
+/// the starting configuration (a random restart) mostly chooses its height.
+const LIFT_WEIGHT: f32 = 0.3;
+
+/// One damped-least-squares run from `q`, a lift held where `q` has it unless `lift_free`; the
+/// configuration when it reaches the target.
 fn descend(
     arm: &Arm,
     world_from_root: &Affine3A,
     target: &Affine3A,
     mut q: Vec<f32>,
     settings: &IkSettings,
+    lift_free: bool,
 ) -> Option<Vec<f32>> {
     let lambda2 = settings.damping * settings.damping;
     let limits = arm.limits();
+    let lift = arm.lift();
     for _ in 0..settings.iterations {
         let (position, mut rotation) = pose_error(&arm.tool_pose(world_from_root, &q), target);
         if !settings.orientation {
@@ -145,6 +166,14 @@ fn descend(
             for c in &mut columns {
                 c[3..].fill(0.0);
             }
+        }
+        let weight = |i: usize| match (Some(i) == lift, lift_free) {
+            (false, _) => 1.0,
+            (true, true) => LIFT_WEIGHT,
+            (true, false) => 0.0,
+        };
+        for (i, c) in columns.iter_mut().enumerate() {
+            c.iter_mut().for_each(|v| *v *= weight(i));
         }
         // A joint at its limit that the step would push past it is held where it is, and the
         // step solved again with the other joints: clamping it afterwards would stall the run
@@ -184,6 +213,9 @@ fn descend(
             for i in 0..dq.len() {
                 dq[i] += toward_middle[i] - along_task[i];
             }
+        }
+        for (i, v) in dq.iter_mut().enumerate() {
+            *v *= weight(i);
         }
         let largest = dq.iter().fold(0.0f32, |m, v| m.max(v.abs()));
         if !largest.is_finite() {

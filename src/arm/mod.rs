@@ -25,6 +25,10 @@ use crate::geometry::TriMesh;
 /// PyBullet package has `panda_grasptarget` between its fingertips).
 const TOOL_LINK_WORDS: [&str; 5] = ["grasptarget", "tcp", "tool", "ee_link", "hand"];
 
+/// The link [`Arm::on_lift`] puts under an arm's root, and its joint.
+pub const LIFT_LINK: &str = "iscene_lift";
+pub const LIFT_JOINT: &str = "iscene_lift_joint";
+
 /// One link of the arm.
 #[derive(Clone, Debug)]
 pub struct ArmLink {
@@ -142,6 +146,54 @@ impl Arm {
         })
     }
 
+    /// The arm on a lift (a torso lift, as on Fetch, TIAGo or PR2): a new root link whose
+    /// prismatic joint slides everything else along +z, from `range.0` to `range.1` metres of
+    /// where the base mounts the arm. It is the chain's first joint, so inverse kinematics and
+    /// planning choose the shoulder's height with the rest; it has no collision pieces (the
+    /// base's column is the robot's own body).
+    pub fn on_lift(self, range: (f32, f32)) -> Self {
+        let lift = ArmLink {
+            name: LIFT_LINK.to_string(),
+            parent: None,
+            parent_from_link: Affine3A::IDENTITY,
+            joint: Some(BodyJoint {
+                name: LIFT_JOINT.to_string(),
+                kind: JointKind::Prismatic,
+                origin: Vec3::ZERO,
+                axis: Vec3::Z,
+                limits: range,
+            }),
+            pieces: Vec::new(),
+        };
+        let links: Vec<ArmLink> = std::iter::once(lift)
+            .chain(self.links.into_iter().map(|link| ArmLink {
+                parent: Some(link.parent.map_or(0, |p| p + 1)),
+                ..link
+            }))
+            .collect();
+        let chain: Vec<usize> = std::iter::once(0)
+            .chain(self.chain.iter().map(|&l| l + 1))
+            .collect();
+        let motion = std::iter::once(LinkMotion::Chain(0))
+            .chain(self.motion.into_iter().map(|m| match m {
+                LinkMotion::Chain(i) => LinkMotion::Chain(i + 1),
+                other => other,
+            }))
+            .collect();
+        Self {
+            name: self.name,
+            links,
+            chain,
+            tool: self.tool + 1,
+            motion,
+        }
+    }
+
+    /// The lift's index in the chain (`on_lift`), if the arm stands on one.
+    pub fn lift(&self) -> Option<usize> {
+        (self.links[self.chain[0]].name == LIFT_LINK).then_some(0)
+    }
+
     /// Number of joints in the chain.
     pub fn dof(&self) -> usize {
         self.chain.len()
@@ -153,6 +205,18 @@ impl Arm {
             .iter()
             .map(|&l| self.links[l].joint.as_ref().expect("chain joint").limits)
             .collect()
+    }
+
+    /// The chain's joint limits with a lift's range narrowed to the heights between those of
+    /// `a` and `b`: what a plan between them samples (the lift goes straight from one height to
+    /// the other, the arm's joints anywhere). With a lift at one height it is drawn nothing
+    /// for, so the arm's own joints are drawn as on an arm without a lift.
+    pub fn limits_between(&self, a: &[f32], b: &[f32]) -> Vec<(f32, f32)> {
+        let mut limits = self.limits();
+        if let Some(i) = self.lift() {
+            limits[i] = (a[i].min(b[i]), a[i].max(b[i]));
+        }
+        limits
     }
 
     /// The middle of every joint's range: a configuration inside the limits.

@@ -78,6 +78,34 @@ impl ArmRig {
     }
 }
 
+impl ArmRig {
+    /// This rig with its arm on a lift sliding its root from `range.0` to `range.1` metres of
+    /// where the base mounts it (`Arm::on_lift`; the range holds 0). The arm travels stowed as
+    /// before, the lift at 0, so drives and what the hand carries on them are unchanged.
+    pub fn on_lift(self, range: (f32, f32)) -> Self {
+        Self {
+            arm: self.arm.on_lift(range),
+            collider: self.collider.on_lift(),
+            stow: std::iter::once(0.0).chain(self.stow).collect(),
+            ..self
+        }
+    }
+}
+
+/// Radius of the mast seen under the root of an arm on a lift, metres.
+pub const MAST_RADIUS_M: f32 = 0.07;
+
+impl ArmRig {
+    /// The mast of an arm on a lift: its link and length (the lift's travel), a cylinder of
+    /// [`MAST_RADIUS_M`] down from the root, what is seen of the lift above the base's column
+    /// (which hides the rest). It collides with nothing: it stands inside the base's footprint.
+    pub fn mast(&self) -> Option<(usize, f32)> {
+        let i = self.arm.lift()?;
+        let (lo, hi) = self.arm.limits()[i];
+        Some((self.arm.chain[i], hi - lo))
+    }
+}
+
 /// Random configurations tried for the stowed arm, and refinements of the best.
 const STOW_SAMPLES: usize = 4000;
 const STOW_REFINEMENTS: usize = 1500;
@@ -307,15 +335,21 @@ pub fn reach_configuration(
     ) {
         return Err(format!("at the start of the approach {why}"));
     }
-    let path =
-        plan(from, &start, &rig.arm.limits(), &free_transit, &rig.plan).map_err(|e| match e {
-            PlanError::StartInCollision => format!(
-                "the arm's configuration before the motion is not clear: {}",
-                touching(rig, world_from_root, transit, held, from, TRANSIT_MARGIN_M)
-                    .unwrap_or_default()
-            ),
-            other => format!("no path to the approach: {other}"),
-        })?;
+    let path = plan(
+        from,
+        &start,
+        &rig.arm.limits_between(from, &start),
+        &free_transit,
+        &rig.plan,
+    )
+    .map_err(|e| match e {
+        PlanError::StartInCollision => format!(
+            "the arm's configuration before the motion is not clear: {}",
+            touching(rig, world_from_root, transit, held, from, TRANSIT_MARGIN_M)
+                .unwrap_or_default()
+        ),
+        other => format!("no path to the approach: {other}"),
+    })?;
     let mut configurations = densify(&path, rig.plan.resolution);
     configurations.extend(line.into_iter().skip(1));
     Ok(ArmPath { configurations })
@@ -489,29 +523,33 @@ pub fn retreat_along(
     })?;
     let top = line.last().expect("not empty").clone();
     let free_transit = clear_of(rig, world_from_root, transit, held, TRANSIT_MARGIN_M);
-    let path =
-        plan(&top, &rig.stow, &rig.arm.limits(), &free_transit, &rig.plan).map_err(
-            |e| match e {
-                PlanError::StartInCollision => format!(
-                    "after the lift {}",
-                    touching(rig, world_from_root, transit, held, &top, TRANSIT_MARGIN_M)
-                        .unwrap_or_default()
-                ),
-                PlanError::GoalInCollision => format!(
-                    "the stowed arm would touch something: {}",
-                    touching(
-                        rig,
-                        world_from_root,
-                        transit,
-                        held,
-                        &rig.stow,
-                        TRANSIT_MARGIN_M
-                    )
-                    .unwrap_or_default()
-                ),
-                other => format!("no path back to the stowed arm: {other}"),
-            },
-        )?;
+    let path = plan(
+        &top,
+        &rig.stow,
+        &rig.arm.limits_between(&top, &rig.stow),
+        &free_transit,
+        &rig.plan,
+    )
+    .map_err(|e| match e {
+        PlanError::StartInCollision => format!(
+            "after the lift {}",
+            touching(rig, world_from_root, transit, held, &top, TRANSIT_MARGIN_M)
+                .unwrap_or_default()
+        ),
+        PlanError::GoalInCollision => format!(
+            "the stowed arm would touch something: {}",
+            touching(
+                rig,
+                world_from_root,
+                transit,
+                held,
+                &rig.stow,
+                TRANSIT_MARGIN_M
+            )
+            .unwrap_or_default()
+        ),
+        other => format!("no path back to the stowed arm: {other}"),
+    })?;
     let mut configurations = line;
     configurations.extend(densify(&path, rig.plan.resolution).into_iter().skip(1));
     Ok(ArmPath { configurations })
@@ -530,4 +568,49 @@ pub fn path_clear(
     let clear = clear_of(rig, world_from_root, obstacles, held, margin);
     path.windows(2)
         .all(|w| segment_free(&w[0], &w[1], &clear, rig.plan.resolution / 4.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::arm::ik::{IkSettings, solve};
+    use crate::arm::tests::two_link_arm;
+
+    #[test]
+    fn an_arm_on_a_lift_reaches_above_its_plane_and_travels_as_before() {
+        let fixed = ArmRig::new(two_link_arm(), 0.5);
+        let lifted = ArmRig::new(two_link_arm(), 0.5).on_lift((-0.3, 0.4));
+        assert_eq!(lifted.arm.dof(), 3);
+        assert_eq!(lifted.arm.lift(), Some(0));
+        assert_eq!(fixed.arm.lift(), None);
+        // Stowed, every link is where it was; the lift link stands at the old root.
+        let (before, after) = (fixed.stowed_link_poses(), lifted.stowed_link_poses());
+        assert_eq!(after.len(), before.len() + 1);
+        for (a, b) in before.iter().zip(&after[1..]) {
+            assert!(a.abs_diff_eq(*b, 1e-6), "{a:?} {b:?}");
+        }
+        let (mast_link, mast_length) = lifted.mast().expect("a mast");
+        assert!(mast_link == 0 && (mast_length - 0.7).abs() < 1e-5);
+        // The planar arm reaches a point 0.25 m above its plane only on the lift.
+        let settings = IkSettings {
+            orientation: false,
+            ..IkSettings::default()
+        };
+        let target = Affine3A::from_translation(Vec3::new(1.2, 0.7, 0.75));
+        let reach = |rig: &ArmRig| {
+            solve(
+                &rig.arm,
+                &rig.base_from_root,
+                &target,
+                &rig.stow,
+                &settings,
+                &|_| true,
+            )
+        };
+        assert!(reach(&fixed).is_none());
+        let q = reach(&lifted).expect("reached on the lift");
+        assert!((q[0] - 0.25).abs() < 1e-3, "{q:?}");
+        let tool = lifted.arm.tool_pose(&lifted.base_from_root, &q).translation;
+        assert!((Vec3::from(tool) - Vec3::new(1.2, 0.7, 0.75)).length() < 1e-3);
+    }
 }

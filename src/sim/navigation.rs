@@ -105,10 +105,18 @@ impl NavGrid {
 
     /// The cheapest path for a base of `radius` from `start` to a cell satisfying `goal`, or
     /// `None` when there is none. The start cell may be tighter than `radius` (the robot may
-    /// begin close to something); every other cell on the path may not.
+    /// begin close to something: a drawer it opened over its base), and so may the cells
+    /// within `radius` of it that are no tighter (it backs out the way it came); every other
+    /// cell on the path may not.
     pub fn plan(&self, start: Vec2, goal: &NavGoal, radius: f32) -> Option<NavPath> {
         let start_cell = self.cell_of(start)?;
         let res = self.grid.resolution;
+        let start_clearance = self.clearance[start_cell.1 * self.grid.width + start_cell.0];
+        let backing_out = |cell: (usize, usize), clearance: f32| {
+            clearance > 0.0
+                && clearance >= start_clearance
+                && self.center(cell).distance(start) <= radius
+        };
         let mm = |m: f32| (m * 1000.0).round() as u32;
         let (cells, _cost) = astar(
             &start_cell,
@@ -131,7 +139,7 @@ impl NavGrid {
                     }
                     let (c, r) = (c as usize, r as usize);
                     let clearance = self.clearance[r * self.grid.width + c];
-                    if clearance < radius {
+                    if clearance < radius && !backing_out((c, r), clearance) {
                         continue;
                     }
                     let step = res * ((dc * dc + dr * dr) as f32).sqrt();
@@ -234,6 +242,43 @@ mod tests {
             "{}",
             path.length_m
         );
+    }
+
+    #[test]
+    fn a_base_closer_to_the_block_than_its_radius_backs_out_and_no_nearer() {
+        let nav = room_with_block();
+        let goal = NavGoal {
+            target: Vec2::new(0.5, 0.5),
+            reach: 0.2,
+            facing: None,
+            keep_out: Vec::new(),
+        };
+        // 12 cm from the block's left face (a drawer opened over the base): every cell around
+        // is tighter than the 25 cm radius.
+        let start = Vec2::new(1.38, 1.5);
+        let path = nav.plan(start, &goal, 0.25).expect("it backs out");
+        let tight = nav.clearance_at(start);
+        assert!(tight < 0.15, "{tight}");
+        for p in &path.waypoints[1..] {
+            let c = nav.clearance_at(*p);
+            assert!(c >= 0.25 || c >= tight, "{p} nearer the block ({c} m)");
+            assert!(
+                c >= 0.25 || p.distance(start) <= 0.25,
+                "{p} tight, far from the start"
+            );
+        }
+        // It does not squeeze past the block's corner it starts beside.
+        let past = NavGoal {
+            target: Vec2::new(1.38, 2.6),
+            reach: 0.05,
+            ..goal
+        };
+        if let Some(path) = nav.plan(start, &past, 0.25) {
+            for p in &path.waypoints[1..] {
+                let c = nav.clearance_at(*p);
+                assert!(c >= 0.25 || p.distance(start) <= 0.25, "{p} ({c} m)");
+            }
+        }
     }
 
     #[test]

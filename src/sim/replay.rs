@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use glam::Affine3A;
 
-use crate::arm::reach::ArmRig;
+use crate::arm::reach::{ArmRig, MAST_RADIUS_M};
 use crate::base::JointKind;
 use crate::export::mjcf::{MjcfExtra, attr_escape, mjcf_document, numbers, pose_attrs};
 use crate::export::obj::obj_text;
@@ -83,7 +83,7 @@ fn robot_bodies(spec: &RobotSpec, rig: &ArmRig) -> String {
         "      <joint name=\"{yaw}\" type=\"hinge\" axis=\"0 0 1\"/>"
     );
     let _ = writeln!(xml, "      {ROBOT_INERTIAL}");
-    let half = 0.5 * spec.height;
+    let half = 0.5 * spec.column_height();
     let _ = writeln!(
         xml,
         "      <geom type=\"cylinder\" size=\"{} {}\" pos=\"0 0 {}\" rgba=\"0.2 0.3 0.6 1\"/>",
@@ -129,6 +129,16 @@ fn arm_body(
         );
     }
     let _ = writeln!(xml, "{pad}  {ROBOT_INERTIAL}");
+    if let Some((_, length)) = rig.mast().filter(|(mast, _)| *mast == l) {
+        // Seen, never touching: the lift's mast stands inside the column and its footprint.
+        let _ = writeln!(
+            xml,
+            "{pad}  <geom type=\"cylinder\" size=\"{} {}\" pos=\"0 0 {}\" contype=\"0\" conaffinity=\"0\" rgba=\"0.2 0.3 0.6 1\"/>",
+            tidy(MAST_RADIUS_M),
+            tidy(0.5 * length),
+            tidy(-0.5 * length)
+        );
+    }
     for k in 0..link.pieces.len() {
         let _ = writeln!(
             xml,

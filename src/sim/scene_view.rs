@@ -278,10 +278,17 @@ impl<'a> SceneView<'a> {
         })
     }
 
-    /// Where `object` fits inside `container` (whose door is open): on the lowest of its inner
-    /// levels with room for it, centred, else shifted towards the front; `None` when it fits on
-    /// none. The object keeps the container's orientation.
-    pub fn spot_in(&self, object: usize, container: &str, ignore: &[usize]) -> Option<Affine3A> {
+    /// Where `object` fits inside `container` (whose door is open): behind an open door, on the
+    /// lowest of its inner levels with room for it, centred, else shifted towards the front (or
+    /// as near `near` as it can be, the robot that puts it there); `None` when it fits on none.
+    /// The object keeps the container's orientation.
+    pub fn spot_in(
+        &self,
+        object: usize,
+        container: &str,
+        ignore: &[usize],
+        near: Option<Vec2>,
+    ) -> Option<Affine3A> {
         let own = self.node_link(container)?;
         let body = self.body_mesh_in_node(container);
         let (lo, hi) = body.bounds()?;
@@ -290,20 +297,68 @@ impl<'a> SceneView<'a> {
         let centre = (lo + hi).truncate() / 2.0;
         let world_from_container = self.poses[own];
         let yaw = yaw_of(&world_from_container);
-        for (floor, ceiling) in inner_levels(&body, centre, lo.z, hi.z) {
-            if ceiling - floor < height + HEADROOM_M {
-                continue;
-            }
-            // Centred first, then towards the open front (-y in the model frame).
-            for dy in [0.0, -0.05, -0.1, 0.05] {
-                let bottom = Vec3::new(centre.x, centre.y + dy, floor + 0.001);
-                let pose = upright_on(world_from_container.transform_point3(bottom), yaw, olo, ohi);
-                if self.overlap_at(object, pose, ignore) <= TOUCH_M {
-                    return Some(pose);
+        // Behind an open door, else in the middle: one door of two open leaves the middle
+        // half behind the closed one.
+        let mut across = self.open_doors_across(container);
+        across.push(centre.x);
+        for x in across {
+            let at = Vec2::new(x, centre.y);
+            for (floor, ceiling) in inner_levels(&body, at, lo.z, hi.z) {
+                if ceiling - floor < height + HEADROOM_M {
+                    continue;
+                }
+                // Centred first, then towards the open front (-y in the model frame); or
+                // nearest the robot first.
+                let mut depths = [0.0, -0.05, -0.1, 0.05];
+                if let Some(near) = near {
+                    let from = world_from_container
+                        .inverse()
+                        .transform_point3(near.extend(0.0));
+                    depths.sort_by(|a, b| {
+                        let d = |dy: f32| Vec2::new(x, centre.y + dy).distance(from.truncate());
+                        d(*a).total_cmp(&d(*b))
+                    });
+                }
+                for dy in depths {
+                    let bottom = Vec3::new(x, centre.y + dy, floor + 0.001);
+                    let pose =
+                        upright_on(world_from_container.transform_point3(bottom), yaw, olo, ohi);
+                    if self.overlap_at(object, pose, ignore) <= TOUCH_M {
+                        return Some(pose);
+                    }
                 }
             }
         }
         None
+    }
+
+    /// The middle (x in the frame of node `container`) of the front each of its open doors
+    /// closes.
+    fn open_doors_across(&self, container: &str) -> Vec<f32> {
+        let Some(own) = self.node_link(container) else {
+            return Vec::new();
+        };
+        let node_from_world = self.poses[own].inverse();
+        self.moving_parts(container)
+            .into_iter()
+            .filter(|&j| {
+                self.tree.links[j].joint.kind == JointKind::Revolute
+                    && open_fraction(self.tree, j) > OPEN_FRACTION
+            })
+            .filter_map(|j| {
+                let link = &self.tree.links[j];
+                let parent = link.parent.map_or(Affine3A::IDENTITY, |p| self.poses[p]);
+                let closed =
+                    parent * link.parent_from_link * link.joint.motion(closed_value(self.tree, j));
+                let door = link
+                    .geometry
+                    .as_ref()?
+                    .visual
+                    .transformed(&(node_from_world * closed));
+                let (lo, hi) = door.bounds()?;
+                Some(0.5 * (lo.x + hi.x))
+            })
+            .collect()
     }
 }
 
@@ -361,16 +416,58 @@ pub fn vertical_hits(mesh: &TriMesh, p: Vec2) -> Vec<f32> {
     hits
 }
 
+/// Where a vertical line through `p` crosses the closed, outward-wound `mesh`, ascending, each
+/// with whether the line, going up, enters the solid there (the face looks down). The
+/// triangles of one face meeting on the line count once; a board's top touching the bottom
+/// of the one above counts as both, the entry first.
+fn vertical_crossings(mesh: &TriMesh, p: Vec2) -> Vec<(f32, bool)> {
+    let mut hits = Vec::new();
+    for t in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.triangle(t);
+        let (a2, b2, c2) = (a.truncate(), b.truncate(), c.truncate());
+        let area = (b2 - a2).perp_dot(c2 - a2);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let u = (b2 - p).perp_dot(c2 - p) / area;
+        let v = (c2 - p).perp_dot(a2 - p) / area;
+        let w = 1.0 - u - v;
+        if u >= 0.0 && v >= 0.0 && w >= 0.0 {
+            // Counter-clockwise seen from above: the face looks up, the line leaves there.
+            hits.push((u * a.z + v * b.z + w * c.z, area < 0.0));
+        }
+    }
+    hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+    hits.dedup_by(|a, b| a.1 == b.1 && (a.0 - b.0).abs() < 1e-4);
+    hits
+}
+
 /// The empty intervals `(floor, ceiling)` a vertical line through `p` passes inside a body made
-/// of closed boards, between `bottom` and `top`: the line enters and leaves boards in turn, so
-/// every second gap between crossings is air with a board under it.
+/// of closed boards, between `bottom` and `top`: air with a board under it and one over it.
+/// Counting the boards the line is in (not taking every second gap between crossings) keeps
+/// boards that touch (a plinth under the bottom board) from turning air into board.
 pub fn inner_levels(body: &TriMesh, p: Vec2, bottom: f32, top: f32) -> Vec<(f32, f32)> {
-    let hits = vertical_hits(body, p);
-    hits.windows(2)
-        .enumerate()
-        .filter(|(k, _)| k % 2 == 1)
-        .map(|(_, w)| (w[0], w[1]))
-        .filter(|(f, c)| *f > bottom && *c < top + 1e-4)
+    let mut levels = Vec::new();
+    let mut inside = 0i32;
+    let mut floor = None;
+    for (z, enters) in vertical_crossings(body, p) {
+        if enters {
+            if inside == 0
+                && let Some(f) = floor.take()
+            {
+                levels.push((f, z));
+            }
+            inside += 1;
+        } else {
+            inside -= 1;
+            if inside == 0 {
+                floor = Some(z);
+            }
+        }
+    }
+    levels
+        .into_iter()
+        .filter(|(f, c)| *f > bottom && *c < top + 1e-4 && c > f)
         .collect()
 }
 
@@ -394,6 +491,24 @@ mod tests {
         assert_eq!(levels.len(), 2, "{levels:?}");
         assert!((levels[0].0 - 0.02).abs() < 1e-5 && (levels[0].1 - 0.5).abs() < 1e-5);
         assert!((levels[1].0 - 0.52).abs() < 1e-5 && (levels[1].1 - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn boards_that_touch_leave_the_air_between_them_air() {
+        // A plinth 0..0.08 under the bottom board 0.08..0.1 (the cabinet of the kitchen's
+        // reconstruction), a shelf 0.48..0.5, the top 0.86..0.88: the crossings at 0.08 are
+        // two, and taking every second gap made the boards the levels.
+        let mut body = TriMesh::cuboid(Vec3::new(-0.3, -0.3, 0.0), Vec3::new(0.3, 0.3, 0.08));
+        for (lo, hi) in [(0.08, 0.1), (0.48, 0.5), (0.86, 0.88)] {
+            body.append(&TriMesh::cuboid(
+                Vec3::new(-0.3, -0.3, lo),
+                Vec3::new(0.3, 0.3, hi),
+            ));
+        }
+        let levels = inner_levels(&body, Vec2::new(0.01, 0.02), 0.0, 0.88);
+        assert_eq!(levels.len(), 2, "{levels:?}");
+        assert!((levels[0].0 - 0.1).abs() < 1e-5 && (levels[0].1 - 0.48).abs() < 1e-5);
+        assert!((levels[1].0 - 0.5).abs() < 1e-5 && (levels[1].1 - 0.86).abs() < 1e-5);
     }
 
     #[test]

@@ -116,6 +116,22 @@ impl Task {
                 ));
             }
         }
+        if let Some([lo, hi]) = r.lift
+            && !(lo.is_finite()
+                && hi.is_finite()
+                && 0.0 < lo
+                && lo <= r.height
+                && r.height <= hi
+                && hi <= MAX_ROBOT_HEIGHT_M)
+        {
+            return Err(InvalidValue::at(
+                "robot.lift",
+                format!(
+                    "[{lo}, {hi}] m must hold robot.height ({} m), from above 0 to at most {MAX_ROBOT_HEIGHT_M} m",
+                    r.height
+                ),
+            ));
+        }
         if let Some(s) = self.start
             && !(s
                 .position

@@ -105,7 +105,7 @@ pub fn simulation_app(
         }
     };
     let spec = task.robot_spec(arm.is_some());
-    let rig = arm.map(|arm| ArmRig::new(arm.clone(), spec.height));
+    let rig = arm.map(|arm| spec.mount(ArmRig::new(arm.clone(), spec.height)));
     // A held object rides in the arm's stowed hand, or on the plate of a base without one.
     let gripper = rig.as_ref().map_or_else(
         || (spec.base_from_gripper(), spec.gripper_mesh()),

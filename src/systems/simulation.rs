@@ -12,7 +12,7 @@ use std::time::Instant;
 use bevy::prelude::*;
 use serde::Serialize;
 
-use crate::arm::reach::ArmRig;
+use crate::arm::reach::{ArmRig, MAST_RADIUS_M};
 use crate::components::{Joint, LinkBody, Panoptic, RobotArmLink};
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::LinkGeometry;
@@ -167,9 +167,21 @@ pub fn spawn_robot(
                 transform_of(pose),
                 ChildOf(base),
             ));
-            // Its collision pieces are its look (the viewer draws link bodies).
-            if !link.pieces.is_empty() {
-                let mut mesh = crate::geometry::TriMesh::default();
+            // Its collision pieces are its look (the viewer draws link bodies); a lift's
+            // mast, which touches nothing, is seen too.
+            let mast = rig
+                .mast()
+                .filter(|(mast, _)| *mast == l)
+                .map(|(_, length)| {
+                    crate::geometry::TriMesh::cylinder(
+                        Vec3::NEG_Z * length,
+                        MAST_RADIUS_M,
+                        length,
+                        16,
+                    )
+                });
+            if !link.pieces.is_empty() || mast.is_some() {
+                let mut mesh = mast.unwrap_or_default();
                 for piece in &link.pieces {
                     mesh.append(piece);
                 }

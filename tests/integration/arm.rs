@@ -250,7 +250,8 @@ fn panda_picks_and_places_in_the_kitchen() {
     );
     let urdf = panda_urdf();
     let arm = Arm::read_urdf(&urdf, None).expect("the Panda reads");
-    let rig = iscene::arm::reach::ArmRig::new(arm, iscene::sim::robot::RobotSpec::ARM_BASE.height);
+    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
+    let rig = base.mount(iscene::arm::reach::ArmRig::new(arm, base.height));
     let mut motions = 0;
     for step in trace["steps"].as_array().expect("steps") {
         let changes = step["changes"].as_array().expect("changes");
@@ -468,7 +469,8 @@ fn panda_opens_and_closes_a_door_and_a_drawer_by_their_handles() {
         }
     }
     let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
-    let rig = iscene::arm::reach::ArmRig::new(arm, iscene::sim::robot::RobotSpec::ARM_BASE.height);
+    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
+    let rig = base.mount(iscene::arm::reach::ArmRig::new(arm, base.height));
     let replay = replay_in_mujoco(&out, &rig);
     assert_eq!(replay["steps"], serde_json::json!([0, 1, 2, 3]), "{replay}");
     assert!(

@@ -245,6 +245,12 @@ fn scene_folders_and_tasks_cannot_name_paths_hang_or_panic() {
     );
     refused_task(
         dir,
+        r#"{"robot": {"height": 0.75, "lift": [0.8, 1.1]},
+            "steps": [{"action": "navigate", "to": "fridge_1"}]}"#,
+        &["robot.lift", "robot.height"],
+    );
+    refused_task(
+        dir,
         r#"{"steps": [{"action": "pick", "object": "../../../x"}]}"#,
         &["not a plain name"],
     );

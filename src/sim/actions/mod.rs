@@ -269,12 +269,13 @@ pub fn attempt(
             }
             let (mut changes, moved) = approach(&view, robot, &state, container)?;
             let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
-            let spot = view.spot_in(link, container, &[gripper]).ok_or_else(|| {
-                ActionError::DoesNotFit {
+            let near = moved.base.position;
+            let spot = view
+                .spot_in(link, container, &[gripper], Some(near))
+                .ok_or_else(|| ActionError::DoesNotFit {
                     object: object.clone(),
                     container: container.clone(),
-                }
-            })?;
+                })?;
             let Some(rig) = arm else {
                 changes.extend(attach(&view, link, container, spot)?);
                 return Ok(changes);

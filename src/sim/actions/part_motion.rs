@@ -446,10 +446,18 @@ pub(super) fn places_to_stand(
         .transform_vector3(Vec3::NEG_Y)
         .truncate()
         .normalize_or_zero();
-    // The shoulder (the chain's second joint) over the base, and how far the tool gets from it.
-    let shoulder_link = rig.arm.chain.get(1).copied().unwrap_or(0);
+    // The shoulder (the chain's second joint past the lift, if any) over the base, how far a
+    // lift takes it up or down, and how far the tool gets from it.
+    let lift = rig.arm.lift();
+    let first = lift.map_or(0, |i| i + 1);
+    let shoulder_link = rig.arm.chain.get(first + 1).copied().unwrap_or(0);
     let stowed = rig.stowed_link_poses();
     let shoulder = Vec3::from(stowed[shoulder_link].translation);
+    let (down, up) = lift.map_or((0.0, 0.0), |i| rig.arm.limits()[i]);
+    let (low, high) = path.iter().fold((f32::MAX, f32::MIN), |(lo, hi), h| {
+        (lo.min(h.z), hi.max(h.z))
+    });
+    let rise = (0.5 * (low + high) - shoulder.z).clamp(down, up);
     let span = arm_span(rig, shoulder_link);
     let middle = path[1].truncate();
     let swept = swept_footprint(view, joint, to, robot.height);
@@ -459,7 +467,7 @@ pub(super) fn places_to_stand(
             .iter()
             .all(|s| s.distance(p) > robot.radius + SWEEP_CLEARANCE_M)
     };
-    let mut places: Vec<((bool, f32), glam::Vec2)> = STAND_DISTANCES_M
+    let mut places: Vec<((bool, bool, f32), glam::Vec2)> = STAND_DISTANCES_M
         .iter()
         .flat_map(|&d| {
             (0..STAND_DIRECTIONS).map(move |k| {
@@ -470,12 +478,23 @@ pub(super) fn places_to_stand(
         .filter(|p| (*p - closed.truncate()).dot(outward) >= robot.radius + 0.1)
         .filter(|p| clear_of(&swept, *p))
         .filter_map(|p| {
-            let over = shoulder + p.extend(0.0);
-            let reach = path.iter().map(|h| h.distance(over)).fold(0.0, f32::max);
-            (reach <= COMFORTABLE_SPAN * span).then_some(((!clear_of(&swept_on, p), reach), p))
+            let reach_from = |over: Vec3| path.iter().map(|h| h.distance(over)).fold(0.0, f32::max);
+            let (stowed, lifted) = (
+                reach_from(shoulder + p.extend(0.0)),
+                reach_from(shoulder + p.extend(rise)),
+            );
+            let comfortable = COMFORTABLE_SPAN * span;
+            // Where the arm works at its stowed height first, as without a lift.
+            (lifted <= comfortable)
+                .then_some(((stowed > comfortable, !clear_of(&swept_on, p), stowed), p))
         })
         .collect();
-    places.sort_by(|a, b| a.0.0.cmp(&b.0.0).then(a.0.1.total_cmp(&b.0.1)));
+    places.sort_by(|a, b| {
+        let ((a_lifts, a_swept, a_reach), (b_lifts, b_swept, b_reach)) = (a.0, b.0);
+        (a_lifts, a_swept)
+            .cmp(&(b_lifts, b_swept))
+            .then(a_reach.total_cmp(&b_reach))
+    });
     Ok(places
         .into_iter()
         .take(MAX_STANDS)
@@ -488,7 +507,8 @@ pub(super) fn places_to_stand(
 fn arm_span(rig: &ArmRig, shoulder: usize) -> f32 {
     use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
-    let limits = rig.arm.limits();
+    // The lift held (it moves the shoulder and the tool alike).
+    let limits = rig.arm.limits_between(&rig.stow, &rig.stow);
     (0..200)
         .map(|_| {
             let q = crate::arm::random_configuration(&limits, &mut rng);
