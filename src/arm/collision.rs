@@ -29,7 +29,8 @@ const ALWAYS_TOUCHING: f32 = 0.5;
 pub struct Obstacle {
     /// What it belongs to (a link of the scene's kinematic tree), for the reasons a plan fails.
     pub name: String,
-    /// Part of the object being grasped: the fingers may touch it, the rest of the arm not.
+    /// Part of the object being grasped: the fingers may touch it (up to `FINGER_DEPTH_M`
+    /// deep), the rest of the arm not.
     pub fingers_may_touch: bool,
     hull: ConvexPolyhedron,
     pose: Pose,
@@ -194,12 +195,16 @@ impl ArmCollider {
             for (hull, lo, hi) in pieces {
                 let (wlo, whi) = world_bounds(&poses[l], *lo, *hi);
                 for (o, obstacle) in obstacles.items.iter().enumerate() {
-                    if (obstacle.fingers_may_touch && self.fingers[l])
-                        || !overlaps((wlo, whi), (obstacle.lo, obstacle.hi), margin)
-                    {
+                    let finger_on_it = obstacle.fingers_may_touch && self.fingers[l];
+                    if !overlaps((wlo, whi), (obstacle.lo, obstacle.hi), margin) {
                         continue;
                     }
-                    if within(&pose, hull, &obstacle.pose, &obstacle.hull, margin) {
+                    let touches = if finger_on_it {
+                        deeper(&pose, hull, &obstacle.pose, &obstacle.hull, FINGER_DEPTH_M)
+                    } else {
+                        within(&pose, hull, &obstacle.pose, &obstacle.hull, margin)
+                    };
+                    if touches {
                         return Some((l, Touching::Obstacle(o)));
                     }
                 }
@@ -267,6 +272,18 @@ fn joints_between(arm: &Arm, a: usize, b: usize) -> usize {
             .count()
     };
     moving(&pa) + moving(&pb)
+}
+
+/// How deep a finger may press into what it grasps, metres: the fingers close on it, but no
+/// further than contact allows (the motion check in rapier refuses 5 mm).
+pub const FINGER_DEPTH_M: f32 = 0.004;
+
+/// Whether two convex pieces overlap by more than `depth`.
+fn deeper(pa: &Pose, a: &ConvexPolyhedron, pb: &Pose, b: &ConvexPolyhedron, depth: f32) -> bool {
+    parry3d::query::contact(pa, a, pb, b, 0.0)
+        .ok()
+        .flatten()
+        .is_some_and(|c| c.dist < -depth)
 }
 
 /// Whether two convex pieces come within `margin` of each other.

@@ -90,6 +90,53 @@ impl KinematicTree {
         crate::base::parent_chain::descends_from(link, ancestor, |l| self.links[l].parent)
     }
 
+    /// `link`, with what it carries, hung from `parent` at `parent_from_link` on `joint` (value
+    /// 0), as an action's attachment does in the world; the links reordered depth first,
+    /// children in name order (as the world is read), so parents still come first. Nothing
+    /// changes when `parent` hangs below `link`.
+    pub fn reparent(
+        &mut self,
+        link: usize,
+        parent: usize,
+        parent_from_link: Affine3A,
+        joint: JointSpec,
+    ) {
+        if link == 0 || self.descends_from(parent, link) {
+            return;
+        }
+        let moved = &mut self.links[link];
+        moved.parent = Some(parent);
+        moved.parent_from_link = parent_from_link;
+        moved.joint = joint;
+        moved.value = 0.0;
+        let mut children = crate::base::parent_chain::children(self.links.iter().map(|l| l.parent));
+        for c in &mut children {
+            c.sort_by(|a, b| self.links[*a].name.cmp(&self.links[*b].name));
+        }
+        let mut order = Vec::with_capacity(self.links.len());
+        let mut stack = vec![0];
+        while let Some(l) = stack.pop() {
+            order.push(l);
+            stack.extend(children[l].iter().rev());
+        }
+        let mut index = vec![0; self.links.len()];
+        for (k, &l) in order.iter().enumerate() {
+            index[l] = k;
+        }
+        let mut old: Vec<Option<TreeLink>> = std::mem::take(&mut self.links)
+            .into_iter()
+            .map(Some)
+            .collect();
+        self.links = order
+            .iter()
+            .filter_map(|&l| old[l].take())
+            .map(|mut l| {
+                l.parent = l.parent.map(|p| index[p]);
+                l
+            })
+            .collect();
+    }
+
     /// Every link's pose in the world at the current joint values.
     pub fn world_from_links(&self) -> Vec<Affine3A> {
         let mut poses: Vec<Affine3A> = Vec::with_capacity(self.links.len());
@@ -210,5 +257,35 @@ mod tests {
         assert!(p.distance(Vec3::new(1.0, 2.0, 0.0)) < 1e-5, "{p}");
         tree.links[2].name = "table_1".into();
         assert!(tree.check().is_err());
+    }
+
+    #[test]
+    fn a_cup_hung_from_a_link_after_it_comes_after_it() {
+        let mut tree = KinematicTree {
+            links: vec![
+                TreeLink::root(),
+                link("table_1", 0, JointSpec::FIXED, Vec3::X),
+                link("cup_1", 1, JointSpec::FLOATING, Vec3::Z),
+                link("robot", 0, JointSpec::FIXED, Vec3::Y),
+                link("robot_gripper", 3, JointSpec::FIXED, Vec3::Z),
+            ],
+        };
+        let grip = Affine3A::from_translation(Vec3::new(0.0, 0.0, -0.1));
+        tree.reparent(2, 4, grip, JointSpec::FIXED);
+        tree.check().expect("well formed");
+        let names: Vec<&str> = tree.links.iter().map(|l| l.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["world", "robot", "robot_gripper", "cup_1", "table_1"]
+        );
+        let cup = tree.world_from_links()[3].translation;
+        assert!(
+            Vec3::from(cup).distance(Vec3::new(0.0, 1.0, 0.9)) < 1e-6,
+            "{cup}"
+        );
+        // Hanging a link from what it carries changes nothing.
+        let before = tree.clone();
+        tree.reparent(1, 1, Affine3A::IDENTITY, JointSpec::FIXED);
+        assert_eq!(tree.links.len(), before.links.len());
     }
 }

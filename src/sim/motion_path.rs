@@ -4,10 +4,10 @@
 
 use glam::{Affine3A, Quat, Vec2};
 
-use crate::kinematics::JointKind;
 use crate::kinematics::tree::KinematicTree;
+use crate::kinematics::{JointKind, JointSpec};
 use crate::sim::actions::Change;
-use crate::sim::robot::{BasePose, ROBOT_LINK};
+use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK};
 
 /// The base drives at this speed (m/s) and turns at this rate (rad/s), whichever takes longer.
 pub const DRIVE_SPEED_M_S: f32 = 1.2;
@@ -153,6 +153,35 @@ pub fn apply_motion(tree: &mut KinematicTree, change: &Change) -> bool {
             true
         }
         Change::Attach { .. } | Change::ArmMotion { .. } => false,
+    }
+}
+
+/// `tree` after `change` as the world makes it (`systems::simulation::apply_change`): a drive or
+/// a joint moved, a link hung from another (held by the gripper on a fixed joint, else on the
+/// joint its class and model give it); an arm's motion leaves the tree as it was. What a plan
+/// looks ahead through.
+pub fn apply_to_tree(tree: &mut KinematicTree, change: &Change) {
+    if apply_motion(tree, change) {
+        return;
+    }
+    if let Change::Attach {
+        link,
+        to,
+        parent_from_link,
+        ..
+    } = change
+    {
+        let index = |name: &str| tree.links.iter().position(|l| l.name == name);
+        let (Some(child), Some(parent)) = (index(link), index(to)) else {
+            return;
+        };
+        let joint = if to == GRIPPER_LINK {
+            JointSpec::FIXED
+        } else {
+            let l = &tree.links[child];
+            crate::kinematics::support_joint(l.class.as_deref().unwrap_or(""), l.modelled)
+        };
+        tree.reparent(child, parent, *parent_from_link, joint);
     }
 }
 

@@ -278,21 +278,33 @@ impl<'a> SceneView<'a> {
         })
     }
 
-    /// Where `object` fits inside `container` (whose door is open): behind an open door, on the
-    /// lowest of its inner levels with room for it, centred, else shifted towards the front (or
-    /// as near `near` as it can be, the robot that puts it there); `None` when it fits on none.
-    /// The object keeps the container's orientation.
-    pub fn spot_in(
+    /// Where `object` fits inside `container` (whose door is open): the first of
+    /// [`Self::spots_in`] without `near`; `None` when it fits nowhere.
+    pub fn spot_in(&self, object: usize, container: &str, ignore: &[usize]) -> Option<Affine3A> {
+        self.spots_in(object, container, ignore, None)
+            .first()
+            .copied()
+    }
+
+    /// Where `object` fits inside `container` (whose door is open), best first: behind an open
+    /// door, on the lowest of its inner levels with room for it, centred, else shifted towards
+    /// the front, or nearest `near` first (the base of an arm that puts it there: a spot near
+    /// the front is in reach). The object keeps the container's orientation.
+    pub fn spots_in(
         &self,
         object: usize,
         container: &str,
         ignore: &[usize],
         near: Option<Vec2>,
-    ) -> Option<Affine3A> {
-        let own = self.node_link(container)?;
+    ) -> Vec<Affine3A> {
+        let mut spots = Vec::new();
+        let Some(own) = self.node_link(container) else {
+            return spots;
+        };
         let body = self.body_mesh_in_node(container);
-        let (lo, hi) = body.bounds()?;
-        let (olo, ohi) = self.local_bounds(object)?;
+        let (Some((lo, hi)), Some((olo, ohi))) = (body.bounds(), self.local_bounds(object)) else {
+            return spots;
+        };
         let height = ohi.z - olo.z;
         let centre = (lo + hi).truncate() / 2.0;
         let world_from_container = self.poses[own];
@@ -308,28 +320,26 @@ impl<'a> SceneView<'a> {
                     continue;
                 }
                 // Centred first, then towards the open front (-y in the model frame); or
-                // nearest the robot first.
+                // nearest `near` first.
                 let mut depths = [0.0, -0.05, -0.1, 0.05];
                 if let Some(near) = near {
                     let from = world_from_container
                         .inverse()
                         .transform_point3(near.extend(0.0));
-                    depths.sort_by(|a, b| {
-                        let d = |dy: f32| Vec2::new(x, centre.y + dy).distance(from.truncate());
-                        d(*a).total_cmp(&d(*b))
-                    });
+                    let off = |dy: &f32| Vec2::new(x, centre.y + dy).distance(from.truncate());
+                    depths.sort_by(|a, b| off(a).total_cmp(&off(b)));
                 }
                 for dy in depths {
                     let bottom = Vec3::new(x, centre.y + dy, floor + 0.001);
                     let pose =
                         upright_on(world_from_container.transform_point3(bottom), yaw, olo, ohi);
                     if self.overlap_at(object, pose, ignore) <= TOUCH_M {
-                        return Some(pose);
+                        spots.push(pose);
                     }
                 }
             }
         }
-        None
+        spots
     }
 
     /// The middle (x in the frame of node `container`) of the front each of its open doors

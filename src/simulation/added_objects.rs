@@ -76,7 +76,7 @@ pub(super) fn add_unseen_objects(
             if !view.is_container(host) {
                 return Err(at(format!("{host} is not a container")));
             }
-            view.spot_in(link, host, &[], None)
+            view.spot_in(link, host, &[])
                 .ok_or_else(|| at(format!("{} does not fit in {host}", added.model)))?
         } else {
             if view.is_layout(host) && !matches!(host_class(&graph, host), Some("floor")) {

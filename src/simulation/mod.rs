@@ -133,10 +133,10 @@ fn default_start(tree: &KinematicTree) -> Option<BasePose> {
 /// each update's wall-clock milliseconds.
 pub(super) fn run_actions(app: &mut App, actions: &[Action]) -> Vec<f64> {
     let mut update_ms = Vec::with_capacity(actions.len());
-    for action in actions {
+    for (k, action) in actions.iter().enumerate() {
         app.world_mut()
             .resource_mut::<Messages<ActionRequest>>()
-            .write(ActionRequest(action.clone()));
+            .write(ActionRequest(action.clone(), actions[k + 1..].to_vec()));
         let started = Instant::now();
         app.update();
         update_ms.push(started.elapsed().as_secs_f64() * 1e3);

@@ -6,7 +6,7 @@ use std::collections::{HashMap, HashSet};
 use bevy::prelude::*;
 use glam::{Affine3A, Mat4};
 
-use crate::classes::{ClassTable, EntityKind};
+use crate::classes::EntityKind;
 use crate::components::{
     CadModel, Joint, OrientedBox, Panoptic, ProximalEndA, ProximalEndB, SceneEntity, SurfacePlanes,
 };
@@ -55,18 +55,6 @@ pub fn transform_of(a: Affine3A) -> Transform {
         translation,
         rotation: rotation.normalize(),
         scale,
-    }
-}
-
-/// The joint an object gets to its support: floating for a movable class with a model, fixed
-/// otherwise. An object no model replaced keeps its segment mesh, the surface seen from one side:
-/// it has no inside to weigh, its hull stands on nothing in particular, and the worst such
-/// segments are the ones the shape filters rejected (a 1.1 m "book" of label bleeding), so it
-/// stays where it was seen.
-pub fn support_joint(class: &str, has_model: bool) -> JointSpec {
-    match ClassTable::builtin().get(class) {
-        Some(info) if info.movable && has_model => JointSpec::FLOATING,
-        _ => JointSpec::FIXED,
     }
 }
 
@@ -141,7 +129,7 @@ pub fn attach_contact_graph(
 /// Gives every node entity (a `SceneEntity` with a box) its frame and its joint to its support,
 /// from its own components: its `Transform` relative to its parent (both entities' frames as
 /// `world_from_entity` makes them; the `SceneRoot`'s is the world frame) and the joint
-/// `support_joint` gives its class (a layout entity under the root is fixed). The frames follow
+/// `kinematics::support_joint` gives its class (a layout entity under the root is fixed). The frames follow
 /// the components, so a stage that changes a box or a model runs this again.
 pub fn hang_frames(world: &mut World) {
     let mut nodes = world.query_filtered::<(
@@ -162,7 +150,7 @@ pub fn hang_frames(world: &mut World) {
             let joint = if parent_pose.is_none() && panoptic.kind == EntityKind::Layout {
                 JointSpec::FIXED
             } else {
-                support_joint(panoptic.class.as_str(), cad.is_some())
+                crate::kinematics::support_joint(panoptic.class.as_str(), cad.is_some())
             };
             let local = parent_pose.unwrap_or(Affine3A::IDENTITY).inverse() * poses[&e];
             (e, transform_of(local), joint)

@@ -18,7 +18,7 @@ use crate::kinematics::JointSpec;
 use crate::kinematics::link::LinkGeometry;
 use crate::kinematics::rest_test::{ObjectVerdict, REST_STEP_S, Verdict};
 use crate::kinematics::tree::KinematicTree;
-use crate::sim::actions::{Action, Change, attempt, robot_in_tree};
+use crate::sim::actions::{Action, Change, attempt_then, robot_in_tree};
 use crate::sim::arm_phases::arm_phases;
 use crate::sim::motion_path::{LinkMotion, apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
@@ -60,9 +60,10 @@ pub fn rest_physics(world: &mut World) -> Result<PhysicsReport, ReadTreeError> {
     Ok(report)
 }
 
-/// Asks the robot to perform an action.
+/// Asks the robot to perform an action; the actions that follow it (a task's next steps) let
+/// a pick look ahead to its place.
 #[derive(Message, Clone, Debug)]
-pub struct ActionRequest(pub Action);
+pub struct ActionRequest(pub Action, pub Vec<Action>);
 
 /// The physics check after an action: the rest test of the whole scene.
 #[derive(Clone, Debug, Serialize)]
@@ -215,7 +216,7 @@ fn pose_arm_links(world: &mut World, q: &[f32]) {
 
 /// Performs `action` on the world: checks it, applies its changes, checks the physics; records
 /// and returns what happened.
-pub fn perform(world: &mut World, action: &Action) -> StepRecord {
+pub fn perform(world: &mut World, action: &Action, then: &[Action]) -> StepRecord {
     let started = Instant::now();
     let step = world
         .get_resource::<SimulationTrace>()
@@ -226,8 +227,8 @@ pub fn perform(world: &mut World, action: &Action) -> StepRecord {
         .and_then(|(tree, entities)| {
             let spec = robot_spec(world).ok_or("the scene has no robot")?;
             let arm = world.get_resource::<RobotArm>().map(|a| a.0.clone());
-            let changes =
-                attempt(&tree, &spec, arm.as_deref(), action).map_err(|e| e.to_string())?;
+            let changes = attempt_then(&tree, &spec, arm.as_deref(), action, then)
+                .map_err(|e| e.to_string())?;
             motion = simulate_motions(world, &tree, &entities, &changes, arm.as_deref());
             if let Some(why) = motion.iter().find_map(refusal) {
                 return Err(why);
@@ -520,7 +521,7 @@ pub fn apply_change(world: &mut World, change: &Change) {
                     .get::<Panoptic>(child)
                     .map_or("", |p| p.class.as_str());
                 let has_model = world.get::<crate::components::CadModel>(child).is_some();
-                crate::systems::scene_graph::support_joint(class, has_model)
+                crate::kinematics::support_joint(class, has_model)
             };
             world.entity_mut(child).insert((
                 ChildOf(parent),
@@ -559,8 +560,8 @@ fn perform_requested_actions(world: &mut World) {
         .resource_mut::<Messages<ActionRequest>>()
         .drain()
         .collect();
-    for ActionRequest(action) in requests {
-        perform(world, &action);
+    for ActionRequest(action, then) in requests {
+        perform(world, &action, &then);
     }
 }
 

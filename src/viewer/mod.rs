@@ -55,7 +55,7 @@ pub use physics_layer::RestVerdicts;
 pub use replay_scene::ReplayData;
 pub use screenshot::{RenderTiming, render_offscreen};
 pub use state::{PointerPosition, SceneRevision, ViewerStatus};
-pub use task_player::{TaskPlayer, action_words};
+pub use task_player::TaskPlayer;
 pub use timeline::ReplayClock;
 
 /// What `iscene view` shows and does.
@@ -233,12 +233,13 @@ pub fn replay_app(replay: Replay, offscreen: bool) -> App {
 /// screenshot then shows where the task ends.
 fn run_whole_task(app: &mut App, task: &std::path::Path) -> Result<(), IsceneError> {
     let actions = app.world().resource::<TaskPlayer>().actions.clone();
-    for action in actions {
-        let record = crate::systems::simulation::perform(app.world_mut(), &action);
+    for (k, action) in actions.iter().enumerate() {
+        let record =
+            crate::systems::simulation::perform(app.world_mut(), action, &actions[k + 1..]);
         if let Some(refused) = record.failed_precondition {
             return Err(InputError::invalid(
                 task,
-                format!("the task stopped at {}: {refused}", action_words(&action)),
+                format!("the task stopped at {}: {refused}", action.in_words()),
             )
             .into());
         }

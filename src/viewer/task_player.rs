@@ -36,32 +36,6 @@ impl TaskPlayer {
 /// While playing, one action per this many seconds: time to see each one.
 const PLAY_STEP_S: f32 = 1.0;
 
-/// The action in words, for the panel.
-pub fn action_words(action: &Action) -> String {
-    match action {
-        Action::Navigate { to } => format!("navigate to {to}"),
-        Action::Open { object, part, .. } => match part {
-            Some(part) => format!("open {object} ({part})"),
-            None => format!("open {object}"),
-        },
-        Action::Close { object, part } => match part {
-            Some(part) => format!("close {object} ({part})"),
-            None => format!("close {object}"),
-        },
-        Action::Pick { object } => format!("pick {object}"),
-        Action::PlaceOn { object, surface } => format!("place {object} on {surface}"),
-        Action::PlaceIn { object, container } => format!("place {object} in {container}"),
-        Action::Push {
-            object,
-            direction,
-            distance,
-        } => format!(
-            "push {object} {distance:.2} m along ({:.2}, {:.2})",
-            direction[0], direction[1]
-        ),
-    }
-}
-
 /// N asks for the next action, P plays or pauses; a refused action stops the play.
 fn step_task(
     keys: Res<ButtonInput<KeyCode>>,
@@ -107,7 +81,8 @@ fn step_task(
         player.playing = false;
     }
     player.asked_at = Some(trace.0.len());
-    requests.write(ActionRequest(action));
+    let then = player.actions[player.next..].to_vec();
+    requests.write(ActionRequest(action, then));
 }
 
 /// Once the asked action has its record: the panel says how it went, and the layers that
@@ -135,7 +110,7 @@ fn report_step(
         "task step {} of {}: {} - {outcome}",
         player.next,
         player.actions.len(),
-        action_words(&record.action)
+        record.action.in_words()
     )];
     if record.success {
         revision.0 += 1;

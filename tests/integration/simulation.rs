@@ -138,7 +138,7 @@ fn placing_into_the_closed_microwave_is_refused_with_the_reason_and_nothing_move
         r#"{"action": "navigate", "to": "microwave_1"}"#,
     ] {
         let action: Action = serde_json::from_str(action).expect("action");
-        let record = perform(world, &action);
+        let record = perform(world, &action, &[]);
         assert!(record.success, "{record:?}");
     }
     let before = read_kinematic_tree(world).expect("tree").world_from_links();
@@ -146,7 +146,7 @@ fn placing_into_the_closed_microwave_is_refused_with_the_reason_and_nothing_move
         r#"{"action": "place_in", "object": "box_1", "container": "microwave_1"}"#,
     )
     .expect("action");
-    let record = perform(world, &place);
+    let record = perform(world, &place, &[]);
     assert!(!record.success);
     assert_eq!(
         record.failed_precondition.as_deref(),

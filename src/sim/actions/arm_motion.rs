@@ -176,13 +176,15 @@ fn grasps_of(
 
 /// The arm's pick of node `id` (link `link`, its obstacles `around`) from where the base
 /// stands: reach, close, lift and stow with it. The object then hangs from the gripper (the
-/// stowed hand) as the fingers hold it.
+/// stowed hand) as the fingers hold it. The first grasp whose pick `then` accepts (the place
+/// that follows plans with it), else the first that works.
 pub(super) fn pick_motion(
     view: &SceneView,
     rig: &ArmRig,
     state: &RobotInTree,
     (id, link): (&str, usize),
     around: &AroundObject,
+    then: &dyn Fn(&[Change]) -> Result<(), String>,
 ) -> Result<Vec<Change>, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
     let (transit, near) = (&around.with_object, &around.grasped);
@@ -193,6 +195,7 @@ pub(super) fn pick_motion(
         &format!("pick {id}"),
         Vec::new(),
         candidates,
+        then,
         |_, grasp| {
             let to = reach(
                 rig,
@@ -223,15 +226,18 @@ pub(super) fn pick_motion(
 }
 
 /// The arm's motion with the first of `candidates` (at most `MAX_GRASPS`) for which `plan`
-/// (given the grasp and its index) finds a reach, a retreat and where the object ends up; else
-/// `what` fails with `attempts` and each grasp's reason.
+/// (given the grasp and its index) finds a reach, a retreat and where the object ends up, and
+/// whose changes `then` accepts; else the first that `plan` finds; else `what` fails with
+/// `attempts` and each grasp's reason.
 fn first_grasp_that_works(
     id: &str,
     what: &str,
     mut attempts: Vec<String>,
     candidates: Vec<Grasp>,
+    then: &dyn Fn(&[Change]) -> Result<(), String>,
     plan: impl Fn(usize, &Grasp) -> Result<(ArmPath, ArmPath, Change), String>,
 ) -> Result<Vec<Change>, ActionError> {
+    let mut first = None;
     for (i, grasp) in candidates.into_iter().take(MAX_GRASPS).enumerate() {
         let label = grasp_label(&grasp);
         match plan(i, &grasp) {
@@ -242,12 +248,19 @@ fn first_grasp_that_works(
                     retreat: back.configurations,
                     part: None,
                 };
-                return Ok(vec![motion, attach]);
+                let changes = vec![motion, attach];
+                match then(&changes) {
+                    Ok(()) => return Ok(changes),
+                    Err(why) => {
+                        tracing::debug!("{label} of {id}: {why}");
+                        first.get_or_insert(changes);
+                    }
+                }
             }
             Err(why) => attempts.push(format!("{label}: {why}")),
         }
     }
-    Err(ActionError::ArmCannot {
+    first.ok_or_else(|| ActionError::ArmCannot {
         what: what.to_string(),
         attempts,
     })
@@ -289,6 +302,7 @@ pub(super) fn place_motion(
         &format!("place {id}"),
         Vec::new(),
         candidates,
+        &|_| Ok(()),
         |i, grasp| {
             let spot = spots[i];
             // The object at its new place, for the way back.

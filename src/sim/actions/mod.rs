@@ -67,6 +67,32 @@ pub enum Action {
 }
 
 impl Action {
+    /// The action in words (a trace's reasons, the viewer's panel).
+    pub fn in_words(&self) -> String {
+        match self {
+            Action::Navigate { to } => format!("navigate to {to}"),
+            Action::Open { object, part, .. } => match part {
+                Some(part) => format!("open {object} ({part})"),
+                None => format!("open {object}"),
+            },
+            Action::Close { object, part } => match part {
+                Some(part) => format!("close {object} ({part})"),
+                None => format!("close {object}"),
+            },
+            Action::Pick { object } => format!("pick {object}"),
+            Action::PlaceOn { object, surface } => format!("place {object} on {surface}"),
+            Action::PlaceIn { object, container } => format!("place {object} in {container}"),
+            Action::Push {
+                object,
+                direction,
+                distance,
+            } => format!(
+                "push {object} {distance:.2} m along ({:.2}, {:.2})",
+                direction[0], direction[1]
+            ),
+        }
+    }
+
     /// The scene nodes the action names.
     pub fn node_ids(&self) -> Vec<&str> {
         match self {
@@ -189,6 +215,18 @@ pub fn attempt(
     arm: Option<&ArmRig>,
     action: &Action,
 ) -> Result<Vec<Change>, ActionError> {
+    attempt_then(tree, robot, arm, action, &[])
+}
+
+/// [`attempt`] for a task whose next actions are `then`: an arm's pick looks ahead to the place
+/// of its object among them (`pick_ahead`).
+pub fn attempt_then(
+    tree: &KinematicTree,
+    robot: &RobotSpec,
+    arm: Option<&ArmRig>,
+    action: &Action,
+    then: &[Action],
+) -> Result<Vec<Change>, ActionError> {
     let view = SceneView::new(tree);
     let Some(state) = robot_in_tree(tree) else {
         return Err(ActionError::NoRobot);
@@ -219,13 +257,28 @@ pub fn attempt(
                 (Some(rig), Some(link)) => {
                     let around = arm_motion::AroundObject::new(&view, link);
                     let target = view.poses[link].translation.truncate();
+                    let ahead = pick_ahead(object, then);
+                    let looked = std::cell::Cell::new(0);
+                    // Whether the place that follows plans after this pick (from the base
+                    // `at`), within a budget of looks.
+                    let place_follows = |at: &RobotInTree, picked: &[Change]| {
+                        if ahead.is_empty() || looked.get() >= MAX_LOOKS_AHEAD {
+                            return Ok(());
+                        }
+                        looked.set(looked.get() + 1);
+                        plans_after(tree, robot, rig, (&state, at), picked, ahead)
+                    };
                     arm_motion::from_some_base(
                         &view,
                         robot,
                         &state,
                         (changes, moved),
                         target,
-                        &|at| arm_motion::pick_motion(&view, rig, at, (object, link), &around),
+                        &|at| {
+                            arm_motion::pick_motion(&view, rig, at, (object, link), &around, &|c| {
+                                place_follows(at, c)
+                            })
+                        },
                     )
                 }
                 _ => Ok(changes.into_iter().chain(picked).collect()),
@@ -269,9 +322,12 @@ pub fn attempt(
             }
             let (mut changes, moved) = approach(&view, robot, &state, container)?;
             let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
-            let near = moved.base.position;
+            // An arm reaches a spot near the front best; any spot must let the doors close.
+            let near = arm.map(|_| moved.base.position);
             let spot = view
-                .spot_in(link, container, &[gripper], Some(near))
+                .spots_in(link, container, &[gripper], near)
+                .into_iter()
+                .find(|spot| closes_with(&view, link, container, *spot))
                 .ok_or_else(|| ActionError::DoesNotFit {
                     object: object.clone(),
                     container: container.clone(),
@@ -419,6 +475,92 @@ fn move_joint(
         }
     }
     Err(tries.error(Some(format!("work {name}"))))
+}
+
+/// Whether every open door and drawer of `container` still closes with the held `object` set at
+/// `spot` (the world pose of its link): a spot near the front can be in a door's way.
+fn closes_with(view: &SceneView, object: usize, container: &str, spot: Affine3A) -> bool {
+    let Some(own) = view.node_link(container) else {
+        return true;
+    };
+    let names = |links: Vec<usize>| -> Vec<String> {
+        links
+            .into_iter()
+            .map(|l| view.tree.links[l].name.clone())
+            .collect()
+    };
+    let parts = names(view.moving_parts(container));
+    let mut tree = view.tree.clone();
+    let from_container = view.poses[own].inverse() * spot;
+    tree.reparent(
+        object,
+        own,
+        from_container,
+        crate::kinematics::JointSpec::FIXED,
+    );
+    let index = |name: &str| tree.links.iter().position(|l| l.name == name);
+    let robot: Vec<usize> = [ROBOT_LINK, GRIPPER_LINK]
+        .iter()
+        .filter_map(|n| index(n))
+        .collect();
+    let placed = SceneView::new(&tree);
+    parts.iter().filter_map(|p| index(p)).all(|joint| {
+        let closed = closed_value(&tree, joint);
+        (tree.links[joint].value - closed).abs() < 1e-4
+            || sweep(&placed, joint, closed, &robot).is_ok()
+    })
+}
+
+/// A pick looks ahead through at most this many of its grasps: planning the place that follows
+/// costs as much as the pick.
+const MAX_LOOKS_AHEAD: usize = 4;
+
+/// The actions of `then` up to the place of `object` (what a pick of it looks ahead through):
+/// drives and doors, then the place; none when no place of it follows before another pick.
+fn pick_ahead<'a>(object: &str, then: &'a [Action]) -> &'a [Action] {
+    for (k, action) in then.iter().enumerate() {
+        match action {
+            Action::PlaceOn { object: o, .. } | Action::PlaceIn { object: o, .. }
+                if o == object =>
+            {
+                return &then[..=k];
+            }
+            Action::Navigate { .. } | Action::Open { .. } | Action::Close { .. } => {}
+            _ => break,
+        }
+    }
+    &[]
+}
+
+/// Whether `ahead` plans, in turn, from `tree` after the robot went from `from` to `at` and
+/// made the changes `picked`; else why not, naming the action that does not.
+fn plans_after(
+    tree: &KinematicTree,
+    robot: &RobotSpec,
+    rig: &ArmRig,
+    (from, at): (&RobotInTree, &RobotInTree),
+    picked: &[Change],
+    ahead: &[Action],
+) -> Result<(), String> {
+    use crate::sim::motion_path::apply_to_tree;
+    let mut after = tree.clone();
+    let drive = Change::MoveBase {
+        from: from.base,
+        to: at.base,
+        path_length_m: 0.0,
+        path: Vec::new(),
+    };
+    for change in std::iter::once(&drive).chain(picked) {
+        apply_to_tree(&mut after, change);
+    }
+    for action in ahead {
+        let changes = attempt(&after, robot, Some(rig), action)
+            .map_err(|e| format!("then {}: {e}", action.in_words()))?;
+        for change in &changes {
+            apply_to_tree(&mut after, change);
+        }
+    }
+    Ok(())
 }
 
 /// The base's step to where it meets `goal` for working `object`'s parts, unless it is there:
@@ -688,4 +830,38 @@ fn push(
         });
     }
     attach(view, link, &support, pose)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pick_looks_ahead_through_drives_and_doors_to_its_own_place_only() {
+        let go = |to: &str| Action::Navigate { to: to.into() };
+        let place_in = |object: &str| Action::PlaceIn {
+            object: object.into(),
+            container: "cabinet_1".into(),
+        };
+        let then = [
+            go("cabinet_1"),
+            Action::Open {
+                object: "cabinet_1".into(),
+                part: None,
+                value: None,
+            },
+            place_in("cup_1"),
+            go("table_1"),
+        ];
+        assert_eq!(pick_ahead("cup_1", &then), &then[..3]);
+        // Another object's place, or another pick first: nothing to look ahead to.
+        assert!(pick_ahead("cup_2", &then).is_empty());
+        let picks_first = [
+            Action::Pick {
+                object: "bowl_1".into(),
+            },
+            place_in("cup_1"),
+        ];
+        assert!(pick_ahead("cup_1", &picks_first).is_empty());
+    }
 }
