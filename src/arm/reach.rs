@@ -497,8 +497,52 @@ pub fn retreat(
     near: &Obstacles,
     held: &Held,
 ) -> Result<ArmPath, String> {
+    retreat_through(rig, world_from_root, from, &[away], transit, near, held)
+}
+
+/// [`retreat`] by the straight stretches `aways` in turn (a hand whose fingers are in a cup
+/// rises off it before it backs out of the cabinet).
+pub fn retreat_through(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    from: &[f32],
+    aways: &[Vec3],
+    transit: &Obstacles,
+    near: &Obstacles,
+    held: &Held,
+) -> Result<ArmPath, String> {
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
-    retreat_along(rig, world_from_root, from, away, &free_near, transit, held)
+    let (last, rest) = aways.split_last().ok_or("no way back")?;
+    let mut start = from.to_vec();
+    let mut lines = Vec::new();
+    for away in rest {
+        let tool = rig.arm.tool_pose(world_from_root, &start);
+        let line = straight_line(rig, world_from_root, &start, &tool, *away, &free_near).map_err(
+            |at| {
+                format!(
+                    "the hand's first way back is blocked or out of reach after {:.0} of {:.0} cm",
+                    100.0 * away.length() * at,
+                    100.0 * away.length()
+                )
+            },
+        )?;
+        start = line.last().expect("not empty").clone();
+        lines.extend(line.into_iter().skip(usize::from(!lines.is_empty())));
+    }
+    let mut path = retreat_along(
+        rig,
+        world_from_root,
+        &start,
+        *last,
+        &free_near,
+        transit,
+        held,
+    )?;
+    if !lines.is_empty() {
+        lines.extend(path.configurations.into_iter().skip(1));
+        path.configurations = lines;
+    }
+    Ok(path)
 }
 
 /// [`retreat`] with the straight stretch accepted by `free_line` instead of a clearance from

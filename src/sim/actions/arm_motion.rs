@@ -8,7 +8,7 @@ use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps};
-use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat};
+use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat, retreat_through};
 use crate::geometry::TriMesh;
 use crate::sim::actions::error::ArmTries;
 use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
@@ -20,6 +20,11 @@ use crate::sim::scene_view::{SceneView, TOUCH_M};
 /// Classes held by their rim when too wide for the fingers.
 const VESSELS: [&str; 3] = ["cup", "bowl", "mug"];
 /// At most this many grasps are tried per action (the best first).
+/// A grasp whose approach is within 45 degrees of straight down comes from above; leaving an
+/// object it set down in a container, its hand first rises this far (metres) over the object's
+/// top.
+const FROM_ABOVE_COS: f32 = 0.7;
+const RISE_CLEAR_M: f32 = 0.01;
 const MAX_GRASPS: usize = 6;
 /// Distances (metres, base centre to the target) of the base poses tried after the one the
 /// base's own approach chose, nearest last: the arm reaches farther down and in from closer.
@@ -327,14 +332,34 @@ pub(super) fn place_motion(
             // Out of the grasp: back along the hand's approach off a surface (up from a top
             // grasp; straight up would drag a side grasp's fingers along a bottle's height),
             // back out of a container's front.
-            let away = inward.map_or(-grasp.approach * LIFT_M, |(d, length)| -d * length);
-            let back = retreat(
+            let aways = match inward {
+                None => vec![-grasp.approach * LIFT_M],
+                // A hand that came down on it (fingers in a cup's rim, around a bottle's neck)
+                // rises off it before it backs out: straight out, the fingers went through
+                // the cup's wall (12 mm in MuJoCo's replay).
+                Some((d, length)) if grasp.approach.z < -FROM_ABOVE_COS => {
+                    let top = view.local_bounds(link).map_or(0.0, |(_, hi)| {
+                        (moved * view.poses[link]).translation.z + hi.z
+                    });
+                    let rise = (top - grasp.world_from_tool.translation.z + RISE_CLEAR_M).max(0.0);
+                    vec![Vec3::Z * rise, -d * length]
+                }
+                Some((d, length)) => vec![-d * length],
+            };
+            // Out of a container the fingers leave the object as they may touch it, no more.
+            let mut near = scene.clone();
+            if inward.is_some() {
+                let mut set_down = Obstacles::default();
+                add_links(&mut set_down, view, &around.links, &moved);
+                near.items.extend(set_down.grasped().items);
+            }
+            let back = retreat_through(
                 rig,
                 &root,
                 to.last(),
-                away,
+                &aways,
                 &placed,
-                scene,
+                &near,
                 &Held::default(),
             )?;
             let attach = super::attach(view, link, host, spot)
