@@ -78,6 +78,9 @@ impl ArmRig {
     }
 }
 
+/// Radius of the mast seen under the root of an arm on a lift, metres.
+pub const MAST_RADIUS_M: f32 = 0.07;
+
 impl ArmRig {
     /// This rig with its arm on a lift sliding its root from `range.0` to `range.1` metres of
     /// where the base mounts it (`Arm::on_lift`; the range holds 0). The arm travels stowed as
@@ -90,12 +93,7 @@ impl ArmRig {
             ..self
         }
     }
-}
 
-/// Radius of the mast seen under the root of an arm on a lift, metres.
-pub const MAST_RADIUS_M: f32 = 0.07;
-
-impl ArmRig {
     /// The mast of an arm on a lift: its link and length (the lift's travel), a cylinder of
     /// [`MAST_RADIUS_M`] down from the root, what is seen of the lift above the base's column
     /// (which hides the rest). It collides with nothing: it stands inside the base's footprint.
