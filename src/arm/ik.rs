@@ -147,7 +147,10 @@ fn descend(
 ) -> Option<Vec<f32>> {
     let lambda2 = settings.damping * settings.damping;
     let limits = arm.limits();
-    let lift = arm.lift();
+    // The lift's joint and the weight of its column (the arm's own are 1).
+    let lift = arm
+        .lift()
+        .map(|i| (i, if lift_free { LIFT_WEIGHT } else { 0.0 }));
     for _ in 0..settings.iterations {
         let (position, mut rotation) = pose_error(&arm.tool_pose(world_from_root, &q), target);
         if !settings.orientation {
@@ -167,13 +170,8 @@ fn descend(
                 c[3..].fill(0.0);
             }
         }
-        let weight = |i: usize| match (Some(i) == lift, lift_free) {
-            (false, _) => 1.0,
-            (true, true) => LIFT_WEIGHT,
-            (true, false) => 0.0,
-        };
-        for (i, c) in columns.iter_mut().enumerate() {
-            c.iter_mut().for_each(|v| *v *= weight(i));
+        if let Some((i, weight)) = lift {
+            columns[i].iter_mut().for_each(|v| *v *= weight);
         }
         // A joint at its limit that the step would push past it is held where it is, and the
         // step solved again with the other joints: clamping it afterwards would stall the run
@@ -214,8 +212,8 @@ fn descend(
                 dq[i] += toward_middle[i] - along_task[i];
             }
         }
-        for (i, v) in dq.iter_mut().enumerate() {
-            *v *= weight(i);
+        if let Some((i, weight)) = lift {
+            dq[i] *= weight;
         }
         let largest = dq.iter().fold(0.0f32, |m, v| m.max(v.abs()));
         if !largest.is_finite() {

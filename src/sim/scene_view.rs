@@ -281,28 +281,40 @@ impl<'a> SceneView<'a> {
     /// Where `object` fits inside `container` (whose door is open): the first of
     /// [`Self::spots_in`] without `near`; `None` when it fits nowhere.
     pub fn spot_in(&self, object: usize, container: &str, ignore: &[usize]) -> Option<Affine3A> {
-        self.spots_in(object, container, ignore, None)
-            .first()
-            .copied()
+        self.spots_in(object, container, ignore, None).next()
     }
 
     /// Where `object` fits inside `container` (whose door is open), best first: behind an open
     /// door, on the lowest of its inner levels with room for it, centred, else shifted towards
     /// the front, or nearest `near` first (the base of an arm that puts it there: a spot near
-    /// the front is in reach). The object keeps the container's orientation.
-    pub fn spots_in(
-        &self,
+    /// the front is in reach). The object keeps the container's orientation. Each spot's room
+    /// is measured as it is asked for.
+    pub fn spots_in<'s>(
+        &'s self,
         object: usize,
         container: &str,
-        ignore: &[usize],
+        ignore: &'s [usize],
+        near: Option<Vec2>,
+    ) -> impl Iterator<Item = Affine3A> + 's {
+        let candidates = self.local_bounds(object).map_or_else(Vec::new, |bounds| {
+            self.candidate_spots_in(container, bounds, near)
+        });
+        candidates
+            .into_iter()
+            .filter(move |pose| self.overlap_at(object, *pose, ignore) <= TOUCH_M)
+    }
+
+    /// The poses [`Self::spots_in`] tries, in its order: on the levels of `container` with room
+    /// for an object of local bounds `olo..ohi`.
+    fn candidate_spots_in(
+        &self,
+        container: &str,
+        (olo, ohi): (Vec3, Vec3),
         near: Option<Vec2>,
     ) -> Vec<Affine3A> {
         let mut spots = Vec::new();
-        let Some(own) = self.node_link(container) else {
-            return spots;
-        };
         let body = self.body_mesh_in_node(container);
-        let (Some((lo, hi)), Some((olo, ohi))) = (body.bounds(), self.local_bounds(object)) else {
+        let (Some(own), Some((lo, hi))) = (self.node_link(container), body.bounds()) else {
             return spots;
         };
         let height = ohi.z - olo.z;
@@ -331,11 +343,12 @@ impl<'a> SceneView<'a> {
                 }
                 for dy in depths {
                     let bottom = Vec3::new(x, centre.y + dy, floor + 0.001);
-                    let pose =
-                        upright_on(world_from_container.transform_point3(bottom), yaw, olo, ohi);
-                    if self.overlap_at(object, pose, ignore) <= TOUCH_M {
-                        spots.push(pose);
-                    }
+                    spots.push(upright_on(
+                        world_from_container.transform_point3(bottom),
+                        yaw,
+                        olo,
+                        ohi,
+                    ));
                 }
             }
         }
@@ -406,30 +419,18 @@ fn upright_on(bottom_in_world: Vec3, yaw: f32, lo: Vec3, hi: Vec3) -> Affine3A {
 
 /// Heights where a vertical line through `p` crosses `mesh`, ascending.
 pub fn vertical_hits(mesh: &TriMesh, p: Vec2) -> Vec<f32> {
-    let mut hits = Vec::new();
-    for t in 0..mesh.triangles.len() {
-        let [a, b, c] = mesh.triangle(t);
-        let (a2, b2, c2) = (a.truncate(), b.truncate(), c.truncate());
-        let area = (b2 - a2).perp_dot(c2 - a2);
-        if area.abs() < 1e-12 {
-            continue;
-        }
-        let u = (b2 - p).perp_dot(c2 - p) / area;
-        let v = (c2 - p).perp_dot(a2 - p) / area;
-        let w = 1.0 - u - v;
-        if u >= 0.0 && v >= 0.0 && w >= 0.0 {
-            hits.push(u * a.z + v * b.z + w * c.z);
-        }
-    }
-    hits.sort_by(f32::total_cmp);
+    let mut hits: Vec<f32> = vertical_crossings(mesh, p)
+        .into_iter()
+        .map(|(z, _)| z)
+        .collect();
     hits.dedup_by(|a, b| (*a - *b).abs() < 1e-4);
     hits
 }
 
-/// Where a vertical line through `p` crosses the closed, outward-wound `mesh`, ascending, each
-/// with whether the line, going up, enters the solid there (the face looks down). The
-/// triangles of one face meeting on the line count once; a board's top touching the bottom
-/// of the one above counts as both, the entry first.
+/// Where a vertical line through `p` crosses `mesh`, ascending, each with whether the line,
+/// going up, enters the solid there (the face looks down; meaningful for a closed,
+/// outward-wound mesh). The triangles of one face meeting on the line count once; a board's top
+/// touching the bottom of the one above counts as both, the entry first.
 fn vertical_crossings(mesh: &TriMesh, p: Vec2) -> Vec<(f32, bool)> {
     let mut hits = Vec::new();
     for t in 0..mesh.triangles.len() {

@@ -7,29 +7,23 @@ use glam::{Affine3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::arm::reach::ArmRig;
-use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, SweepPose};
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
-use crate::sim::scene_view::{SceneView, TOUCH_M, closed_value, open_value};
+use crate::sim::scene_view::{SceneView, TOUCH_M};
 
 mod arm_motion;
 mod error;
+mod joints;
+mod look_ahead;
 mod part_motion;
 mod reach;
 
 pub use arm_motion::scene_obstacles;
 pub use error::ActionError;
-use error::ArmTries;
+use joints::{closes_with, move_joint};
+use look_ahead::{MAX_LOOKS_AHEAD, pick_ahead, plans_after};
 pub use reach::nav_grid;
-use reach::{APPROACH_M, approach, approach_point, drive, nav_goal, navigate, within_reach};
-
-/// A door turns at most this far (radians), a drawer slides this far (metres), between the
-/// poses where its path is checked.
-const SWEEP_STEP: f32 = 0.05;
-/// A door opened as far as it goes must be at least this fraction open.
-const MIN_OPEN_FRACTION: f32 = 0.6;
-/// The base stands within this distance (metres) of a place chosen to work a part from.
-const PLACE_TO_STAND_M: f32 = 0.08;
+use reach::{approach, approach_point, navigate, within_reach};
 
 /// One robot action, as task scripts write it (`{"action": "open", "object": "fridge_1"}`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -326,7 +320,6 @@ pub fn attempt_then(
             let near = arm.map(|_| moved.base.position);
             let spot = view
                 .spots_in(link, container, &[gripper], near)
-                .into_iter()
                 .find(|spot| closes_with(&view, link, container, *spot))
                 .ok_or_else(|| ActionError::DoesNotFit {
                     object: object.clone(),
@@ -374,318 +367,6 @@ pub fn attempt_then(
             *distance,
         ),
     }
-}
-
-/// Opens (`open` is `Some(value)`; `Some(None)` as far as it goes) or closes (`None`) a door or
-/// drawer of `object`. The base first steps to where it stands for the doors (in front, out of
-/// their swing) when it is not there; the sweep is checked with the base where it ends. With an
-/// arm, the base stands where the arm reaches the handle along its whole path (out of the
-/// part's way: the sweep says), and the hand takes the handle and moves the part.
-fn move_joint(
-    tree: &KinematicTree,
-    robot: &RobotSpec,
-    arm: Option<&ArmRig>,
-    state: &RobotInTree,
-    object: &str,
-    part: Option<&str>,
-    open: Option<Option<f32>>,
-) -> Result<Vec<Change>, ActionError> {
-    let view = SceneView::new(tree);
-    let joint = joint_of(&view, object, part)?;
-    let name = tree.links[joint].name.clone();
-    let from = tree.links[joint].value;
-    let Some(rig) = arm else {
-        let own = view.node_link(object).unwrap_or(0);
-        let goal = nav_goal(&view, robot, object, own);
-        let (mut changes, moved, _) = stand_for_part(&view, robot, state, object, &goal)?;
-        let (to, _) = part_target(&SceneView::new(&moved), joint, open, &[])?;
-        changes.push(Change::SetJoint {
-            link: name,
-            from,
-            to,
-        });
-        return Ok(changes);
-    };
-    if let Some(held) = &state.holding {
-        return Err(ActionError::Holds(held.clone()));
-    }
-    let nominal = match open {
-        Some(Some(v)) => tree.links[joint].joint.clamp(v),
-        // Where it is open enough: the arm may not follow it farther from one place.
-        Some(None) => MIN_OPEN_FRACTION * open_value(tree, joint),
-        None => closed_value(tree, joint),
-    };
-    let farthest = match open {
-        Some(None) => open_value(tree, joint),
-        _ => nominal,
-    };
-    let places =
-        part_motion::places_to_stand(&view, rig, robot, object, joint, (nominal, farthest))?;
-    if places.is_empty() {
-        return Err(ActionError::ArmCannot {
-            what: format!("work {name}"),
-            attempts: vec![format!(
-                "no place to stand in front of {object} from which the arm reaches the handle \
-                 along its path and the part misses the base"
-            )],
-        });
-    }
-    let (mut tries, mut tried) = (ArmTries::default(), Vec::<Vec2>::new());
-    for place in places {
-        let goal = crate::sim::navigation::NavGoal {
-            target: place,
-            reach: PLACE_TO_STAND_M,
-            facing: None,
-            keep_out: Vec::new(),
-        };
-        // The stowed hand is not where the hand is while it works the part: the arm's own
-        // check keeps it clear of the part.
-        let stowed_hand: Vec<usize> = view.link(GRIPPER_LINK).into_iter().collect();
-        let stood = stand_for_part(&view, robot, state, object, &goal).and_then(|stood| {
-            let target = part_target(&SceneView::new(&stood.1), joint, open, &stowed_hand)?;
-            Ok((stood, target))
-        });
-        let ((mut changes, moved, after), (to, least)) = match stood {
-            Ok(found) => found,
-            Err(e) => {
-                tries.unreached(e);
-                continue;
-            }
-        };
-        let p = after.base.position;
-        if tried
-            .iter()
-            .any(|t| t.distance(p) <= arm_motion::SAME_BASE_M)
-        {
-            continue;
-        }
-        tried.push(p);
-        let view = SceneView::new(&moved);
-        match part_motion::work_part(&view, rig, &after, object, joint, to, least) {
-            Ok(work) => {
-                changes.push(work.motion);
-                changes.push(Change::SetJoint {
-                    link: name,
-                    from,
-                    to: work.reached,
-                });
-                return Ok(changes);
-            }
-            Err(e) => tries.failed(&arm_motion::base_words(&after), e)?,
-        }
-    }
-    Err(tries.error(Some(format!("work {name}"))))
-}
-
-/// Whether every open door and drawer of `container` still closes with the held `object` set at
-/// `spot` (the world pose of its link): a spot near the front can be in a door's way.
-fn closes_with(view: &SceneView, object: usize, container: &str, spot: Affine3A) -> bool {
-    let Some(own) = view.node_link(container) else {
-        return true;
-    };
-    let names = |links: Vec<usize>| -> Vec<String> {
-        links
-            .into_iter()
-            .map(|l| view.tree.links[l].name.clone())
-            .collect()
-    };
-    let parts = names(view.moving_parts(container));
-    let mut tree = view.tree.clone();
-    let from_container = view.poses[own].inverse() * spot;
-    tree.reparent(
-        object,
-        own,
-        from_container,
-        crate::kinematics::JointSpec::FIXED,
-    );
-    let index = |name: &str| tree.links.iter().position(|l| l.name == name);
-    let robot: Vec<usize> = [ROBOT_LINK, GRIPPER_LINK]
-        .iter()
-        .filter_map(|n| index(n))
-        .collect();
-    let placed = SceneView::new(&tree);
-    parts.iter().filter_map(|p| index(p)).all(|joint| {
-        let closed = closed_value(&tree, joint);
-        (tree.links[joint].value - closed).abs() < 1e-4
-            || sweep(&placed, joint, closed, &robot).is_ok()
-    })
-}
-
-/// A pick looks ahead through at most this many of its grasps: planning the place that follows
-/// costs as much as the pick.
-const MAX_LOOKS_AHEAD: usize = 4;
-
-/// The actions of `then` up to the place of `object` (what a pick of it looks ahead through):
-/// drives and doors, then the place; none when no place of it follows before another pick.
-fn pick_ahead<'a>(object: &str, then: &'a [Action]) -> &'a [Action] {
-    for (k, action) in then.iter().enumerate() {
-        match action {
-            Action::PlaceOn { object: o, .. } | Action::PlaceIn { object: o, .. }
-                if o == object =>
-            {
-                return &then[..=k];
-            }
-            Action::Navigate { .. } | Action::Open { .. } | Action::Close { .. } => {}
-            _ => break,
-        }
-    }
-    &[]
-}
-
-/// Whether `ahead` plans, in turn, from `tree` after the robot went from `from` to `at` and
-/// made the changes `picked`; else why not, naming the action that does not.
-fn plans_after(
-    tree: &KinematicTree,
-    robot: &RobotSpec,
-    rig: &ArmRig,
-    (from, at): (&RobotInTree, &RobotInTree),
-    picked: &[Change],
-    ahead: &[Action],
-) -> Result<(), String> {
-    use crate::sim::motion_path::apply_to_tree;
-    let mut after = tree.clone();
-    let drive = Change::MoveBase {
-        from: from.base,
-        to: at.base,
-        path_length_m: 0.0,
-        path: Vec::new(),
-    };
-    for change in std::iter::once(&drive).chain(picked) {
-        apply_to_tree(&mut after, change);
-    }
-    for action in ahead {
-        let changes = attempt(&after, robot, Some(rig), action)
-            .map_err(|e| format!("then {}: {e}", action.in_words()))?;
-        for change in &changes {
-            apply_to_tree(&mut after, change);
-        }
-    }
-    Ok(())
-}
-
-/// The base's step to where it meets `goal` for working `object`'s parts, unless it is there:
-/// the drive (if any), the tree with the base moved, and the robot after it.
-fn stand_for_part(
-    view: &SceneView,
-    robot: &RobotSpec,
-    state: &RobotInTree,
-    object: &str,
-    goal: &crate::sim::navigation::NavGoal,
-) -> Result<(Vec<Change>, KinematicTree, RobotInTree), ActionError> {
-    let mut moved = view.tree.clone();
-    if goal.is_met(state.base.position) {
-        return Ok((Vec::new(), moved, state.clone()));
-    }
-    let (change, after) = drive(view, robot, state, goal, APPROACH_M)?
-        .ok_or_else(|| ActionError::NoPlaceToWorkDoors(object.to_string()))?;
-    if let Some(base) = view.link(ROBOT_LINK) {
-        moved.links[base].parent_from_link = after.base.world_from_base();
-    }
-    Ok((vec![change], moved, after))
-}
-
-/// The value part `joint` moves to (`open` as for [`move_joint`]), its sweep checked in `view`,
-/// and for a door opened as far as it goes, the least value that is open enough.
-fn part_target(
-    view: &SceneView,
-    joint: usize,
-    open: Option<Option<f32>>,
-    ignore: &[usize],
-) -> Result<(f32, Option<f32>), ActionError> {
-    let tree = view.tree;
-    let name = tree.links[joint].name.clone();
-    let from = tree.links[joint].value;
-    match open {
-        None | Some(Some(_)) => {
-            let target = match open {
-                Some(Some(v)) => tree.links[joint].joint.clamp(v),
-                _ => closed_value(tree, joint),
-            };
-            sweep(view, joint, target, ignore).map_err(|(hit, at)| ActionError::WouldHit {
-                part: name.clone(),
-                hit,
-                at,
-            })?;
-            Ok((target, None))
-        }
-        Some(None) => {
-            let target = open_value(tree, joint);
-            let least = Some(MIN_OPEN_FRACTION * target);
-            match sweep(view, joint, target, ignore) {
-                Ok(()) => Ok((target, least)),
-                Err((hit, at)) => {
-                    // As far as it goes, if that is open enough to reach in.
-                    let last = at - SWEEP_STEP * (target - from).signum();
-                    if last / target < MIN_OPEN_FRACTION {
-                        return Err(ActionError::HitsBeforeOpen {
-                            part: name,
-                            hit,
-                            at,
-                        });
-                    }
-                    Ok((last, least))
-                }
-            }
-        }
-    }
-}
-
-/// The moving part `part` of `object` (its main one when `None`).
-fn joint_of(view: &SceneView, object: &str, part: Option<&str>) -> Result<usize, ActionError> {
-    if view.node_link(object).is_none() {
-        return Err(ActionError::NotInScene(object.to_string()));
-    }
-    let parts = view.moving_parts(object);
-    match part {
-        None => parts
-            .first()
-            .copied()
-            .ok_or_else(|| ActionError::NotArticulated(object.to_string())),
-        Some(p) => parts
-            .into_iter()
-            .find(|&j| view.tree.links[j].name == format!("{object}_{p}"))
-            .ok_or_else(|| ActionError::NoSuchPart {
-                object: object.to_string(),
-                part: p.to_string(),
-            }),
-    }
-}
-
-/// Sweeps joint `joint` from its value to `target`, `ignore` left out; the first thing the
-/// moving part (and what it carries) hits, with the value, or `Ok`.
-fn sweep(
-    view: &SceneView,
-    joint: usize,
-    target: f32,
-    ignore: &[usize],
-) -> Result<(), (String, f32)> {
-    let tree = view.tree;
-    let from = tree.links[joint].value;
-    let steps = ((target - from).abs() / SWEEP_STEP).ceil().max(1.0) as usize;
-    let solids: Vec<LinkSolids> = (0..tree.links.len())
-        .map(|i| {
-            if ignore.contains(&i) {
-                LinkSolids::none()
-            } else {
-                LinkSolids::of(tree, i)
-            }
-        })
-        .collect();
-    let mut pose = SweepPose::new(tree, &solids, joint, &[]);
-    // What already touches at the start (a door against its own frame) is contact.
-    let at_start = pose.depths(from);
-    for k in 1..=steps {
-        let value = from + (target - from) * k as f32 / steps as f32;
-        let depths = pose.depths(value);
-        let hit = depths
-            .iter()
-            .zip(&at_start)
-            .position(|(&depth, &before)| depth > SWEEP_TOLERANCE_M.max(before + TOUCH_M));
-        if let Some(p) = hit {
-            return Err((tree.links[pose.still_of(p)].name.clone(), value));
-        }
-    }
-    Ok(())
 }
 
 /// The link of `object` if the robot holds it.
@@ -830,38 +511,4 @@ fn push(
         });
     }
     attach(view, link, &support, pose)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_pick_looks_ahead_through_drives_and_doors_to_its_own_place_only() {
-        let go = |to: &str| Action::Navigate { to: to.into() };
-        let place_in = |object: &str| Action::PlaceIn {
-            object: object.into(),
-            container: "cabinet_1".into(),
-        };
-        let then = [
-            go("cabinet_1"),
-            Action::Open {
-                object: "cabinet_1".into(),
-                part: None,
-                value: None,
-            },
-            place_in("cup_1"),
-            go("table_1"),
-        ];
-        assert_eq!(pick_ahead("cup_1", &then), &then[..3]);
-        // Another object's place, or another pick first: nothing to look ahead to.
-        assert!(pick_ahead("cup_2", &then).is_empty());
-        let picks_first = [
-            Action::Pick {
-                object: "bowl_1".into(),
-            },
-            place_in("cup_1"),
-        ];
-        assert!(pick_ahead("cup_1", &picks_first).is_empty());
-    }
 }
