@@ -18,25 +18,35 @@ const HOLLOW_RESOLUTION: u32 = 32;
 const HOLLOW_PIECES: u32 = 24;
 const REMEMBERED_DECOMPOSITIONS: usize = 256;
 
-/// The V-HACD pieces of a hollow component, made once per process for each mesh (a world is
-/// built again for the checks of every simulated step, and one cup takes 140 ms), at most
-/// `REMEMBERED_DECOMPOSITIONS` remembered.
-fn hollow_pieces(component: &TriMesh) -> Vec<TriMesh> {
+/// V-HACD's voxel edge along a surface seen from one side (a segment of the map, whose own voxels
+/// are 1-2 cm), the least and most voxels along its longest side, and the most pieces made of it.
+const SURFACE_VOXEL_M: f32 = 0.02;
+const SURFACE_RESOLUTION: (u32, u32) = (16, 96);
+const SURFACE_PIECES: u32 = 32;
+
+/// The V-HACD pieces of `mesh` at `resolution` and `max_pieces`, made once per process for each
+/// mesh (a world is built again for the checks of every simulated step, and one cup takes
+/// 140 ms), at most `REMEMBERED_DECOMPOSITIONS` remembered.
+fn remembered_decomposition(
+    mesh: &TriMesh,
+    params: &parry3d::transformation::vhacd::VHACDParameters,
+) -> Vec<TriMesh> {
     type Made = Mutex<HashMap<u64, Vec<TriMesh>>>;
     static MADE: OnceLock<Made> = OnceLock::new();
     let key = {
         let mut hasher = std::collections::hash_map::DefaultHasher::new();
-        for p in &component.positions {
+        format!("{params:?}").hash(&mut hasher);
+        for p in &mesh.positions {
             p.to_array().map(f32::to_bits).hash(&mut hasher);
         }
-        component.triangles.hash(&mut hasher);
+        mesh.triangles.hash(&mut hasher);
         hasher.finish()
     };
     let made = MADE.get_or_init(Made::default);
     if let Some(pieces) = made.lock().ok().and_then(|m| m.get(&key).cloned()) {
         return pieces;
     }
-    let pieces = component.convex_decomposition(HOLLOW_RESOLUTION, HOLLOW_PIECES);
+    let pieces = mesh.decomposed(params);
     if let Ok(mut m) = made.lock() {
         if m.len() >= REMEMBERED_DECOMPOSITIONS {
             m.clear();
@@ -129,6 +139,31 @@ impl TriMesh {
         self.hulls_and_collision_pieces().1
     }
 
+    /// Convex pieces along a surface seen from one side (what the map saw of an object no model
+    /// replaced): V-HACD of its surface voxels at about the map's voxel size, so a shelf's
+    /// boards stay boards with room between them, where the hull of the shelf is a solid block
+    /// with the bottles inside it. Empty when nothing spans volume.
+    pub fn surface_pieces(&self) -> Vec<TriMesh> {
+        let Some((lo, hi)) = self.bounds() else {
+            return Vec::new();
+        };
+        let longest = (hi - lo).max_element();
+        let (least, most) = SURFACE_RESOLUTION;
+        let resolution = ((longest / SURFACE_VOXEL_M).ceil() as u32).clamp(least, most);
+        remembered_decomposition(
+            self,
+            &parry3d::transformation::vhacd::VHACDParameters {
+                resolution,
+                max_convex_hulls: SURFACE_PIECES,
+                concavity: 0.001,
+                plane_downsampling: 1,
+                convex_hull_downsampling: 1,
+                fill_mode: parry3d::transformation::voxelization::FillMode::SurfaceOnly,
+                ..Default::default()
+            },
+        )
+    }
+
     /// The hull of each connected component, and [`Self::collision_pieces`] made from them.
     pub fn hulls_and_collision_pieces(&self) -> (Vec<TriMesh>, Vec<TriMesh>) {
         let mut hulls = Vec::new();
@@ -139,7 +174,14 @@ impl TriMesh {
             };
             let hollow = hull.signed_volume() > HOLLOW_HULL_RATIO * component.signed_volume().abs();
             let open = if hollow {
-                hollow_pieces(&component)
+                remembered_decomposition(
+                    &component,
+                    &parry3d::transformation::vhacd::VHACDParameters {
+                        resolution: HOLLOW_RESOLUTION,
+                        max_convex_hulls: HOLLOW_PIECES,
+                        ..Default::default()
+                    },
+                )
             } else {
                 Vec::new()
             };
@@ -158,16 +200,19 @@ impl TriMesh {
     /// longest side), wound outwards. Works on meshes that are not closed: their surface voxels
     /// are decomposed. Empty when nothing spans volume.
     pub fn convex_decomposition(&self, resolution: u32, max_pieces: u32) -> Vec<TriMesh> {
-        use parry3d::transformation::vhacd::{VHACD, VHACDParameters};
+        self.decomposed(&parry3d::transformation::vhacd::VHACDParameters {
+            resolution,
+            max_convex_hulls: max_pieces,
+            ..Default::default()
+        })
+    }
+
+    fn decomposed(&self, params: &parry3d::transformation::vhacd::VHACDParameters) -> Vec<TriMesh> {
+        use parry3d::transformation::vhacd::VHACD;
         if self.triangles.is_empty() {
             return Vec::new();
         }
-        let params = VHACDParameters {
-            resolution,
-            max_convex_hulls: max_pieces,
-            ..VHACDParameters::default()
-        };
-        let decomposition = VHACD::decompose(&params, &self.positions, &self.triangles, true);
+        let decomposition = VHACD::decompose(params, &self.positions, &self.triangles, true);
         decomposition
             .compute_exact_convex_hulls(&self.positions, &self.triangles)
             .into_iter()

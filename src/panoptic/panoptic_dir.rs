@@ -2,9 +2,10 @@
 //! `<id>.ply` (its segment mesh) and `surface_voxels.ply` (every surface voxel centre with the
 //! index of its entity plus one, 0 = none; what `iscene eval` scores).
 
+use std::collections::HashMap;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Affine3A, Mat4, Vec3};
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{
     Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType,
@@ -124,6 +125,60 @@ pub fn read_segment_meshes(dir: &Path, index: &PanopticIndex) -> Result<Vec<TriM
         .iter()
         .map(|e| read_mesh_ply(&dir.join(format!("{}.ply", e.id))))
         .collect()
+}
+
+/// The segment meshes of the entities `ids` that a reconstruction's folder `dir` holds
+/// (`panoptic/<id>.ply`), moved into the aligned frame of its contact graph (`report.json`'s
+/// `gravity.aligned_from_world`): what the map saw of them, exactly as the reconstruction built
+/// its objects of it. A folder without a map (a ground truth) holds none.
+pub fn read_aligned_segment_meshes(
+    dir: &Path,
+    ids: &[&str],
+) -> Result<HashMap<String, TriMesh>, InputError> {
+    let panoptic = dir.join("panoptic");
+    if ids.is_empty() || !panoptic.join("entities.json").exists() {
+        return Ok(HashMap::new());
+    }
+    let index = read_index(&panoptic)?;
+    let report_path = dir.join("report.json");
+    let text =
+        std::fs::read_to_string(&report_path).map_err(|e| InputError::io(&report_path, &e))?;
+    let report: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| InputError::invalid(&report_path, format!("not JSON: {e}")))?;
+    let aligned_from_world = aligned_from_world_in(&report, &report_path)?;
+    let mut meshes = HashMap::new();
+    for e in index
+        .entities
+        .iter()
+        .filter(|e| ids.contains(&e.id.as_str()))
+    {
+        let mesh = read_mesh_ply(&panoptic.join(format!("{}.ply", e.id)))?;
+        meshes.insert(e.id.clone(), mesh.transformed(&aligned_from_world));
+    }
+    Ok(meshes)
+}
+
+/// `gravity.aligned_from_world` of a reconstruction's report.json (`report`, read from `path`):
+/// the frame its contact graph is in, from the sequence's world frame its map is in. Identity
+/// when the report has none.
+pub fn aligned_from_world_in(
+    report: &serde_json::Value,
+    path: &Path,
+) -> Result<Affine3A, InputError> {
+    match &report["gravity"]["aligned_from_world"] {
+        serde_json::Value::Null => Ok(Affine3A::IDENTITY),
+        value => {
+            let m: [f32; 16] = serde_json::from_value(value.clone())
+                .map_err(|e| InputError::invalid(path, format!("aligned_from_world: {e}")))?;
+            if m.iter().any(|x| !x.is_finite()) {
+                return Err(InputError::invalid(
+                    path,
+                    "aligned_from_world is not finite",
+                ));
+            }
+            Ok(Affine3A::from_mat4(Mat4::from_cols_array(&m)))
+        }
+    }
 }
 
 /// Reads `entities.json` and `surface_voxels.ply` of a reconstruction's `panoptic/` folder.

@@ -9,13 +9,13 @@ pub mod vertex_colours;
 
 use std::path::{Path, PathBuf};
 
-use glam::{Affine3A, Mat4};
+use glam::Affine3A;
 
 use crate::error::{InputError, IsceneError};
 use crate::geometry::{GravityBox, Pinhole, Plane, TriMesh};
 use crate::graph::{ContactGraph, GraphEdge};
 use crate::io::Sequence;
-use crate::panoptic::panoptic_dir::{read_index, read_segment_meshes};
+use crate::panoptic::panoptic_dir::{aligned_from_world_in, read_index, read_segment_meshes};
 
 pub use first_seen::{first_seen, seen_in_frame};
 pub use vertex_colours::vertex_colours;
@@ -112,20 +112,7 @@ pub(crate) fn read_report(path: &Path) -> Result<ReportFacts, InputError> {
                 .map_err(|e| InputError::invalid(path, format!("frame_selection: {e}")))?,
         ),
     };
-    let aligned_from_world = match &report["gravity"]["aligned_from_world"] {
-        serde_json::Value::Null => Affine3A::IDENTITY,
-        value => {
-            let m: [f32; 16] = serde_json::from_value(value.clone())
-                .map_err(|e| InputError::invalid(path, format!("aligned_from_world: {e}")))?;
-            if m.iter().any(|x| !x.is_finite()) {
-                return Err(InputError::invalid(
-                    path,
-                    "aligned_from_world is not finite",
-                ));
-            }
-            Affine3A::from_mat4(Mat4::from_cols_array(&m))
-        }
-    };
+    let aligned_from_world = aligned_from_world_in(&report, path)?;
     Ok(ReportFacts {
         sequence,
         frames,

@@ -4,13 +4,13 @@
 use bevy::prelude::*;
 use glam::Affine3A;
 
+use super::scene_shapes::SceneShapes;
 use crate::base::InvalidValue;
-use crate::cad::db::database::CadDatabase;
 use crate::graph::ContactGraph;
 use crate::graph::GraphEdge;
 use crate::sim::scene_view::SceneView;
 use crate::sim::task::AddedObject;
-use crate::systems::kinematic_tree::{read_kinematic_tree, spawn_node_links};
+use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::scene_graph::spawn_contact_graph;
 use crate::systems::simulation::SimulationPlugin;
 
@@ -21,8 +21,9 @@ use crate::systems::simulation::SimulationPlugin;
 pub(super) fn add_unseen_objects(
     mut graph: ContactGraph,
     adds: &[AddedObject],
-    db: &CadDatabase,
+    shapes: &SceneShapes,
 ) -> Result<ContactGraph, InvalidValue> {
+    let db = &shapes.models;
     for (i, added) in adds.iter().enumerate() {
         let at = |problem: String| InvalidValue::at(format!("add[{i}] ({})", added.id), problem);
         let (host, inside) = added.host().map_err(|e| at(e.to_string()))?;
@@ -66,7 +67,7 @@ pub(super) fn add_unseen_objects(
         let mut app = App::new();
         app.add_plugins(SimulationPlugin);
         spawn_contact_graph(app.world_mut(), &graph).map_err(|e| at(e.to_string()))?;
-        spawn_node_links(app.world_mut(), &graph, Some(db));
+        shapes.spawn_links(app.world_mut(), &graph);
         let tree = read_kinematic_tree(app.world_mut()).map_err(|e| at(e.to_string()))?;
         let view = SceneView::new(&tree);
         let link = view

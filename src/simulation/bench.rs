@@ -56,7 +56,12 @@ pub fn bench_simulation(
     for _ in 0..runs {
         let mut app = match first.take() {
             Some(app) => app,
-            None => simulation_app(&prepared.graph, &prepared.task, &prepared.db, arm.as_ref())?,
+            None => simulation_app(
+                &prepared.graph,
+                &prepared.task,
+                &prepared.shapes,
+                arm.as_ref(),
+            )?,
         };
         let update_ms = run_actions(&mut app, &prepared.actions);
         let steps = app.world().resource::<SimulationTrace>().0.clone();

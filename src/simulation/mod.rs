@@ -10,10 +10,12 @@ mod added_objects;
 mod bench;
 mod pick_place_trial;
 mod prepare;
+mod scene_shapes;
 
 pub use bench::{SimulationBenchReport, StepTiming, bench_simulation};
 pub use pick_place_trial::{PickPlaceTrial, pick_and_place_trial};
 pub use prepare::task_world;
+pub use scene_shapes::SceneShapes;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -23,7 +25,6 @@ use serde::Serialize;
 
 use crate::arm::Arm;
 use crate::arm::reach::ArmRig;
-use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
 use crate::export::write_tree_exports;
 use crate::graph::ContactGraph;
@@ -41,7 +42,7 @@ use crate::sim::symbolic::symbolic_scene;
 use crate::sim::task::Task;
 use crate::sim::trajectory::trajectory;
 use crate::sim::{actions::Action, pddl};
-use crate::systems::kinematic_tree::{read_kinematic_tree, spawn_node_links};
+use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::scene_graph::spawn_contact_graph;
 use crate::systems::simulation::{
     ActionRequest, RobotArm, SimulationPlugin, SimulationTrace, StepPhysics, StepRecord,
@@ -78,20 +79,20 @@ pub struct SimulationSummary {
     pub output: PathBuf,
 }
 
-/// The live world of `graph`: its entities, their links (CAD models from `db`, usually
-/// `CadDatabase::for_scene` of the scene's folder) and the robot at `start` (default: the most
-/// open spot of the floor).
+/// The live world of `graph`: its entities, their links (of `shapes`, usually
+/// `SceneShapes::read` of the scene's folder) and the robot at `start` (default: the most open
+/// spot of the floor).
 pub fn simulation_app(
     graph: &ContactGraph,
     task: &Task,
-    db: &CadDatabase,
+    shapes: &SceneShapes,
     arm: Option<&Arm>,
 ) -> Result<App, IsceneError> {
     let mut app = App::new();
     app.add_plugins(SimulationPlugin);
     let world = app.world_mut();
     spawn_contact_graph(world, graph)?;
-    spawn_node_links(world, graph, Some(db));
+    shapes.spawn_links(world, graph);
     let pose = match task.start {
         Some(s) => BasePose {
             position: Vec2::from(s.position),

@@ -6,10 +6,10 @@ use std::path::Path;
 use bevy::prelude::*;
 
 use super::added_objects::add_unseen_objects;
+use super::scene_shapes::SceneShapes;
 use super::simulation_app;
 use crate::arm::Arm;
 use crate::base::InvalidValue;
-use crate::cad::db::database::CadDatabase;
 use crate::error::{InputError, IsceneError};
 use crate::graph::ContactGraph;
 use crate::sim::actions::Action;
@@ -36,8 +36,8 @@ pub(super) struct PreparedTask {
     /// States the planner expanded to find `plan`.
     pub(super) planner_expanded: Option<usize>,
     pub(super) actions: Vec<Action>,
-    /// The models the scene's links come from.
-    pub(super) db: CadDatabase,
+    /// What the scene's links are built of.
+    pub(super) shapes: SceneShapes,
 }
 
 /// The task on the scene in `dir`, and the world built to read its start state (ready to run).
@@ -48,11 +48,11 @@ pub(super) fn prepare(
 ) -> Result<(PreparedTask, App), IsceneError> {
     let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
     let task = Task::load(task_path)?;
-    let db = CadDatabase::for_scene(dir)?;
-    let graph =
-        add_unseen_objects(graph, &task.add, &db).map_err(|p| InputError::invalid(task_path, p))?;
+    let shapes = SceneShapes::read(dir, &graph)?;
+    let graph = add_unseen_objects(graph, &task.add, &shapes)
+        .map_err(|p| InputError::invalid(task_path, p))?;
     check_steps_name_movable_nodes(&task, &graph).map_err(|p| InputError::invalid(task_path, p))?;
-    let mut app = simulation_app(&graph, &task, &db, arm)?;
+    let mut app = simulation_app(&graph, &task, &shapes, arm)?;
     let before = read_kinematic_tree(app.world_mut())?;
     let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
     let scene = SymbolicScene {
@@ -88,7 +88,7 @@ pub(super) fn prepare(
         planner_expanded: plan.as_ref().map(|(_, e)| *e),
         plan: plan.map(|(names, _)| names),
         actions,
-        db,
+        shapes,
     };
     Ok((prepared, app))
 }

@@ -19,13 +19,14 @@ use crate::cad::db::database::CadDatabase;
 use crate::cad::model_parts::{attach_handles, model_parts};
 use crate::components::{
     CadModel, Joint, LinkBody, ListedPart, ModelPart, Panoptic, PerceivedFront, RobotArmLink,
-    SceneEntity,
+    SceneEntity, SegmentMesh,
 };
 use crate::error::IsceneError;
-use crate::graph::ContactGraph;
+use crate::geometry::{GravityBox, TriMesh};
 use crate::graph::parts::PartJson;
+use crate::graph::{ContactGraph, GraphNode};
 use crate::kinematics::JointSpec;
-use crate::kinematics::link::{NodeLink, node_links};
+use crate::kinematics::link::{NodeLink, SeenShape, node_links, observed_surface};
 use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
 use crate::perception::handles::Handle;
 use crate::systems::cad_replacement::SceneModels;
@@ -68,6 +69,23 @@ fn kinematic_tree_stage(world: &mut World) -> Result<(), IsceneError> {
     Ok(())
 }
 
+/// Gives the scene entities named in `seen` their segment meshes (in the world frame), of which
+/// [`spawn_node_links`] builds the objects no model replaced: a world read back from a
+/// reconstruction's folder gets the objects the reconstruction checked.
+pub fn attach_segment_meshes(world: &mut World, seen: &HashMap<String, TriMesh>) {
+    let entities: Vec<(Entity, String)> = world
+        .query::<(Entity, &SceneEntity)>()
+        .iter(world)
+        .filter(|(_, id)| seen.contains_key(&id.0))
+        .map(|(e, id)| (e, id.0.clone()))
+        .collect();
+    for (entity, id) in entities {
+        world
+            .entity_mut(entity)
+            .insert(SegmentMesh(seen[&id].clone()));
+    }
+}
+
 /// Gives every scene entity the links of its contact-graph node in `graph` (its own link's body
 /// and the moving parts of its CAD model from `db`, spawned below it, each listed with its
 /// handle: the one perceived on its front, else its model's).
@@ -99,12 +117,40 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 .unwrap_or_default()
         })
         .collect();
+    // What the map saw of each object no model replaced, less what it holds and with the
+    // surface under each thing it holds: its link is made of it.
+    let seen: Vec<Option<SeenShape>> = entities
+        .iter()
+        .map(|(e, id)| {
+            let node = graph.node(id).filter(|n| n.cad.is_none())?;
+            let mesh = &world.get::<SegmentMesh>(*e)?.0;
+            // Each held thing where it was seen and where its model stands.
+            let held: Vec<GravityBox> = held_by(graph, id)
+                .iter()
+                .filter_map(|h| graph.node(h))
+                .flat_map(|h| [GravityBox::from(&h.bbox), placed_box(h, db)])
+                .collect();
+            let stands: Vec<GravityBox> = graph
+                .support_edges()
+                .filter(|(parent, _)| parent == id)
+                .filter_map(|(_, child)| graph.node(child))
+                .map(|child| placed_box(child, db))
+                .collect();
+            Some(observed_surface(
+                mesh,
+                &GravityBox::from(&node.bbox),
+                &held,
+                &stands,
+            ))
+        })
+        .collect();
     let floor = graph.nodes.iter().find(|n| n.class == "floor");
     let links: Vec<(Vec<NodeLink>, Vec<PartJson>)> = entities
         .par_iter()
         .zip(poses.par_iter())
         .zip(perceived.par_iter())
-        .map(|(((_, id), pose), perceived)| {
+        .zip(seen.par_iter())
+        .map(|((((_, id), pose), perceived), seen)| {
             let Some(node) = graph.node(id) else {
                 return (Vec::new(), Vec::new());
             };
@@ -117,13 +163,51 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 attach_handles(&mut parts, perceived, &model.placed_handles(&frame));
                 parts
             });
-            let links = node_links(node, placed.map(|(m, _)| &m.model), *pose, floor);
+            let links = node_links(
+                node,
+                placed.map(|(m, _)| &m.model),
+                seen.as_ref(),
+                *pose,
+                floor,
+            );
             (links, parts)
         })
         .collect();
     for ((entity, id), (links, parts)) in entities.iter().zip(links) {
         spawn_links(world, *entity, id, links, parts);
     }
+}
+
+/// Where `node` stands: the box of its placed model (in its box's yaw), else its own box.
+fn placed_box(node: &GraphNode, db: Option<&CadDatabase>) -> GravityBox {
+    let own = GravityBox::from(&node.bbox);
+    let placed = node.cad.as_ref().zip(db).and_then(|(cad, db)| {
+        let world_from_model = Affine3A::from_mat4(Mat4::from_cols_array(&cad.world_from_model));
+        let points: Vec<glam::Vec3> = db
+            .get(&cad.model)?
+            .mesh
+            .positions
+            .iter()
+            .map(|p| world_from_model.transform_point3(*p))
+            .collect();
+        GravityBox::enclosing(&points, own.yaw)
+    });
+    placed.unwrap_or(own)
+}
+
+/// The nodes that `id` holds up, directly or through others.
+fn held_by<'a>(graph: &'a ContactGraph, id: &str) -> Vec<&'a str> {
+    let mut held: Vec<&str> = Vec::new();
+    let mut holders = vec![id];
+    while let Some(holder) = holders.pop() {
+        for (_, child) in graph.support_edges().filter(|(p, _)| *p == holder) {
+            if !held.contains(&child) {
+                held.push(child);
+                holders.push(child);
+            }
+        }
+    }
+    held
 }
 
 /// Gives `entity` its own link's body and spawns the moving parts below it, each with the

@@ -40,7 +40,7 @@ use crate::graph::ContactGraph;
 use crate::replay::{Replay, load_replay};
 use crate::sim::scene_view::{SceneView, open_value};
 use crate::sim::task::Task;
-use crate::simulation::{read_arm, simulation_app, task_world};
+use crate::simulation::{SceneShapes, read_arm, simulation_app, task_world};
 use crate::systems::kinematic_tree::read_kinematic_tree;
 use crate::systems::simulation::apply_change;
 
@@ -135,8 +135,8 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
             } else {
                 ContactGraph::load(&options.dir.join("contact_graph.json"))?
             };
-            let db = CadDatabase::for_scene(&options.dir)?;
-            let app = simulation_app(&graph, &Task::default(), &db, arm.as_ref())?;
+            let shapes = SceneShapes::read(&options.dir, &graph)?;
+            let app = simulation_app(&graph, &Task::default(), &shapes, arm.as_ref())?;
             (Vec::new(), app)
         }
     };

@@ -8,11 +8,10 @@ use std::path::Path;
 
 use crate::common;
 
-use iscene::cad::db::database::CadDatabase;
 use iscene::graph::ContactGraph;
 use iscene::sim::actions::Action;
 use iscene::sim::task::Task;
-use iscene::simulation::simulation_app;
+use iscene::simulation::{SceneShapes, simulation_app};
 use iscene::systems::kinematic_tree::read_kinematic_tree;
 use iscene::systems::simulation::perform;
 
@@ -128,8 +127,8 @@ fn placing_into_the_closed_microwave_is_refused_with_the_reason_and_nothing_move
     let gt = kitchen_truth(dir.path());
     let graph = ContactGraph::load(&gt.join("contact_graph.json")).expect("graph");
     let task: Task = serde_json::from_str(r#"{"goals": ["fridge_1 open"]}"#).expect("task");
-    let db = CadDatabase::for_scene(&gt).expect("database");
-    let mut app = simulation_app(&graph, &task, &db, None).expect("app");
+    let shapes = SceneShapes::read(&gt, &graph).expect("models");
+    let mut app = simulation_app(&graph, &task, &shapes, None).expect("app");
     let world = app.world_mut();
     for action in [
         r#"{"action": "navigate", "to": "fridge_1"}"#,
