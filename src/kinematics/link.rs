@@ -72,14 +72,14 @@ impl LinkGeometry {
     /// What the map saw of an object no model replaced (`seen`, in the link's frame), for a link
     /// of `class`: it collides and rests as the convex pieces along its surface and its support
     /// patches, so what stands in or on it starts where it was seen, not inside the hull of its
-    /// parent. `None` when the surface spans no volume (a few points, one plane) and there is no
-    /// patch.
+    /// parent. `None` when the surface spans no volume (a counter found from a few points of its
+    /// top, one plane): its patches alone are no object.
     pub fn observed(seen: &SeenShape, color: [f32; 3], class: &str) -> Option<Self> {
         let mut pieces = seen.surface.surface_pieces();
-        pieces.extend(seen.supports.iter().cloned());
         if pieces.is_empty() {
             return None;
         }
+        pieces.extend(seen.supports.iter().cloned());
         let mut visual = seen.surface.clone();
         for patch in &seen.supports {
             visual.append(patch);

@@ -4,10 +4,11 @@
 //! Every object a model replaced is a dynamic body, standing where the reconstruction put it,
 //! whatever its joint in the tree: a table that would topple is as wrong as a cup that would
 //! slide. The layout, what hangs on a wall and the objects no model replaced are static. Those
-//! keep their segment meshes, and their boxes stand for geometry seen, not for bodies of known
-//! shape and weight; every export fixes them too. A counter seen from the front is a box 35 cm
-//! deep (7-Scenes redkitchen): as a dynamic body hundreds of times a cup's weight it shook the
-//! cup on it off its edge, while MuJoCo, which has it fixed, rests the cup to 0.02 mm. An
+//! are made of what the map saw of them (`kinematics::link::observed_surface`), a surface seen
+//! from one side, not a body of known shape and weight; every export fixes them too. A counter
+//! seen from the front is a box 35 cm deep (7-Scenes redkitchen): as a dynamic body hundreds of
+//! times a cup's weight it shook the cup on it off its edge, while MuJoCo, which has it fixed,
+//! rests the cup to 0.02 mm. An
 //! articulated object's doors and drawers are locked to it at their current values. After the
 //! simulated time each object is judged by how far it moved and turned, and by how deep it
 //! started inside anything else.

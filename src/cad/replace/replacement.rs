@@ -266,9 +266,10 @@ pub fn check_and_place(
         .filter(|n| n.class == "wall" || n.class == "floor")
         .filter_map(|n| layout_plane(&n.id))
         .collect();
-    // The objects no model replaces keep their segment meshes, which simulators collide as
-    // their boxes (`kinematics::link`): the models must not enter those either (chairs tucked
-    // under a counter that no model replaced), and what stands on one is snapped onto its top.
+    // The objects no model replaces keep their segment meshes (simulators collide them as the
+    // pieces of what was seen, `kinematics::link::observed_surface`), here their boxes: the
+    // models must not enter those either (chairs tucked under a counter that no model
+    // replaced), and what stands on one is snapped onto its top.
     let (obstacle_ids, obstacles): (Vec<&str>, Vec<PlacedSolid>) = graph
         .nodes
         .iter()
