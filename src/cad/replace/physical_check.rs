@@ -90,13 +90,15 @@ const MAX_SEARCH_STEPS: usize = 64;
 /// every model onto what holds it. `holders` says what holds each object; `movable` which
 /// objects may be moved rather than shrunk when neighbours overlap; `layout` are the floor's
 /// and walls' planes, facing into the room; `obstacles` the objects that keep their segment
-/// meshes, which neither move nor shrink (a counter no model replaced).
+/// meshes, which neither move nor shrink (a counter no model replaced), and `obstacle_holders`
+/// the object that holds each, when one of `alignments`' objects does (empty: none).
 pub fn check_placements(
     alignments: &[Vec<(&DatabaseModel, Affine3A)>],
     holders: &[Holder],
     movable: &[bool],
     layout: &[Plane],
     obstacles: &[PlacedSolid],
+    obstacle_holders: &[Option<usize>],
 ) -> CheckedPlacements {
     // Library models are built to the size they were fitted at rather than stretched to it
     // (`sizing`), then fitted in height to what they hold.
@@ -261,14 +263,26 @@ pub fn check_placements(
                 .filter(|&j| j != i)
                 .filter_map(|j| Some((j, penetration_depth(me, finals[j].as_ref()?))))
                 .collect();
-            let obstacle_penetration_m = obstacles
-                .iter()
-                .map(|o| penetration_depth(me, o))
-                .fold(0.0f32, f32::max);
+            // What it holds rests on it: the box of a thing no model replaced lying on a
+            // shelf's board is as deep in the board as the noise of the surface it was seen on
+            // (a 1 cm "book" 1.5 mm into the board left a shelf and its eleven books unplaced,
+            // seed 35), so it gets the bar two models get, not the obstacles' own.
+            let (held_penetration_m, obstacle_penetration_m) =
+                obstacles
+                    .iter()
+                    .enumerate()
+                    .fold((0.0f32, 0.0f32), |(held, other), (k, o)| {
+                        let depth = penetration_depth(me, o);
+                        if obstacle_holders.get(k).copied().flatten() == Some(i) {
+                            (held.max(depth), other)
+                        } else {
+                            (held, other.max(depth))
+                        }
+                    });
             let max_penetration_m = depths
                 .iter()
                 .map(|(_, d)| *d)
-                .fold(obstacle_penetration_m, f32::max);
+                .fold(obstacle_penetration_m.max(held_penetration_m), f32::max);
             // A deep overlap of two models is charged to the one that yields (`keeps_place`):
             // leaving a table as its box for a chair pushed into it starts the chair, and
             // everything on the table, inside that box.
@@ -287,6 +301,7 @@ pub fn check_placements(
             let tips_over = holders[i] != Holder::Other && !me.stands();
             let conflicts = usize::from(overlapped)
                 + usize::from(obstacle_penetration_m > MAX_OBSTACLE_PENETRATION_M)
+                + usize::from(held_penetration_m > MAX_PENETRATION_M)
                 + usize::from(layout_penetration_m > MAX_PENETRATION_M)
                 + usize::from(held_area.is_some_and(|a| a < MIN_SUPPORT_AREA))
                 + usize::from(tips_over);
@@ -435,7 +450,7 @@ mod tests {
             Holder::Object(0),
         ];
         let movable = [false, true, true, true];
-        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[]);
+        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[], &[]);
         let (k, pose) = checked.chosen[1].expect("cup placed");
         assert_eq!(k, 1, "the cup that does not sink in");
         assert_eq!(checked.swaps, 1);
@@ -473,7 +488,7 @@ mod tests {
             Holder::Floor(floor),
         ];
         let movable = [false, true, true, true];
-        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[]);
+        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[], &[]);
         let check = |i: usize| checked.checks[i].as_ref().expect("checked");
         assert!(check(0).max_penetration_m > 0.1, "{:?}", check(0));
         assert_eq!(check(0).conflicts, 0, "the table stays: {:?}", check(0));
@@ -502,7 +517,7 @@ mod tests {
         let at = |x: f32| vec![(cabinet, Affine3A::from_translation(Vec3::X * x))];
         let alignments = vec![at(0.0), at(width - overlap)];
         let holders = [Holder::Floor(floor), Holder::Floor(floor)];
-        let checked = check_placements(&alignments, &holders, &[false, false], &[floor], &[]);
+        let checked = check_placements(&alignments, &holders, &[false, false], &[floor], &[], &[]);
         let solids: Vec<PlacedSolid> = (0..2)
             .map(|i| PlacedSolid::new(cabinet, &checked.chosen[i].expect("placed").1))
             .collect();
@@ -531,7 +546,7 @@ mod tests {
         // The same overlap with a movable object (as if the second were a chair) is a
         // segmentation fault too deep to move it over: it stays, reported.
         let alignments = vec![at(0.0), at(width - overlap)];
-        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[]);
+        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[], &[]);
         let check = checked.checks[1].as_ref().expect("second check");
         assert_eq!(check.separated_m, 0.0);
         assert!(check.conflicts > 0, "{check:?}");
@@ -565,6 +580,7 @@ mod tests {
             &[true],
             &[floor],
             std::slice::from_ref(&counter),
+            &[],
         );
         let (_, pose) = checked.chosen[0].expect("placed");
         let after = PlacedSolid::new(chair, &pose);
@@ -606,6 +622,7 @@ mod tests {
             &[true],
             &[floor],
             &counters,
+            &[],
         );
         let check = checked.checks[0].as_ref().expect("check");
         assert!(
@@ -613,6 +630,41 @@ mod tests {
             "{check:?}"
         );
         assert!(check.conflicts > 0, "{check:?}");
+    }
+
+    #[test]
+    fn a_thing_no_model_replaced_lying_on_a_table_is_no_conflict_of_the_table() {
+        let db = CadDatabase::parametric();
+        let table = model_of(&db, "table_01");
+        let top = table.model.size.z;
+        let floor = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        // A 1 cm "book" seen on the top, its box 1.5 mm into the table's model.
+        let corners: Vec<Vec3> = (0..8)
+            .map(|k| {
+                Vec3::new(
+                    [-0.1, 0.1][k & 1],
+                    [-0.1, 0.1][(k >> 1) & 1],
+                    [top - 0.0015, top + 0.0085][k >> 2],
+                )
+            })
+            .collect();
+        let book = PlacedSolid::from_hull(&corners).expect("a box spans volume");
+        let check = |holder: Option<usize>| {
+            let checked = check_placements(
+                &[vec![(table, Affine3A::IDENTITY)]],
+                &[Holder::Floor(floor)],
+                &[false],
+                &[floor],
+                std::slice::from_ref(&book),
+                &[holder],
+            );
+            checked.checks[0].clone().expect("check")
+        };
+        let holding = check(Some(0));
+        assert_eq!(holding.conflicts, 0, "{holding:?}");
+        assert!(holding.max_penetration_m > MAX_OBSTACLE_PENETRATION_M);
+        // The same box not on it is an obstacle the table may not enter.
+        assert!(check(None).conflicts > 0);
     }
 
     #[test]
@@ -643,7 +695,7 @@ mod tests {
             chair_at(-reach),
             vec![(cup, on_top)],
         ];
-        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[]);
+        let checked = check_placements(&alignments, &holders, &movable, &[floor], &[], &[]);
         assert_eq!(
             checked.chosen[0].expect("table").0,
             0,
@@ -666,7 +718,7 @@ mod tests {
         // down to where the cup was seen standing.
         let alignments = vec![vec![(table, second)], vec![(cup, on_top)]];
         let holders = [Holder::Floor(floor), Holder::Object(0)];
-        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[]);
+        let checked = check_placements(&alignments, &holders, &[false, true], &[floor], &[], &[]);
         let (_, table_pose) = checked.chosen[0].expect("table");
         let table_top = PlacedSolid::new(table, &table_pose).hi.z;
         assert!((table_top - top).abs() < 1e-3, "{table_top}");

@@ -351,7 +351,21 @@ pub fn check_and_place(
                 .is_some_and(|c| c.movable)
         })
         .collect();
-    let checked = check_placements(&options, &holders, &movable, &layout, &obstacles);
+    let obstacle_holders: Vec<Option<usize>> = obstacle_ids
+        .iter()
+        .map(|id| {
+            let parent = graph.parent_of(id)?;
+            ids.iter().position(|o| o == parent)
+        })
+        .collect();
+    let checked = check_placements(
+        &options,
+        &holders,
+        &movable,
+        &layout,
+        &obstacles,
+        &obstacle_holders,
+    );
     let mut records = Vec::new();
     let mut placed = Vec::new();
     let mut built = Vec::new();
