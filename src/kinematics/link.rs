@@ -15,13 +15,10 @@ use crate::geometry::{GravityBox, Plane, TriMesh};
 use crate::graph::GraphNode;
 use crate::kinematics::JointSpec;
 use crate::kinematics::inertial::Inertial;
+use crate::kinematics::observed::SeenShape;
 
 /// Thickness given to the floor and ceiling slabs and the least given to a wall.
 pub const LAYOUT_THICKNESS_M: f32 = 0.05;
-
-/// How far (metres) past its box the surface an object no model replaced is made of may reach:
-/// half the map's coarsest voxel.
-const SEEN_MARGIN_M: f32 = 0.01;
 
 /// How far the floor slab reaches beyond the floor's observed footprint.
 const FLOOR_MARGIN_M: f32 = 0.5;
@@ -97,28 +94,6 @@ impl LinkGeometry {
             inertial,
             friction: info.map_or(0.5, |c| c.friction),
         })
-    }
-}
-
-/// What an object no model replaced is made of ([`observed_surface`]).
-#[derive(Clone, Debug, Default)]
-pub struct SeenShape {
-    /// The part of its segment mesh that is its own.
-    pub surface: TriMesh,
-    /// A box under each thing it holds, where the camera could not see.
-    pub supports: Vec<TriMesh>,
-}
-
-impl SeenShape {
-    pub fn transformed(&self, to_from_world: &Affine3A) -> Self {
-        Self {
-            surface: self.surface.transformed(to_from_world),
-            supports: self
-                .supports
-                .iter()
-                .map(|p| p.transformed(to_from_world))
-                .collect(),
-        }
     }
 }
 
@@ -201,76 +176,6 @@ impl NodeLink {
             geometry,
         }
     }
-}
-
-/// The least area (square metres) of a connected piece of an object's segment that it is made
-/// of: four voxels of 2 cm. Smaller ones are what bleeding left beside what it holds, and one
-/// vertex 15 cm up the side of a bottle made a convex piece that started the bottle 9 cm inside
-/// the shelf under it (seed 35).
-const MIN_SEEN_AREA_M2: f32 = 0.0016;
-
-/// How far (metres) beside the box of a thing that an object no model replaced holds its
-/// surface is cut away: a voxel.
-const HELD_MARGIN_M: f32 = 0.02;
-
-/// Thickness (metres) of the surface put under each object that an object no model replaced
-/// holds: a voxel.
-const SUPPORT_PATCH_M: f32 = 0.02;
-
-/// What an object no model replaced is made of: of `seen`, its segment mesh (world frame), the
-/// triangles inside its box `own` and outside the boxes `held` of what stands on or in it (where
-/// the map saw each and where its model stands), and
-/// under each of `stands` (the placed boxes of what it holds directly) a support patch.
-///
-/// Its box is fitted to the bulk of its points; beyond it, and on what it holds, the segment has
-/// label bleeding (a bottle on a cabinet started 2.9 cm inside a "cup" segment of the wall
-/// behind it, seed 18 of the benchmark; books on an unmodelled shelf 4-9 cm inside the pieces
-/// that the shelf's board made with the books' bled tops, seed 35). Its own box is grown by
-/// `SEEN_MARGIN_M`, the held ones by `HELD_MARGIN_M` beside and `SEEN_MARGIN_M` above and
-/// below, which takes the board just under each held thing too: the camera never saw it (a
-/// cabinet's top came out with a hole under each of its five objects, which fell 77-85 cm
-/// through them, seed 31) and where it saw the board around, its noise made a convex piece of
-/// the board 1-2 cm higher than the book standing on it. The contact graph says the surface is
-/// there, so a patch of it, a box of its own, stands under each one's footprint, its top where
-/// the object stands. Pieces smaller than `MIN_SEEN_AREA_M2` left by the cuts are dropped.
-pub fn observed_surface(
-    seen: &TriMesh,
-    own: &GravityBox,
-    held: &[GravityBox],
-    stands: &[GravityBox],
-) -> SeenShape {
-    let m = SEEN_MARGIN_M;
-    let held: Vec<(Affine3A, Vec3)> = held
-        .iter()
-        .map(|b| (b.world_from_box().inverse(), b.size / 2.0))
-        .collect();
-    let in_held = |p: Vec3| {
-        held.iter().any(|(box_from_world, h)| {
-            let q = box_from_world.transform_point3(p);
-            let beside = HELD_MARGIN_M;
-            q.x.abs() <= h.x + beside && q.y.abs() <= h.y + beside && q.z.abs() <= h.z + m
-        })
-    };
-    let kept =
-        seen.filtered(|t| t.iter().all(|&p| own.contains(p, m)) && !t.iter().any(|&p| in_held(p)));
-    let mut surface = TriMesh::default();
-    for component in kept.connected_components() {
-        if component.area() >= MIN_SEEN_AREA_M2 {
-            surface.append(&component);
-        }
-    }
-    let supports = stands
-        .iter()
-        .map(|stand| {
-            let center = stand
-                .center
-                .truncate()
-                .extend(stand.bottom_z() - SUPPORT_PATCH_M / 2.0);
-            TriMesh::cuboid_centered(center, stand.size.truncate().extend(SUPPORT_PATCH_M))
-                .transformed(&Affine3A::from_rotation_z(stand.yaw).with_fixed_point(center))
-        })
-        .collect();
-    SeenShape { surface, supports }
 }
 
 /// Rotation about a fixed point, for boxes turned about their centre.
@@ -426,6 +331,7 @@ mod tests {
     use crate::cad::ParametricLibrary;
     use crate::graph::{BoxJson, CadPlacement};
     use crate::kinematics::JointKind;
+    use crate::kinematics::observed::observed_surface;
 
     fn node(id: &str, class: &str, kind: EntityKind, gbox: GravityBox) -> GraphNode {
         GraphNode {

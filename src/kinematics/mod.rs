@@ -5,6 +5,7 @@ pub mod inertial;
 pub mod joint_sweep;
 pub mod link;
 pub mod motion_bounds;
+pub mod observed;
 pub mod ray_pick;
 pub mod rest_test;
 pub mod tree;

@@ -22,11 +22,12 @@ use crate::components::{
     SceneEntity, SegmentMesh,
 };
 use crate::error::IsceneError;
-use crate::geometry::{GravityBox, TriMesh};
+use crate::geometry::TriMesh;
+use crate::graph::ContactGraph;
 use crate::graph::parts::PartJson;
-use crate::graph::{ContactGraph, GraphNode};
 use crate::kinematics::JointSpec;
-use crate::kinematics::link::{NodeLink, SeenShape, node_links, observed_surface};
+use crate::kinematics::link::{NodeLink, node_links};
+use crate::kinematics::observed::{SeenShape, seen_shape};
 use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
 use crate::perception::handles::Handle;
 use crate::systems::cad_replacement::SceneModels;
@@ -117,32 +118,10 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 .unwrap_or_default()
         })
         .collect();
-    // What the map saw of each object no model replaced, less what it holds and with the
-    // surface under each thing it holds: its link is made of it.
+    // What the map saw of each object no model replaced: its link is made of it.
     let seen: Vec<Option<SeenShape>> = entities
         .iter()
-        .map(|(e, id)| {
-            let node = graph.node(id).filter(|n| n.cad.is_none())?;
-            let mesh = &world.get::<SegmentMesh>(*e)?.0;
-            // Each held thing where it was seen and where its model stands.
-            let held: Vec<GravityBox> = held_by(graph, id)
-                .iter()
-                .filter_map(|h| graph.node(h))
-                .flat_map(|h| [GravityBox::from(&h.bbox), placed_box(h, db)])
-                .collect();
-            let stands: Vec<GravityBox> = graph
-                .support_edges()
-                .filter(|(parent, _)| parent == id)
-                .filter_map(|(_, child)| graph.node(child))
-                .map(|child| placed_box(child, db))
-                .collect();
-            Some(observed_surface(
-                mesh,
-                &GravityBox::from(&node.bbox),
-                &held,
-                &stands,
-            ))
-        })
+        .map(|(e, id)| seen_shape(graph, id, &world.get::<SegmentMesh>(*e)?.0, db))
         .collect();
     let floor = graph.nodes.iter().find(|n| n.class == "floor");
     let links: Vec<(Vec<NodeLink>, Vec<PartJson>)> = entities
@@ -176,38 +155,6 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
     for ((entity, id), (links, parts)) in entities.iter().zip(links) {
         spawn_links(world, *entity, id, links, parts);
     }
-}
-
-/// Where `node` stands: the box of its placed model (in its box's yaw), else its own box.
-fn placed_box(node: &GraphNode, db: Option<&CadDatabase>) -> GravityBox {
-    let own = GravityBox::from(&node.bbox);
-    let placed = node.cad.as_ref().zip(db).and_then(|(cad, db)| {
-        let world_from_model = Affine3A::from_mat4(Mat4::from_cols_array(&cad.world_from_model));
-        let points: Vec<glam::Vec3> = db
-            .get(&cad.model)?
-            .mesh
-            .positions
-            .iter()
-            .map(|p| world_from_model.transform_point3(*p))
-            .collect();
-        GravityBox::enclosing(&points, own.yaw)
-    });
-    placed.unwrap_or(own)
-}
-
-/// The nodes that `id` holds up, directly or through others.
-fn held_by<'a>(graph: &'a ContactGraph, id: &str) -> Vec<&'a str> {
-    let mut held: Vec<&str> = Vec::new();
-    let mut holders = vec![id];
-    while let Some(holder) = holders.pop() {
-        for (_, child) in graph.support_edges().filter(|(p, _)| *p == holder) {
-            if !held.contains(&child) {
-                held.push(child);
-                holders.push(child);
-            }
-        }
-    }
-    held
 }
 
 /// Gives `entity` its own link's body and spawns the moving parts below it, each with the
