@@ -30,8 +30,8 @@ const SUPPORT_PATCH_M: f32 = 0.02;
 
 /// What an object no model replaced is made of: of `seen`, its segment mesh (world frame), the
 /// triangles inside its box `own` and outside the boxes `held` of what stands on or in it (where
-/// the map saw each and where its model stands), and
-/// under each of `stands` (the placed boxes of what it holds directly) a support patch.
+/// the map saw each and where its model stands), and under each of `stands` (the placed boxes of
+/// what it holds directly) a support patch.
 ///
 /// Its box is fitted to the bulk of its points; beyond it, and on what it holds, the segment has
 /// label bleeding (a bottle on a cabinet started 2.9 cm inside a "cup" segment of the wall
