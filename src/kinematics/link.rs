@@ -114,10 +114,10 @@ pub struct NodeLink {
 }
 
 /// The links of `node`, whose own frame is `world_from_link` (the rigid part of its CAD
-/// placement, else its box). `model` is its CAD model when it was replaced; `seen` is its segment
-/// mesh in the world frame, what an object no model replaced is made of (its box when none is
-/// given or it spans no volume); `floor` is the floor node, which tells walls which side is the
-/// room's.
+/// placement, else its box). `model` is its CAD model when it was replaced; `seen` is what an
+/// object no model replaced is made of (`observed::seen_shape`, world frame; its box when none is
+/// given or its surface spans no volume); `floor` is the floor node, which tells walls which side
+/// is the room's.
 pub fn node_links(
     node: &GraphNode,
     model: Option<&CadModel>,
