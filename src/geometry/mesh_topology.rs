@@ -7,6 +7,8 @@ use std::hash::{Hash, Hasher};
 use std::sync::{Mutex, OnceLock};
 
 use glam::Vec3;
+use parry3d::transformation::vhacd::VHACDParameters;
+use parry3d::transformation::voxelization::FillMode;
 
 use crate::geometry::TriMesh;
 
@@ -27,10 +29,7 @@ const SURFACE_PIECES: u32 = 32;
 /// The V-HACD pieces of `mesh` at `resolution` and `max_pieces`, made once per process for each
 /// mesh (a world is built again for the checks of every simulated step, and one cup takes
 /// 140 ms), at most `REMEMBERED_DECOMPOSITIONS` remembered.
-fn remembered_decomposition(
-    mesh: &TriMesh,
-    params: &parry3d::transformation::vhacd::VHACDParameters,
-) -> Vec<TriMesh> {
+fn remembered_decomposition(mesh: &TriMesh, params: &VHACDParameters) -> Vec<TriMesh> {
     type Made = Mutex<HashMap<u64, Vec<TriMesh>>>;
     static MADE: OnceLock<Made> = OnceLock::new();
     let key = {
@@ -150,15 +149,18 @@ impl TriMesh {
         let longest = (hi - lo).max_element();
         let (least, most) = SURFACE_RESOLUTION;
         let resolution = ((longest / SURFACE_VOXEL_M).ceil() as u32).clamp(least, most);
+        // An open surface has no inside to fill; with V-HACD's default concavity (0.01) and
+        // its plane and hull downsampling, the front half of a shelf's lower level stayed one
+        // piece, boards, sides and the air between them.
         remembered_decomposition(
             self,
-            &parry3d::transformation::vhacd::VHACDParameters {
+            &VHACDParameters {
                 resolution,
                 max_convex_hulls: SURFACE_PIECES,
                 concavity: 0.001,
                 plane_downsampling: 1,
                 convex_hull_downsampling: 1,
-                fill_mode: parry3d::transformation::voxelization::FillMode::SurfaceOnly,
+                fill_mode: FillMode::SurfaceOnly,
                 ..Default::default()
             },
         )
@@ -176,7 +178,7 @@ impl TriMesh {
             let open = if hollow {
                 remembered_decomposition(
                     &component,
-                    &parry3d::transformation::vhacd::VHACDParameters {
+                    &VHACDParameters {
                         resolution: HOLLOW_RESOLUTION,
                         max_convex_hulls: HOLLOW_PIECES,
                         ..Default::default()
@@ -200,14 +202,15 @@ impl TriMesh {
     /// longest side), wound outwards. Works on meshes that are not closed: their surface voxels
     /// are decomposed. Empty when nothing spans volume.
     pub fn convex_decomposition(&self, resolution: u32, max_pieces: u32) -> Vec<TriMesh> {
-        self.decomposed(&parry3d::transformation::vhacd::VHACDParameters {
+        self.decomposed(&VHACDParameters {
             resolution,
             max_convex_hulls: max_pieces,
             ..Default::default()
         })
     }
 
-    fn decomposed(&self, params: &parry3d::transformation::vhacd::VHACDParameters) -> Vec<TriMesh> {
+    /// [`Self::convex_decomposition`] with all of V-HACD's parameters given.
+    fn decomposed(&self, params: &VHACDParameters) -> Vec<TriMesh> {
         use parry3d::transformation::vhacd::VHACD;
         if self.triangles.is_empty() {
             return Vec::new();
