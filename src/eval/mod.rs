@@ -21,7 +21,7 @@ use crate::classes::{ClassTable, EntityKind};
 use crate::error::InputError;
 use crate::io::Sequence;
 use crate::io::ply::read_mesh_ply;
-use crate::panoptic::panoptic_dir::read_panoptic;
+use crate::panoptic::panoptic_dir::{aligned_from_world_in, read_panoptic};
 use panoptic_quality::{PanopticMetrics, Segment, evaluate};
 use truth::NearestMesh;
 
@@ -198,7 +198,7 @@ fn contact_metrics(
         .map(|n| n.id.clone())
         .collect();
     let truth = seen_subgraph(&truth, seen);
-    let truth_from_pred = aligned_from_world(report, &dir.join("report.json"))?.inverse();
+    let truth_from_pred = aligned_from_world_in(report, &dir.join("report.json"))?.inverse();
     let db = CadDatabase::for_scene(dir)?;
     let cad = evaluate_cad(&pred, &truth, &truth_from_pred, &db, truth_meshes);
     let articulation =
@@ -214,26 +214,4 @@ fn read_report(path: &Path) -> Result<serde_json::Value, InputError> {
     }
     let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, &e))?;
     serde_json::from_str(&text).map_err(|e| InputError::invalid(path, format!("invalid JSON: {e}")))
-}
-
-/// The reconstruction's aligned frame from the sequence's world frame, as report.json records it
-/// (identity when the report has none).
-fn aligned_from_world(
-    value: &serde_json::Value,
-    report: &Path,
-) -> Result<glam::Affine3A, InputError> {
-    let Some(cols) = value.pointer("/gravity/aligned_from_world") else {
-        return Ok(glam::Affine3A::IDENTITY);
-    };
-    let cols: [f32; 16] = serde_json::from_value(cols.clone())
-        .map_err(|e| InputError::invalid(report, format!("gravity.aligned_from_world: {e}")))?;
-    if cols.iter().any(|v| !v.is_finite()) {
-        return Err(InputError::invalid(
-            report,
-            "gravity.aligned_from_world holds a NaN",
-        ));
-    }
-    Ok(glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(
-        &cols,
-    )))
 }

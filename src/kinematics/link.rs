@@ -50,10 +50,22 @@ impl LinkGeometry {
     /// Collision pieces, mass and friction of `visual`, which is also its surface, for a link of
     /// `class`.
     pub fn new(visual: TriMesh, color: [f32; 3], class: &str) -> Self {
+        let (hulls, collision) = visual.hulls_and_collision_pieces();
+        Self::of_pieces(visual, color, class, hulls, collision)
+    }
+
+    /// `visual`, also its surface, colliding as `collision` in the planners and exports and as
+    /// `hulls` in rapier, with the mass and friction of `class`.
+    fn of_pieces(
+        visual: TriMesh,
+        color: [f32; 3],
+        class: &str,
+        hulls: Vec<TriMesh>,
+        collision: Vec<TriMesh>,
+    ) -> Self {
         let info = ClassTable::builtin().get(class);
         let density = info.map_or(500.0, |c| c.density);
         let friction = info.map_or(0.5, |c| c.friction);
-        let (hulls, collision) = visual.hulls_and_collision_pieces();
         let inertial = Inertial::of_mesh(&visual, density);
         Self {
             surface: visual.clone(),
@@ -81,19 +93,15 @@ impl LinkGeometry {
         for patch in &seen.supports {
             visual.append(patch);
         }
-        let info = ClassTable::builtin().get(class);
         // It stays fixed in every check and every export; its mass is its hull's, as for any
         // open surface.
-        let inertial = Inertial::of_mesh(&visual, info.map_or(500.0, |c| c.density));
-        Some(Self {
-            surface: visual.clone(),
+        Some(Self::of_pieces(
             visual,
             color,
-            collision: pieces.clone(),
-            hulls: pieces,
-            inertial,
-            friction: info.map_or(0.5, |c| c.friction),
-        })
+            class,
+            pieces.clone(),
+            pieces,
+        ))
     }
 }
 

@@ -168,12 +168,13 @@ pub fn aligned_from_world_in(
     match &report["gravity"]["aligned_from_world"] {
         serde_json::Value::Null => Ok(Affine3A::IDENTITY),
         value => {
-            let m: [f32; 16] = serde_json::from_value(value.clone())
-                .map_err(|e| InputError::invalid(path, format!("aligned_from_world: {e}")))?;
+            let m: [f32; 16] = serde_json::from_value(value.clone()).map_err(|e| {
+                InputError::invalid(path, format!("gravity.aligned_from_world: {e}"))
+            })?;
             if m.iter().any(|x| !x.is_finite()) {
                 return Err(InputError::invalid(
                     path,
-                    "aligned_from_world is not finite",
+                    "gravity.aligned_from_world is not finite",
                 ));
             }
             Ok(Affine3A::from_mat4(Mat4::from_cols_array(&m)))
