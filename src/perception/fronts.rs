@@ -11,6 +11,7 @@ use glam::{Affine3A, Vec3};
 use crate::geometry::{GravityBox, TriMesh};
 use crate::graph::build::surface_points;
 use crate::perception::handles::{Front, Handle, HandleKind, find_handles};
+use crate::perception::open_drawers::{OpenDrawer, open_drawers};
 use crate::perception::parts::{FrontExtent, PerceivedPart, front_extent, lay_out_parts};
 
 /// The front's points are those within its rectangle grown by this much sideways, metres (a
@@ -32,12 +33,14 @@ const SAME_BAR_COS: f32 = 0.866;
 /// Where surface points are sampled on a model to find its handles, metres apart.
 const MODEL_SAMPLE_SPACING_M: f32 = 0.01;
 
-/// What the camera saw of an object's front: the plane facing the room, the handles on it, the
-/// rectangle its doors and drawers cover and the parts the handles open there.
+/// What the camera saw of an object's front: the plane facing the room, the handles on it (an
+/// open drawer's carried back onto it), the rectangle its doors and drawers cover, the parts the
+/// handles open there and the drawers standing open.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PerceivedFront {
     pub front: Front,
     pub handles: Vec<Handle>,
+    pub open_drawers: Vec<OpenDrawer>,
     pub extent: FrontExtent,
     pub parts: Vec<PerceivedPart>,
     /// Nothing stands out in front of it beyond its handles: no door or drawer is open, nothing
@@ -94,13 +97,18 @@ pub fn perceive_front(
         _ => plane,
     };
     let front = Front::new(face.origin + face.normal * depth, face.normal)?;
+    let open = open_drawers(&front, &across);
     let on_front: Vec<Vec3> = across
         .iter()
         .copied()
         .filter(|p| (-BEHIND_M..=IN_FRONT_M).contains(&front.local(*p).z))
+        .filter(|p| !open.iter().any(|d| d.holds(&front, *p)))
         .collect();
-    let handles = find_handles(&front, &on_front);
-    let beyond = handles.iter().map(|h| h.depth).fold(0.0, f32::max) + BEYOND_HANDLES_M;
+    let mut handles = find_handles(&front, &on_front);
+    // Measured from the closed front, an open drawer's handle stands out by its drawer's travel.
+    let shut_handles_out = handles.iter().map(|h| h.depth).fold(0.0, f32::max);
+    handles.extend(open.iter().flat_map(|d| d.handles.iter().copied()));
+    let beyond = shut_handles_out + BEYOND_HANDLES_M;
     let in_front = across
         .iter()
         .filter(|p| front.local(**p).z > beyond)
@@ -110,14 +118,30 @@ pub fn perceive_front(
         right: [-half_width, half_width],
         z: [bbox.bottom_z(), bbox.top_z()],
     };
-    let extent = front_extent(&front, face, &on_front);
+    let extent = with_open_drawers(front_extent(&front, face, &on_front), face, &open);
     let parts = lay_out_parts(&front, extent, &handles, flaps);
     Some(PerceivedFront {
         front,
         handles,
+        open_drawers: open,
         extent,
         parts,
         clear,
+    })
+}
+
+/// `extent` grown over the rectangles of the `open` drawers (whose fronts are not on the front
+/// plane), within `face`.
+fn with_open_drawers(extent: FrontExtent, face: FrontExtent, open: &[OpenDrawer]) -> FrontExtent {
+    open.iter().fold(extent, |e, d| FrontExtent {
+        right: [
+            e.right[0].min(d.right[0]).max(face.right[0]),
+            e.right[1].max(d.right[1]).min(face.right[1]),
+        ],
+        z: [
+            e.z[0].min(d.z[0]).max(face.z[0]),
+            e.z[1].max(d.z[1]).min(face.z[1]),
+        ],
     })
 }
 
@@ -224,7 +248,7 @@ const MIN_CUT_M: f32 = 0.03;
 const MIN_KEPT_SHARE: f32 = 0.6;
 
 /// `bbox` cut back to the perceived `front` (the front plane, its handles and a margin in front
-/// of it), and the `points` left within it; `None` when there is nothing to cut, or too much.
+/// of it), and the `points` left within it, less what belongs to an open drawer; `None` when there is nothing to cut, or too much.
 pub fn cut_to_front(
     bbox: &GravityBox,
     seen: &PerceivedFront,
@@ -244,6 +268,7 @@ pub fn cut_to_front(
         .iter()
         .copied()
         .filter(|p| seen.front.local(*p).z <= limit)
+        .filter(|p| !seen.open_drawers.iter().any(|d| d.holds(&seen.front, *p)))
         .collect();
     if (kept.len() as f32) < MIN_KEPT_SHARE * points.len() as f32 {
         return None;

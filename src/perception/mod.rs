@@ -5,4 +5,5 @@
 
 pub mod fronts;
 pub mod handles;
+pub mod open_drawers;
 pub mod parts;

@@ -14,8 +14,8 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::cad::db::database::CadDatabase;
-use crate::cad::replace::alignment::Alignment;
-use crate::cad::replace::matching::Candidate;
+use crate::cad::replace::alignment::{Alignment, choice_score};
+use crate::cad::replace::matching::{Candidate, ObservedObject};
 use crate::cad::replace::replacement::{
     AlignMethod, ReplacementRecord, align_scene_reusing, check_and_place, observed_objects,
     rank_scene,
@@ -217,11 +217,40 @@ fn cad_align_stage(
     } else {
         Arc::new(library.0.with_models(perceived))
     };
+    for (object, alignments) in objects.iter().zip(&aligned) {
+        log_leading_choices(object, &models, alignments);
+    }
     commands.insert_resource(AlignedModels(models));
     for (object, alignments) in objects.iter().zip(aligned) {
         commands
             .entity(entity_of[object.id])
             .insert(CadAlignments(alignments));
+    }
+}
+
+/// How many of an object's alignments the debug log lists.
+const LOGGED_CHOICES: usize = 4;
+
+/// The leading alignments of `object` and what their choice scores are made of, at debug level
+/// (`RUST_LOG=iscene=debug`): why one model won over another.
+fn log_leading_choices(object: &ObservedObject, models: &CadDatabase, alignments: &[Alignment]) {
+    if !tracing::enabled!(tracing::Level::DEBUG) {
+        return;
+    }
+    for a in alignments.iter().take(LOGGED_CHOICES) {
+        let model = models
+            .models()
+            .get(a.candidate.model)
+            .map_or("?", |m| m.model.id.as_str());
+        tracing::debug!(
+            "{}: {model} score {:.4} = alignment {:.4}, facing {:.2}, upright {:.2}, layout {:.2}",
+            object.id,
+            choice_score(a),
+            a.alignment_error,
+            a.candidate.facing_error,
+            a.candidate.upright_error,
+            a.layout_error,
+        );
     }
 }
 

@@ -6,6 +6,7 @@
 //! physics check use. Reading the tree from the ECS (not from the contact graph) means it can be
 //! read again after any simulated action.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -29,7 +30,7 @@ use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::observed::{SeenShape, seen_shape};
 use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
-use crate::perception::handles::Handle;
+use crate::perception::open_drawers::drawer_openings;
 use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneGravity;
 use crate::systems::link_colors::paint_links_as_seen;
@@ -109,14 +110,9 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 .map_or(Affine3A::IDENTITY, |g| g.affine())
         })
         .collect();
-    let perceived: Vec<Vec<Handle>> = entities
+    let perceived: Vec<Option<PerceivedFront>> = entities
         .iter()
-        .map(|(e, _)| {
-            world
-                .get::<PerceivedFront>(*e)
-                .map(|f| f.0.handles.clone())
-                .unwrap_or_default()
-        })
+        .map(|(e, _)| world.get::<PerceivedFront>(*e).cloned())
         .collect();
     // What the map saw of each object no model replaced: its link is made of it.
     let seen: Vec<Option<SeenShape>> = entities
@@ -137,13 +133,25 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 let frame = Affine3A::from_mat4(Mat4::from_cols_array(&c.world_from_model));
                 Some((db.get(&c.model)?, frame))
             });
+            let handles = perceived.as_ref().map_or(&[][..], |f| &f.0.handles[..]);
             let parts = placed.map_or_else(Vec::new, |(model, frame)| {
                 let mut parts = model_parts(&model.model, &frame);
-                attach_handles(&mut parts, perceived, &model.placed_handles(&frame));
+                attach_handles(&mut parts, handles, &model.placed_handles(&frame));
                 parts
             });
+            // A drawer seen standing open stands open in the tree as far as it was pulled out.
+            let opened = perceived.as_ref().map_or_else(Vec::new, |f| {
+                drawer_openings(&f.0.front, &f.0.open_drawers, &parts)
+            });
+            let node = if opened.is_empty() {
+                Cow::Borrowed(node)
+            } else {
+                let mut node = node.clone();
+                node.joints.extend(opened);
+                Cow::Owned(node)
+            };
             let links = node_links(
-                node,
+                &node,
                 placed.map(|(m, _)| &m.model),
                 seen.as_ref(),
                 *pose,

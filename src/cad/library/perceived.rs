@@ -242,6 +242,7 @@ mod tests {
             PerceivedFront {
                 front,
                 handles: vec![drawer, door],
+                open_drawers: Vec::new(),
                 extent,
                 parts,
                 clear: true,

@@ -198,6 +198,12 @@ pub fn check_placements(
             .min();
         match best {
             Some((c, k)) if c < current[worst] => {
+                tracing::debug!(
+                    "physical check: {} ({} conflicts) gives way to {} ({c})",
+                    choice[worst].map_or("nothing", |m| alignments[worst][m].0.model.id.as_str()),
+                    current[worst],
+                    alignments[worst][k].0.model.id,
+                );
                 choice[worst] = Some(k);
                 tried_in_vain.iter_mut().for_each(|t| *t = false);
             }
