@@ -25,7 +25,12 @@ const DEPTH_BIN_M: f32 = 0.01;
 const PLANE_HALF_THICKNESS_M: f32 = 0.015;
 /// A drawer's front is at least this wide and high (metres) ...
 const MIN_WIDTH_M: f32 = 0.15;
-const MIN_HEIGHT_M: f32 = 0.06;
+const MIN_HEIGHT_M: f32 = 0.08;
+/// ... parallel to the front: its points' distance out of the front changes by at most this
+/// much per metre across it or up it (about 8 degrees). An oven's flap turned down part way
+/// crosses the slab of each depth bin as a strip 7 to 12 cm high that slopes (seed 30 read one
+/// as three drawers).
+const MAX_TILT: f32 = 0.15;
 /// ... and its points fill at least this share of the map's 2 cm cells over its rectangle: the
 /// sides of an open drawer, an open door seen edge-on and a row of handles fill a thin strip.
 const MIN_FILL: f32 = 0.4;
@@ -142,7 +147,7 @@ fn drawer_front(front: &Front, out: f32, on: &[Vec3], all: &[Vec3]) -> Option<Op
     let right = range(on.iter().map(|p| front.local(*p).x).collect());
     let z = range(on.iter().map(|p| p.z).collect());
     let (width, height) = (right[1] - right[0], z[1] - z[0]);
-    if width < MIN_WIDTH_M || height < MIN_HEIGHT_M {
+    if width < MIN_WIDTH_M || height < MIN_HEIGHT_M || tilted(front, on) {
         return None;
     }
     let mut cells: Vec<(i32, i32)> = on
@@ -243,6 +248,30 @@ pub fn drawer_openings(
         }
     }
     openings
+}
+
+/// Whether `points` slope out of `front`'s plane by more than [`MAX_TILT`] across it or up it:
+/// the least-squares plane `out = a + b right + c up` through them.
+fn tilted(front: &Front, points: &[Vec3]) -> bool {
+    let local: Vec<Vec3> = points.iter().map(|p| front.local(*p)).collect();
+    let n = local.len() as f32;
+    let mean = local.iter().copied().sum::<Vec3>() / n;
+    let (mut xx, mut xy, mut yy, mut xo, mut yo) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for l in &local {
+        let d = *l - mean;
+        xx += d.x * d.x;
+        xy += d.x * d.y;
+        yy += d.y * d.y;
+        xo += d.x * d.z;
+        yo += d.y * d.z;
+    }
+    let det = xx * yy - xy * xy;
+    if det <= f32::EPSILON {
+        return true;
+    }
+    let across = (yy * xo - xy * yo) / det;
+    let up = (xx * yo - xy * xo) / det;
+    across.abs() > MAX_TILT || up.abs() > MAX_TILT
 }
 
 #[cfg(test)]
@@ -366,5 +395,20 @@ mod tests {
             }
         }
         assert!(open_drawers(&f, &door).is_empty());
+        // An oven's flap 0.6 wide and 0.6 high, hinged along its bottom at z = 0.1 and turned
+        // down 15 degrees: each depth bin's slab crosses it as a strip 11 cm high.
+        let mut flap = Vec::new();
+        for k in 0..=60 {
+            let up = 0.01 * k as f32;
+            for i in 0..=30 {
+                let out = up * 15f32.to_radians().tan();
+                flap.push(Vec3::new(0.02 * i as f32, -out, 0.1 + up));
+            }
+        }
+        assert!(
+            open_drawers(&f, &flap).is_empty(),
+            "{:?}",
+            open_drawers(&f, &flap)
+        );
     }
 }
