@@ -130,7 +130,7 @@ fn densest_depth(front: &Front, points: &[Vec3]) -> Option<f32> {
             (b, before + counts[b] + after)
         })
         .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))?;
-    (count >= MIN_PLANE_POINTS).then(|| MIN_OUT_M + bin as f32 * DEPTH_BIN_M)
+    (count >= MIN_PLANE_POINTS).then_some(MIN_OUT_M + bin as f32 * DEPTH_BIN_M)
 }
 
 /// The open drawer whose front is the plane `out` metres out of `front` holding `on`, when they
