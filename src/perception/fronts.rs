@@ -248,7 +248,8 @@ const MIN_CUT_M: f32 = 0.03;
 const MIN_KEPT_SHARE: f32 = 0.6;
 
 /// `bbox` cut back to the perceived `front` (the front plane, its handles and a margin in front
-/// of it), and the `points` left within it, less what belongs to an open drawer; `None` when there is nothing to cut, or too much.
+/// of it), and the `points` left within it, less what belongs to an open drawer; `None` when
+/// there is nothing to cut, or too much.
 pub fn cut_to_front(
     bbox: &GravityBox,
     seen: &PerceivedFront,

@@ -42,7 +42,7 @@ const EDGE_QUANTILE: f32 = 0.03;
 /// Points within this distance of a drawer's rectangle (metres), standing out of the closed
 /// front by more than [`ON_FRONT_M`], are the drawer's: its box behind its front, its rim.
 const FOOTPRINT_MARGIN_M: f32 = 0.04;
-pub const ON_FRONT_M: f32 = 0.015;
+const ON_FRONT_M: f32 = 0.015;
 /// Planes looked at per front, open drawers found at most.
 const MAX_PLANES: usize = 8;
 const MAX_DRAWERS: usize = 4;
@@ -76,8 +76,9 @@ impl OpenDrawer {
 }
 
 /// The drawers standing open in front of `front` among `points` (the object's surface across its
-/// front, world frame), outermost plane's first found, then the next: planes parallel to the
-/// front at least [`MIN_OUT_M`] out whose points cover a drawer-sized rectangle.
+/// front, world frame): planes parallel to the front at least [`MIN_OUT_M`] out whose points
+/// cover a drawer-sized rectangle, the plane holding most points looked at first, then the next
+/// among what is left.
 pub fn open_drawers(front: &Front, points: &[Vec3]) -> Vec<OpenDrawer> {
     let mut left: Vec<Vec3> = points
         .iter()
@@ -221,7 +222,7 @@ pub fn drawer_openings(
     for d in drawers {
         let centre = front.origin
             + front.right * (0.5 * (d.right[0] + d.right[1]))
-            + glam::Vec3::Z * (0.5 * (d.z[0] + d.z[1]) - front.origin.z);
+            + Vec3::Z * (0.5 * (d.z[0] + d.z[1]) - front.origin.z);
         let nearest = parts
             .iter()
             .enumerate()

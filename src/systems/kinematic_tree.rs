@@ -139,10 +139,16 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 attach_handles(&mut parts, handles, &model.placed_handles(&frame));
                 parts
             });
-            // A drawer seen standing open stands open in the tree as far as it was pulled out.
-            let opened = perceived.as_ref().map_or_else(Vec::new, |f| {
-                drawer_openings(&f.0.front, &f.0.open_drawers, &parts)
-            });
+            // A drawer seen standing open stands open in the tree as far as it was pulled out,
+            // unless the graph says where it is.
+            let opened: Vec<(String, f32)> = perceived
+                .as_ref()
+                .map_or_else(Vec::new, |f| {
+                    drawer_openings(&f.0.front, &f.0.open_drawers, &parts)
+                })
+                .into_iter()
+                .filter(|(name, _)| !node.joints.contains_key(name))
+                .collect();
             let node = if opened.is_empty() {
                 Cow::Borrowed(node)
             } else {
