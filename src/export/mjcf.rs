@@ -172,8 +172,17 @@ fn write_body(
         if tree.links[c].joint.kind == JointKind::Floating {
             continue;
         }
+        // Posed as the joint stands now, which `ref` makes the joint's initial value: a drawer
+        // seen open starts open, in the same joint coordinates and range.
         let child = &tree.links[c];
-        write_body(xml, tree, children, c, &child.parent_from_link, depth + 1);
+        write_body(
+            xml,
+            tree,
+            children,
+            c,
+            &child.parent_from_link_now(),
+            depth + 1,
+        );
     }
     let _ = writeln!(xml, "{pad}</body>");
 }
@@ -200,9 +209,10 @@ fn write_joint(xml: &mut String, tree: &KinematicTree, i: usize, pad: &str) {
             };
             let _ = writeln!(
                 xml,
-                "{pad}  <joint name=\"{name}\" type=\"{kind}\" axis=\"{axis}\"{} damping=\"{}\" ref=\"0\"/>",
+                "{pad}  <joint name=\"{name}\" type=\"{kind}\" axis=\"{axis}\"{} damping=\"{}\" ref=\"{}\"/>",
                 range(link.joint.limits),
-                tidy(JOINT_DAMPING)
+                tidy(JOINT_DAMPING),
+                tidy(link.value)
             );
         }
     }
@@ -258,5 +268,37 @@ mod tests {
             xml.matches("</body>").count()
         );
         assert_eq!(xml.matches("<body ").count(), 4);
+    }
+
+    #[test]
+    fn a_drawer_standing_open_starts_open_in_the_same_joint_coordinates() {
+        let mut drawer = link(
+            "cabinet_1_drawer_1",
+            2,
+            JointSpec::prismatic(Vec3::NEG_Y, 0.0, 0.3),
+            Vec3::new(0.0, -0.2, 0.5),
+        );
+        drawer.value = 0.16;
+        let tree = KinematicTree {
+            links: vec![
+                TreeLink::root(),
+                link("floor", 0, JointSpec::FIXED, Vec3::ZERO),
+                link("cabinet_1", 1, JointSpec::FIXED, Vec3::new(1.0, 0.0, 0.0)),
+                drawer,
+            ],
+        };
+        let xml = mjcf_text(&tree, "scene");
+        let body = xml
+            .lines()
+            .find(|l| l.contains("<body name=\"cabinet_1_drawer_1\""))
+            .expect("drawer body");
+        // 16 cm out along -y from where it stands shut, and that is the joint's initial value.
+        assert!(body.contains("pos=\"0 -0.36 0.5\""), "{body}");
+        assert!(
+            xml.contains(
+                "type=\"slide\" axis=\"0 -1 0\" range=\"0 0.3\" damping=\"0.5\" ref=\"0.16\""
+            ),
+            "{xml}"
+        );
     }
 }
