@@ -16,6 +16,7 @@ use serde::Serialize;
 
 use crate::graph::parts::{PartJointType, PartJson};
 use crate::perception::handles::{Front, Handle, find_handles};
+use crate::perception::parts::quantile_range;
 
 /// A plane this far out of the closed front (metres) or farther may be an open drawer's front:
 /// handles stand 2 to 6 cm out, and cover too little to pass for one.
@@ -67,12 +68,15 @@ impl OpenDrawer {
     /// carcass: across its rectangle (grown by [`FOOTPRINT_MARGIN_M`]) and out of the front.
     pub fn holds(&self, front: &Front, p: Vec3) -> bool {
         let l = front.local(p);
-        l.z > ON_FRONT_M
-            && l.x >= self.right[0] - FOOTPRINT_MARGIN_M
-            && l.x <= self.right[1] + FOOTPRINT_MARGIN_M
-            && p.z >= self.z[0] - FOOTPRINT_MARGIN_M
-            && p.z <= self.z[1] + FOOTPRINT_MARGIN_M
+        l.z > ON_FRONT_M && in_footprint(self.right, self.z, l.x, p.z)
     }
+}
+
+/// Whether `right` along a front and height `z` lie across the rectangle `rect_right` by
+/// `rect_z` grown by [`FOOTPRINT_MARGIN_M`].
+fn in_footprint(rect_right: [f32; 2], rect_z: [f32; 2], right: f32, z: f32) -> bool {
+    (rect_right[0] - FOOTPRINT_MARGIN_M..=rect_right[1] + FOOTPRINT_MARGIN_M).contains(&right)
+        && (rect_z[0] - FOOTPRINT_MARGIN_M..=rect_z[1] + FOOTPRINT_MARGIN_M).contains(&z)
 }
 
 /// The drawers standing open in front of `front` among `points` (the object's surface across its
@@ -140,11 +144,7 @@ fn drawer_front(front: &Front, out: f32, on: &[Vec3], all: &[Vec3]) -> Option<Op
     if on.len() < MIN_PLANE_POINTS {
         return None;
     }
-    let range = |mut v: Vec<f32>| {
-        v.sort_by(f32::total_cmp);
-        let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
-        [at(EDGE_QUANTILE), at(1.0 - EDGE_QUANTILE)]
-    };
+    let range = |v: Vec<f32>| quantile_range(v, EDGE_QUANTILE);
     let right = range(on.iter().map(|p| front.local(*p).x).collect());
     let z = range(on.iter().map(|p| p.z).collect());
     let (width, height) = (right[1] - right[0], z[1] - z[0]);
@@ -177,11 +177,7 @@ fn drawer_front(front: &Front, out: f32, on: &[Vec3], all: &[Vec3]) -> Option<Op
         .copied()
         .filter(|p| {
             let l = plane.local(*p);
-            (-BEHIND_M..=IN_FRONT_M).contains(&l.z)
-                && l.x >= right[0] - FOOTPRINT_MARGIN_M
-                && l.x <= right[1] + FOOTPRINT_MARGIN_M
-                && p.z >= z[0] - FOOTPRINT_MARGIN_M
-                && p.z <= z[1] + FOOTPRINT_MARGIN_M
+            (-BEHIND_M..=IN_FRONT_M).contains(&l.z) && in_footprint(right, z, l.x, p.z)
         })
         .collect();
     let handles = find_handles(&plane, &near)

@@ -87,15 +87,19 @@ pub fn front_extent(front: &Front, face: FrontExtent, points: &[Vec3]) -> FrontE
     if on.len() < MIN_FRONT_POINTS {
         return face;
     }
-    let range = |mut v: Vec<f32>| {
-        v.sort_by(f32::total_cmp);
-        let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
-        [at(EXTENT_QUANTILE), at(1.0 - EXTENT_QUANTILE)]
-    };
+    let range = |v: Vec<f32>| quantile_range(v, EXTENT_QUANTILE);
     FrontExtent {
         right: range(on.iter().map(|l| l.x).collect()),
         z: range(on.iter().map(|l| l.y + front.origin.z).collect()),
     }
+}
+
+/// The `q` and `1 - q` quantiles of `values` (not empty): where a surface's points end, a few
+/// stray ones left out.
+pub fn quantile_range(mut values: Vec<f32>, q: f32) -> [f32; 2] {
+    values.sort_by(f32::total_cmp);
+    let at = |q: f32| values[((values.len() - 1) as f32 * q).round() as usize];
+    [at(q), at(1.0 - q)]
 }
 
 /// What a handle says of the part it opens.
