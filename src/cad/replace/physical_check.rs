@@ -3,11 +3,12 @@
 //! enough of its supporting surface. A min-conflict search over each object's aligned candidates
 //! (start from the best, move the most conflicted object to its least conflicting candidate,
 //! bounded) picks the final models; neighbours still overlapping side by side are pulled apart
-//! (`separation`); then every model is snapped onto its supporting surface.
+//! (`separation`); then every model is snapped onto its supporting surface (`snapping`) and
+//! judged (`placement_verdict`).
 
 use std::borrow::Cow;
 
-use glam::{Affine3A, Vec3};
+use glam::Affine3A;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -16,24 +17,17 @@ pub use crate::cad::placed_solid::{
     PlacedSolid, deepest_contact, layout_penetration, penetration_depth, support_area,
 };
 use crate::cad::replace::height_fit::fit_heights_to_children;
+use crate::cad::replace::placement_verdict::placement_verdicts;
 use crate::cad::replace::separation::{parted, retreat_from_walls, separate_neighbours};
 use crate::cad::replace::sizing::built_to_fit;
+use crate::cad::replace::snapping::snap_onto_holders;
 use crate::geometry::Plane;
 
 /// Deeper interpenetration than this (metres) is a conflict (the bar).
 pub const MAX_PENETRATION_M: f32 = 0.01;
-/// A model still this deep (metres) in an obstacle after separation is a conflict: an obstacle
-/// neither moves nor shrinks, so what separation could not part from it (a chair squeezed
-/// between two counters) would start the simulation overlapping it.
-const MAX_OBSTACLE_PENETRATION_M: f32 = 0.001;
 /// A child must stand on at least this share of its bottom rectangle (the contact graph's
 /// stable-support bar).
 pub const MIN_SUPPORT_AREA: f32 = 0.5;
-/// How far (metres) from a child's bottom its parent's final surface may be for the child to be
-/// snapped onto it: the contact graph says the parent holds it, and the parent's model may be
-/// a few centimetres taller or lower than the surface the child was seen on (a table model
-/// scaled to the whole table segment, chairs and all).
-const SNAP_HEIGHT_BAND_M: f32 = 0.1;
 /// What holds an object up, as the check needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Holder {
@@ -227,101 +221,17 @@ pub fn check_placements(
             .zip(&retreated_m)
             .map(|(a, b)| a + b)
             .collect();
-    // Snap parents before children: a child rests on its parent's final surface.
-    let mut finals: Vec<Option<PlacedSolid>> = (0..n).map(|_| None).collect();
-    for i in support_order(holders) {
-        let (Some(k), Some(pose)) = (choice[i], poses[i]) else {
-            continue;
-        };
-        let model = alignments[i][k].0;
-        let solid = PlacedSolid::new(model, &pose);
-        let centre = 0.25 * solid.footprint.iter().sum::<Vec3>();
-        let target = match holders[i] {
-            Holder::Object(p) => finals[p].as_ref().and_then(|parent| {
-                parent.surface_height_within(
-                    centre.truncate(),
-                    solid.bottom_z(),
-                    SNAP_HEIGHT_BAND_M,
-                )
-            }),
-            Holder::Obstacle(k) => obstacles[k].surface_height_within(
-                centre.truncate(),
-                solid.bottom_z(),
-                SNAP_HEIGHT_BAND_M,
-            ),
-            Holder::Floor(plane) if plane.normal.z.abs() > 1e-3 => Some(
-                -(plane.normal.x * centre.x + plane.normal.y * centre.y + plane.offset)
-                    / plane.normal.z,
-            ),
-            _ => None,
-        };
-        let snapped = match target {
-            Some(z) => Affine3A::from_translation(Vec3::Z * (z - solid.bottom_z())) * pose,
-            None => pose,
-        };
-        poses[i] = Some(snapped);
-        finals[i] = Some(PlacedSolid::new(model, &snapped));
-    }
-    let checks = (0..n)
-        .map(|i| {
-            let me = finals[i].as_ref()?;
-            let depths: Vec<(usize, f32)> = (0..n)
-                .filter(|&j| j != i)
-                .filter_map(|j| Some((j, penetration_depth(me, finals[j].as_ref()?))))
-                .collect();
-            // What it holds rests on it: the box of a thing no model replaced lying on a
-            // shelf's board is as deep in the board as the noise of the surface it was seen on
-            // (a 1 cm "book" 1.5 mm into the board left a shelf and its eleven books unplaced,
-            // seed 35), so it gets the bar two models get, not the obstacles' own.
-            let (held_penetration_m, obstacle_penetration_m) =
-                obstacles
-                    .iter()
-                    .enumerate()
-                    .fold((0.0f32, 0.0f32), |(held, other), (k, o)| {
-                        let depth = penetration_depth(me, o);
-                        if obstacle_holders.get(k).copied().flatten() == Some(i) {
-                            (held.max(depth), other)
-                        } else {
-                            (held, other.max(depth))
-                        }
-                    });
-            let max_penetration_m = depths
-                .iter()
-                .map(|(_, d)| *d)
-                .fold(obstacle_penetration_m.max(held_penetration_m), f32::max);
-            // A deep overlap of two models is charged to the one that yields (`keeps_place`):
-            // leaving a table as its box for a chair pushed into it starts the chair, and
-            // everything on the table, inside that box.
-            let overlapped = depths
-                .iter()
-                .any(|&(j, d)| d > MAX_PENETRATION_M && !keeps_place(i, j, holders, movable));
-            let layout_penetration_m = layout_penetration(me, layout);
-            let held_area = match holders[i] {
-                Holder::Object(p) => finals[p].as_ref().map(|parent| support_area(me, parent)),
-                Holder::Obstacle(k) => obstacles.get(k).map(|parent| support_area(me, parent)),
-                _ => None,
-            };
-            // A child that does not stand on this model is the child's conflict, not this
-            // one's: the search above has already preferred candidates that hold their children,
-            // and leaving the holder as its box would start everything else it holds inside it.
-            let tips_over = holders[i] != Holder::Other && !me.stands();
-            let conflicts = usize::from(overlapped)
-                + usize::from(obstacle_penetration_m > MAX_OBSTACLE_PENETRATION_M)
-                + usize::from(held_penetration_m > MAX_PENETRATION_M)
-                + usize::from(layout_penetration_m > MAX_PENETRATION_M)
-                + usize::from(held_area.is_some_and(|a| a < MIN_SUPPORT_AREA))
-                + usize::from(tips_over);
-            Some(PlacementCheck {
-                chosen: choice[i]?,
-                tips_over,
-                max_penetration_m,
-                layout_penetration_m,
-                support_area: held_area,
-                conflicts,
-                separated_m: separated_m[i],
-            })
-        })
-        .collect();
+    let finals = snap_onto_holders(&models, holders, obstacles, &mut poses);
+    let checks = placement_verdicts(
+        &finals,
+        &choice,
+        &separated_m,
+        holders,
+        movable,
+        layout,
+        obstacles,
+        obstacle_holders,
+    );
     CheckedPlacements {
         chosen: (0..n).map(|i| Some((choice[i]?, poses[i]?))).collect(),
         checks,
@@ -335,57 +245,13 @@ pub fn check_placements(
     }
 }
 
-/// Whether object `i` keeps its placement where its model and `j`'s overlap: it holds `j`, or
-/// `j` does not hold it and it is fixed while `j` is movable, or, both alike, more objects rest
-/// on it (directly or not). At a tie neither does, and both are left in conflict.
-fn keeps_place(i: usize, j: usize, holders: &[Holder], movable: &[bool]) -> bool {
-    if holders[j] == Holder::Object(i) {
-        return true;
-    }
-    if holders[i] == Holder::Object(j) {
-        return false;
-    }
-    let resting_on = |o: usize| {
-        (0..holders.len())
-            .filter(|&c| {
-                let mut at = c;
-                for _ in 0..holders.len() {
-                    match holders[at] {
-                        Holder::Object(p) if p == o => return true,
-                        Holder::Object(p) => at = p,
-                        _ => return false,
-                    }
-                }
-                false
-            })
-            .count()
-    };
-    (!movable[i], resting_on(i)) > (!movable[j], resting_on(j))
-}
-
-/// Object indices with every holder before what it holds (objects in a support cycle, which
-/// the contact graph never makes, come last).
-fn support_order(holders: &[Holder]) -> Vec<usize> {
-    let depth = |mut i: usize| {
-        let mut d = 0;
-        while let Holder::Object(p) = holders[i] {
-            d += 1;
-            i = p;
-            if d > holders.len() {
-                break;
-            }
-        }
-        d
-    };
-    let mut order: Vec<usize> = (0..holders.len()).collect();
-    order.sort_by_key(|&i| (depth(i), i));
-    order
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
+
     use crate::cad::db::database::CadDatabase;
+    use crate::cad::replace::placement_verdict::MAX_OBSTACLE_PENETRATION_M;
 
     fn model_of<'a>(db: &'a CadDatabase, id: &str) -> &'a DatabaseModel {
         db.models()
