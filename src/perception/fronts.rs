@@ -11,6 +11,7 @@ use glam::{Affine3A, Vec3};
 use crate::geometry::{GravityBox, TriMesh};
 use crate::graph::build::surface_points;
 use crate::perception::handles::{Front, Handle, HandleKind, find_handles};
+use crate::perception::open_doors::{OpenDoor, open_doors};
 use crate::perception::open_drawers::{OpenDrawer, open_drawers};
 use crate::perception::parts::{FrontExtent, PerceivedPart, front_extent, lay_out_parts};
 
@@ -34,13 +35,14 @@ const SAME_BAR_COS: f32 = 0.866;
 const MODEL_SAMPLE_SPACING_M: f32 = 0.01;
 
 /// What the camera saw of an object's front: the plane facing the room, the handles on it (an
-/// open drawer's carried back onto it), the rectangle its doors and drawers cover, the parts the
-/// handles open there and the drawers standing open.
+/// open drawer's or door's carried back onto it), the rectangle its doors and drawers cover, the
+/// parts the handles open there and the drawers and doors standing open.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PerceivedFront {
     pub front: Front,
     pub handles: Vec<Handle>,
     pub open_drawers: Vec<OpenDrawer>,
+    pub open_doors: Vec<OpenDoor>,
     pub extent: FrontExtent,
     pub parts: Vec<PerceivedPart>,
     /// Nothing stands out in front of it beyond its handles: no door or drawer is open, nothing
@@ -88,42 +90,88 @@ pub fn perceive_front(
         })
         .collect();
     let plane = front_depth(&face, depth_of_box, &across).unwrap_or(0.0);
+    let face_right = [-half_width, half_width];
+    let look = |depth: f32| -> Option<(Front, Vec<OpenDrawer>, Vec<OpenDoor>)> {
+        let front = Front::new(face.origin + face.normal * depth, face.normal)?;
+        let drawers = open_drawers(&front, &across);
+        let doors = if flaps {
+            Vec::new()
+        } else {
+            let free: Vec<Vec3> = across
+                .iter()
+                .copied()
+                .filter(|p| !drawers.iter().any(|d| d.holds(&front, *p)))
+                .collect();
+            open_doors(&front, face_right, &free)
+        };
+        Some((front, drawers, doors))
+    };
     // Behind an open door the inside's back is the largest plane facing the room, at the back
     // of the box: the carcass's front is then where its top (or, above the eye, its bottom)
     // ends. (A plane farther out is a front, an open drawer's included.)
     let at_back = -plane > depth_of_box - BACK_BAND_M;
-    let depth = match carcass_edge_depth(&face, half_width, half_height, points) {
-        Some(edge) if at_back && edge - plane > OPEN_FRONT_M => edge,
-        _ => plane,
+    let edges = carcass_edges(&face, half_width, half_height, points);
+    let edge = edges
+        .chosen
+        .filter(|edge| at_back && edge - plane > OPEN_FRONT_M);
+    // A door standing open turns about the carcass's front edge, wherever the plane is (a door
+    // open square showed the shelves inside, 13 cm behind the edge, as the largest plane): of
+    // the plane (unless it is the inside's back) and the edges of the top and the bottom, the
+    // front is where a door stands open best (its panel running from a hinge there as far as a
+    // door reaches, not on into the carcass's side behind it; then the longest).
+    let with_door = [edge.is_none().then_some(plane), edges.top, edges.bottom]
+        .into_iter()
+        .flatten()
+        .filter(|d| *d == plane || d - plane > OPEN_FRONT_M)
+        .filter_map(look)
+        .filter(|(_, _, doors)| !doors.is_empty())
+        .max_by_key(|(_, _, doors)| {
+            doors
+                .iter()
+                .map(|d| (usize::from(!d.reaches_cap), d.cells))
+                .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+        });
+    let (front, open, doors) = match with_door {
+        Some(seen) => seen,
+        None => look(edge.unwrap_or(plane))?,
     };
-    let front = Front::new(face.origin + face.normal * depth, face.normal)?;
-    let open = open_drawers(&front, &across);
+    tracing::debug!(
+        "front at {:.2} (plane {plane:.2}, carcass edges {edges:?}, box depth {depth_of_box:.2}): \
+         {} open drawers, open doors {doors:?}",
+        front.local(face.origin).z,
+        open.len()
+    );
+    let opened = |p: &Vec3| {
+        open.iter().any(|d| d.holds(&front, *p)) || doors.iter().any(|d| d.holds(&front, *p))
+    };
     let on_front: Vec<Vec3> = across
         .iter()
         .copied()
         .filter(|p| (-BEHIND_M..=IN_FRONT_M).contains(&front.local(*p).z))
-        .filter(|p| !open.iter().any(|d| d.holds(&front, *p)))
+        .filter(|p| !opened(p))
         .collect();
     let mut handles = find_handles(&front, &on_front);
     // Measured from the closed front, an open drawer's handle stands out by its drawer's travel.
     let shut_handles_out = handles.iter().map(|h| h.depth).fold(0.0, f32::max);
     handles.extend(open.iter().flat_map(|d| d.handles.iter().copied()));
+    handles.extend(doors.iter().flat_map(|d| d.handles.iter().copied()));
     let beyond = shut_handles_out + BEYOND_HANDLES_M;
     let in_front = across
         .iter()
-        .filter(|p| front.local(**p).z > beyond)
+        .filter(|p| front.local(**p).z > beyond && !opened(p))
         .count();
     let clear = in_front as f32 <= MAX_IN_FRONT_SHARE * across.len() as f32;
     let face = FrontExtent {
-        right: [-half_width, half_width],
+        right: face_right,
         z: [bbox.bottom_z(), bbox.top_z()],
     };
-    let extent = with_open_drawers(front_extent(&front, face, &on_front), face, &open);
+    let extent = with_open_parts(front_extent(&front, face, &on_front), face, &open, &doors);
     let parts = lay_out_parts(&front, extent, &handles, flaps);
     Some(PerceivedFront {
         front,
         handles,
         open_drawers: open,
+        open_doors: doors,
         extent,
         parts,
         clear,
@@ -131,16 +179,25 @@ pub fn perceive_front(
 }
 
 /// `extent` grown over the rectangles of the `open` drawers (whose fronts are not on the front
-/// plane), within `face`.
-fn with_open_drawers(extent: FrontExtent, face: FrontExtent, open: &[OpenDrawer]) -> FrontExtent {
-    open.iter().fold(extent, |e, d| FrontExtent {
+/// plane) and the shut rectangles of the open `doors`, within `face`.
+fn with_open_parts(
+    extent: FrontExtent,
+    face: FrontExtent,
+    open: &[OpenDrawer],
+    doors: &[OpenDoor],
+) -> FrontExtent {
+    let rectangles = open
+        .iter()
+        .map(|d| (d.right, d.z))
+        .chain(doors.iter().map(|d| (d.shut_right(), d.z)));
+    rectangles.fold(extent, |e, (right, z)| FrontExtent {
         right: [
-            e.right[0].min(d.right[0]).max(face.right[0]),
-            e.right[1].max(d.right[1]).min(face.right[1]),
+            e.right[0].min(right[0]).max(face.right[0]),
+            e.right[1].max(right[1]).min(face.right[1]),
         ],
         z: [
-            e.z[0].min(d.z[0]).max(face.z[0]),
-            e.z[1].max(d.z[1]).min(face.z[1]),
+            e.z[0].min(z[0]).max(face.z[0]),
+            e.z[1].max(z[1]).min(face.z[1]),
         ],
     })
 }
@@ -168,15 +225,24 @@ const EDGE_BIN_SHARE: f32 = 0.2;
 /// Bins of the edge's search, metres: the map's surface points are about 2 cm apart.
 const EDGE_BIN_M: f32 = 0.02;
 
-/// The offset along `face.normal` (negative inwards) where the carcass's top surface ends, seen
-/// in the band of points under the box's top, or its bottom where more of that was seen (a
-/// wall cabinet above the eye); `None` with too few points in both.
-fn carcass_edge_depth(
+/// Where the carcass's top and bottom surfaces end towards the front (offsets along
+/// `face.normal`, negative inwards), and the one to trust without other evidence.
+#[derive(Clone, Copy, Debug)]
+struct CarcassEdges {
+    top: Option<f32>,
+    bottom: Option<f32>,
+    /// The top's, or the bottom's where more of that was seen (a wall cabinet above the eye).
+    chosen: Option<f32>,
+}
+
+/// The edges of the carcass's top surface, seen in the band of points under the box's top, and
+/// of its bottom, in the band above the box's bottom; each `None` with too few points.
+fn carcass_edges(
     face: &Front,
     half_width: f32,
     half_height: f32,
     points: &[Vec3],
-) -> Option<f32> {
+) -> CarcassEdges {
     let band = |top: bool| -> Vec<f32> {
         points
             .iter()
@@ -193,17 +259,28 @@ fn carcass_edge_depth(
             .collect()
     };
     let (top, bottom) = (band(true), band(false));
-    let inward = if top.len() >= bottom.len() {
-        top
-    } else {
-        bottom
-    };
+    let (top_edge, bottom_edge) = (band_edge(&top), band_edge(&bottom));
+    CarcassEdges {
+        top: top_edge,
+        bottom: bottom_edge,
+        chosen: if top.len() >= bottom.len() {
+            top_edge
+        } else {
+            bottom_edge
+        },
+    }
+}
+
+/// Where a band's top (or bottom) surface ends towards the front: the offset (negative inwards)
+/// of the outermost bin holding at least [`EDGE_BIN_SHARE`] of the fullest one; `None` with
+/// fewer than [`MIN_EDGE_POINTS`].
+fn band_edge(inward: &[f32]) -> Option<f32> {
     if inward.len() < MIN_EDGE_POINTS {
         return None;
     }
     let outermost = inward.iter().copied().fold(f32::MAX, f32::min);
     let mut counts: Vec<u32> = Vec::new();
-    for d in &inward {
+    for d in inward {
         let bin = ((d - outermost) / EDGE_BIN_M) as usize;
         if counts.len() <= bin {
             counts.resize(bin + 1, 0);
@@ -243,8 +320,8 @@ fn front_depth(face: &Front, depth: f32, points: &[Vec3]) -> Option<f32> {
 const BEYOND_HANDLES_M: f32 = 0.02;
 /// The box is cut back to the front only when that moves its face at least this far (metres) ...
 const MIN_CUT_M: f32 = 0.03;
-/// ... and leaves at least this share of its points: a front plane found deep inside the box
-/// (the back of an open cabinet's inside) must not cut off the real front.
+/// ... and leaves at least this share of the points no open part holds: a front plane found
+/// deep inside the box (the back of an open cabinet's inside) must not cut off the real front.
 const MIN_KEPT_SHARE: f32 = 0.6;
 
 /// `bbox` cut back to the perceived `front` (the front plane, its handles and a margin in front
@@ -265,13 +342,17 @@ pub fn cut_to_front(
     if face_out - limit < MIN_CUT_M {
         return None;
     }
-    let kept: Vec<Vec3> = points
+    let opened = |p: &Vec3| {
+        seen.open_drawers.iter().any(|d| d.holds(&seen.front, *p))
+            || seen.open_doors.iter().any(|d| d.holds(&seen.front, *p))
+    };
+    let closed: Vec<Vec3> = points.iter().copied().filter(|p| !opened(p)).collect();
+    let kept: Vec<Vec3> = closed
         .iter()
         .copied()
         .filter(|p| seen.front.local(*p).z <= limit)
-        .filter(|p| !seen.open_drawers.iter().any(|d| d.holds(&seen.front, *p)))
         .collect();
-    if (kept.len() as f32) < MIN_KEPT_SHARE * points.len() as f32 {
+    if (kept.len() as f32) < MIN_KEPT_SHARE * closed.len() as f32 {
         return None;
     }
     let cut = face_out - limit;

@@ -5,5 +5,6 @@
 
 pub mod fronts;
 pub mod handles;
+pub mod open_doors;
 pub mod open_drawers;
 pub mod parts;

@@ -30,6 +30,7 @@ use crate::kinematics::JointSpec;
 use crate::kinematics::link::{NodeLink, node_links};
 use crate::kinematics::observed::{SeenShape, seen_shape};
 use crate::kinematics::tree::{KinematicTree, TreeError, TreeLink};
+use crate::perception::open_doors::door_openings;
 use crate::perception::open_drawers::drawer_openings;
 use crate::systems::cad_replacement::SceneModels;
 use crate::systems::contact_graph::SceneGravity;
@@ -139,12 +140,14 @@ pub fn spawn_node_links(world: &mut World, graph: &ContactGraph, db: Option<&Cad
                 attach_handles(&mut parts, handles, &model.placed_handles(&frame));
                 parts
             });
-            // A drawer seen standing open stands open in the tree as far as it was pulled out,
-            // unless the graph says where it is.
+            // A drawer or door seen standing open stands open in the tree as far as it was
+            // pulled out or turned, unless the graph says where it is.
             let opened: Vec<(String, f32)> = perceived
                 .as_ref()
                 .map_or_else(Vec::new, |f| {
-                    drawer_openings(&f.0.front, &f.0.open_drawers, &parts)
+                    let mut opened = drawer_openings(&f.0.front, &f.0.open_drawers, &parts);
+                    opened.extend(door_openings(&f.0.front, &f.0.open_doors, &parts));
+                    opened
                 })
                 .into_iter()
                 .filter(|(name, _)| !node.joints.contains_key(name))

@@ -243,6 +243,7 @@ mod tests {
                 front,
                 handles: vec![drawer, door],
                 open_drawers: Vec::new(),
+                open_doors: Vec::new(),
                 extent,
                 parts,
                 clear: true,
