@@ -237,12 +237,7 @@ struct CarcassEdges {
 
 /// The edges of the carcass's top surface, seen in the band of points under the box's top, and
 /// of its bottom, in the band above the box's bottom; each `None` with too few points.
-fn carcass_edges(
-    face: &Front,
-    half_width: f32,
-    half_height: f32,
-    points: &[Vec3],
-) -> CarcassEdges {
+fn carcass_edges(face: &Front, half_width: f32, half_height: f32, points: &[Vec3]) -> CarcassEdges {
     let band = |top: bool| -> Vec<f32> {
         points
             .iter()
@@ -444,6 +439,7 @@ pub fn layout_error(perceived: &[Handle], predicted: &[Handle]) -> f32 {
 mod tests {
     use super::*;
     use crate::cad::library::storage::{cabinet_drawers, cabinet_two_doors};
+    use crate::perception::parts::{PartKind, Side};
 
     fn size() -> Vec3 {
         Vec3::new(0.6, 0.45, 0.8)
@@ -534,6 +530,55 @@ mod tests {
         assert!(kept.len() >= 2 * 31 * 41);
         // Cut once, it needs no second cut.
         assert!(cut_to_front(&cut, &seen, &kept).is_none());
+    }
+
+    #[test]
+    fn a_door_open_square_stands_on_the_top_s_edge_and_is_no_part_of_the_carcass() {
+        // A cupboard 0.6 wide, 0.34 deep and 0.7 high facing -y, its front at y = 0: its top,
+        // its inside's back (the largest plane across the face), its right side seen along
+        // its length, an inside floor recessed 14 cm (a bottom band holding more points than
+        // the top, whose edge lies inside), and its door hinged on the right (+x, seen from the
+        // room) open 90 degrees with a vertical bar on its outer face near its free edge.
+        let mut points = panel(Vec3::new(-0.3, 0.34, 0.0), Vec3::X, 30, Vec3::Z, 35);
+        points.extend(panel(Vec3::new(-0.3, 0.0, 0.7), Vec3::X, 30, Vec3::Y, 17));
+        points.extend(panel(Vec3::new(0.3, 0.0, 0.0), Vec3::Y, 17, Vec3::Z, 35));
+        for layer in 0..3 {
+            let z = 0.005 * layer as f32;
+            points.extend(panel(Vec3::new(-0.3, 0.14, z), Vec3::X, 30, Vec3::Y, 10));
+        }
+        points.extend(panel(
+            Vec3::new(0.3, -0.02, 0.0),
+            Vec3::NEG_Y,
+            29,
+            Vec3::Z,
+            35,
+        ));
+        for j in 0..=8 {
+            points.push(Vec3::new(0.33, -0.56, 0.3 + 0.02 * j as f32));
+            points.push(Vec3::new(0.335, -0.56, 0.3 + 0.02 * j as f32));
+        }
+        let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
+        let seen = perceive_front(&bbox, Vec3::NEG_Y, &points, false).expect("front");
+        assert!(seen.front.origin.y.abs() < 0.021, "{:?}", seen.front);
+        assert_eq!(seen.open_doors.len(), 1, "{:?}", seen.open_doors);
+        let door = &seen.open_doors[0];
+        assert_eq!(door.hinge, Side::Right, "{door:?}");
+        assert!((door.angle.to_degrees() - 90.0).abs() < 3.0, "{door:?}");
+        assert!((door.width - 0.6).abs() < 0.05, "{door:?}");
+        // The bar turned back onto the shut front opens a door hinged on the right.
+        assert!(
+            seen.parts
+                .iter()
+                .any(|p| p.kind == PartKind::Door { hinge: Side::Right }),
+            "{:?} {:?}",
+            seen.parts,
+            seen.handles
+        );
+        // The box (0.94 deep) is cut back to the front and its handles' depth, the door's
+        // points (0.6 out) left out.
+        let (cut, kept) = cut_to_front(&bbox, &seen, &points).expect("a cut");
+        assert!(cut.size.y < 0.42, "{cut:?}");
+        assert!(kept.iter().all(|p| p.y >= -0.07), "{cut:?}");
     }
 
     #[test]

@@ -42,9 +42,6 @@ const MIN_OUT_M: f32 = 0.03;
 /// empty ones (what stands in front hides some of it) ...
 const CELL_M: f32 = 0.02;
 const MAX_GAP_CELLS: usize = 2;
-/// A run still going this many cells past the widest door the front can hold runs on into
-/// something else (the carcass's side behind a hinge found too deep).
-const RUN_ON_CELLS: usize = 3;
 /// ... starts within this distance of the hinge (metres), beyond where it first stands
 /// [`MIN_OUT_M`] out ...
 const NEAR_HINGE_M: f32 = 0.06;
@@ -54,6 +51,9 @@ const MIN_WIDTH_M: f32 = 0.2;
 const MIN_HEIGHT_M: f32 = 0.25;
 /// ... at most the front's width and this much more (a door covers the front at most) ...
 const WIDTH_SLACK_M: f32 = 0.04;
+/// (A run still going this many cells past that runs on into something else: the carcass's
+/// side, behind a hinge looked for too deep.)
+const RUN_ON_CELLS: usize = 3;
 /// ... filling at least this share of its cells along it, and this share of its 2 cm cells
 /// across its rectangle (a chair's back bleeding into the segment fills a strip).
 const MIN_RUN_FILL: f32 = 0.6;
@@ -306,7 +306,8 @@ fn fit_panel(panel: Panel, standing: &[(Vec2, f32)]) -> Panel {
         .map(|(l, _)| *l)
         .filter(|l| {
             let d = *l - panel.hinge_at;
-            d.dot(normal).abs() <= PANEL_HALF_THICKNESS_M && (0.0..=panel.width).contains(&d.dot(along))
+            d.dot(normal).abs() <= PANEL_HALF_THICKNESS_M
+                && (0.0..=panel.width).contains(&d.dot(along))
         })
         .collect();
     if on.len() < 2 {
@@ -374,7 +375,12 @@ fn finish_door(front: &Front, panel: Panel, points: &[Vec3]) -> Option<OpenDoor>
     let mut cells: Vec<(i32, i32)> = on
         .iter()
         .filter(|(_, h)| (z[0]..=z[1]).contains(h))
-        .map(|(a, h)| ((a / CELL_M).floor() as i32, ((h - z[0]) / CELL_M).floor() as i32))
+        .map(|(a, h)| {
+            (
+                (a / CELL_M).floor() as i32,
+                ((h - z[0]) / CELL_M).floor() as i32,
+            )
+        })
         .collect();
     cells.sort_unstable();
     cells.dedup();
@@ -455,7 +461,12 @@ pub fn door_openings(front: &Front, doors: &[OpenDoor], parts: &[PartJson]) -> V
             })
             .map(|(k, p)| {
                 let off = p.front_center() - centre;
-                (k, (off - front.normal * off.dot(front.normal)).with_z(0.0).length())
+                (
+                    k,
+                    (off - front.normal * off.dot(front.normal))
+                        .with_z(0.0)
+                        .length(),
+                )
             })
             .filter(|(_, distance)| *distance <= SAME_DOOR_M)
             .min_by(|a, b| a.1.total_cmp(&b.1));
@@ -484,7 +495,9 @@ mod tests {
             ((z1 - z0) / 0.02).round() as usize,
         );
         (0..=nx)
-            .flat_map(|i| (0..=nz).map(move |j| Vec3::new(x0 + 0.02 * i as f32, 0.0, z0 + 0.02 * j as f32)))
+            .flat_map(|i| {
+                (0..=nz).map(move |j| Vec3::new(x0 + 0.02 * i as f32, 0.0, z0 + 0.02 * j as f32))
+            })
             .collect()
     }
 
@@ -549,7 +562,10 @@ mod tests {
                 // Back on the shut front: 4 cm from the free edge, standing out of the front.
                 let shut_x = hinge_x + if hinge_x < 0.3 { 0.56 } else { -0.56 };
                 assert!((h.center.x - shut_x).abs() < 0.02, "{degrees}: {h:?}");
-                assert!(h.center.y < -0.015 && h.center.y > -0.05, "{degrees}: {h:?} {d:?}");
+                assert!(
+                    h.center.y < -0.015 && h.center.y > -0.05,
+                    "{degrees}: {h:?} {d:?}"
+                );
                 assert!(h.axis.z.abs() > 0.95, "{degrees}: {h:?}");
                 // The panel is the door's; the inside's back and the front are not.
                 let hinge = Vec3::new(hinge_x, 0.0, 0.0);
@@ -585,7 +601,11 @@ mod tests {
         assert!(open_doors(&f, [-0.3, 0.3], &drawer).is_empty());
         // A chair's back 30 cm in front, parallel to the front: no run from a hinge.
         let mut chair = shut_panel([0.0, 0.6], [0.1, 0.7]);
-        chair.extend(shut_panel([0.1, 0.5], [0.4, 0.9]).into_iter().map(|p| p - Vec3::Y * 0.3));
+        chair.extend(
+            shut_panel([0.1, 0.5], [0.4, 0.9])
+                .into_iter()
+                .map(|p| p - Vec3::Y * 0.3),
+        );
         assert!(open_doors(&f, [-0.3, 0.3], &chair).is_empty());
     }
 
@@ -624,7 +644,11 @@ mod tests {
         assert!((opened[0].1.abs() - 1.0).abs() < 1e-6 && (opened[0].1 > 0.0) == upper_opens);
         // A door seen hinged on the other side stands for none of them.
         let other = OpenDoor {
-            hinge: if side == Side::Left { Side::Right } else { Side::Left },
+            hinge: if side == Side::Left {
+                Side::Right
+            } else {
+                Side::Left
+            },
             hinge_at: [-hinge_right, 0.0],
             ..open(1.0)
         };
