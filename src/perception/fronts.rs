@@ -361,6 +361,19 @@ pub fn cut_to_front(
     Some((cut_box, kept))
 }
 
+/// The box and points a model is fitted to: `bbox` and `points` cut back to the perceived
+/// `front` where it calls for a cut ([`cut_to_front`]), else as they are.
+pub fn fitted_to_front<'a>(
+    bbox: &GravityBox,
+    front: Option<&PerceivedFront>,
+    points: &'a [Vec3],
+) -> (GravityBox, std::borrow::Cow<'a, [Vec3]>) {
+    match front.and_then(|f| cut_to_front(bbox, f, points)) {
+        Some((cut, kept)) => (cut, std::borrow::Cow::Owned(kept)),
+        None => (*bbox, std::borrow::Cow::Borrowed(points)),
+    }
+}
+
 /// The handles on the front of a model in the canonical frame (front facing -y, the origin at
 /// the bottom centre of its box `size`), found as the perception finds them on what a camera
 /// straight in front of the model sees of `visual` (its look with doors and drawers closed):

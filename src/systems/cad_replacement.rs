@@ -26,6 +26,8 @@ use crate::components::{
     CadAlignments, CadCandidates, CadModel, ObservedSurface, PerceivedFront, SceneEntity,
     ShapeRejection,
 };
+use crate::geometry::GravityBox;
+use crate::perception::fronts::fitted_to_front;
 use crate::systems::contact_graph::SceneGravity;
 use crate::systems::scene_graph::hang_frames;
 use crate::systems::scene_nodes::SceneNodes;
@@ -272,8 +274,24 @@ fn physical_check_stage(
         return;
     };
     let graph = nodes.contact_graph();
-    let points = observed_points(surfaces.iter());
     let entity_of = nodes.entities_by_id();
+    // Each placement's residual is measured on what its model was fitted to: an open door's or
+    // drawer's points are no part of the closed model.
+    let points: HashMap<String, Vec<Vec3>> = observed_points(surfaces.iter())
+        .into_iter()
+        .map(|(id, p)| {
+            let front = entity_of
+                .get(id.as_str())
+                .and_then(|e| findings.get(*e).ok()?.1);
+            let fitted = match (graph.node(&id), front) {
+                (Some(n), Some(f)) => fitted_to_front(&GravityBox::from(&n.bbox), Some(&f.0), &p)
+                    .1
+                    .into_owned(),
+                _ => p,
+            };
+            (id, fitted)
+        })
+        .collect();
     let order = nodes.entities();
     // The aligned objects, in the graph's order (CadAlign's).
     let (ids, options): (Vec<String>, Vec<Vec<Alignment>>) = order

@@ -2,7 +2,6 @@
 //! points, ranked against the database, aligned, checked together for physical plausibility, and
 //! written back into the graph's nodes.
 
-use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::{Affine3A, Mat4, Vec3};
@@ -20,7 +19,7 @@ use crate::cad::replace::sizing::pose_scale;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
-use crate::perception::fronts::{cut_to_front, perceive_front};
+use crate::perception::fronts::{fitted_to_front, perceive_front};
 use crate::perception::parts::opens_as_flap;
 
 /// Objects with fewer segment points than this keep their segment mesh: too little was seen to
@@ -104,10 +103,7 @@ pub fn observed_objects<'a>(
                 .and_then(|f| perceive_front(&bbox, f.direction, p, opens_as_flap(&n.class)));
             // An open door or drawer (or what stands in front) is no part of the closed object
             // the models are fitted as.
-            let (bbox, points) = match front.as_ref().and_then(|f| cut_to_front(&bbox, f, p)) {
-                Some((cut, kept)) => (cut, Cow::Owned(kept)),
-                None => (bbox, Cow::Borrowed(p.as_slice())),
-            };
+            let (bbox, points) = fitted_to_front(&bbox, front.as_ref(), p);
             Some(ObservedObject {
                 id: &n.id,
                 class: &n.class,
