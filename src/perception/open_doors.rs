@@ -144,13 +144,14 @@ impl OpenDoor {
 /// `face_right` (the box's face along the front), each a panel running out of the front at its
 /// angle through a hinge line within [`HINGE_SEARCH_M`] of that edge and of the front plane.
 pub fn open_doors(front: &Front, face_right: [f32; 2], points: &[Vec3]) -> Vec<OpenDoor> {
-    let standing: Vec<(Vec2, f32)> = points
+    // Seen from above: (right, out) of the points standing out of the front.
+    let standing: Vec<Vec2> = points
         .iter()
         .map(|p| {
             let l = front.local(*p);
-            (Vec2::new(l.x, l.z), p.z)
+            Vec2::new(l.x, l.z)
         })
-        .filter(|(l, _)| l.y >= MIN_OUT_M)
+        .filter(|l| l.y >= MIN_OUT_M)
         .collect();
     let max_width = face_right[1] - face_right[0] + WIDTH_SLACK_M;
     if standing.is_empty() || max_width < MIN_WIDTH_M {
@@ -168,8 +169,9 @@ pub fn open_doors(front: &Front, face_right: [f32; 2], points: &[Vec3]) -> Vec<O
         .collect()
 }
 
-/// A panel hypothesis: hinge side, hinge line and angle, the run of cells along it and how
-/// closely the points within its slab follow it.
+/// A panel hypothesis: hinge side, hinge line and angle, the run of cells along it, how
+/// closely the points within its slab follow it, and whether the run goes on past the widest
+/// door.
 #[derive(Clone, Copy, Debug)]
 struct Panel {
     hinge: Side,
@@ -177,13 +179,13 @@ struct Panel {
     angle: f32,
     width: f32,
     cells: usize,
-    on: f32,
+    closeness: f32,
     capped: bool,
 }
 
 /// The hinge line near `edge` and angle whose ray holds the longest run of `standing` points
-/// ((right, out), height), when that run makes a door.
-fn best_panel(standing: &[(Vec2, f32)], hinge: Side, edge: f32, max_width: f32) -> Option<Panel> {
+/// (right, out), when that run makes a door.
+fn best_panel(standing: &[Vec2], hinge: Side, edge: f32, max_width: f32) -> Option<Panel> {
     let inward = match hinge {
         Side::Left => 1.0,
         Side::Right => -1.0,
@@ -209,8 +211,8 @@ fn best_panel(standing: &[(Vec2, f32)], hinge: Side, edge: f32, max_width: f32) 
                 // How well the line runs through the points: each point within the slab
                 // counts the more the nearer it lies to the line (a handle standing beside the
                 // panel must not pull the line off it).
-                let mut on = 0.0;
-                for (l, _) in standing {
+                let mut closeness = 0.0;
+                for l in standing {
                     let d = *l - hinge_at;
                     let (a, n) = (d.dot(along), d.dot(normal));
                     if n.abs() <= PANEL_HALF_THICKNESS_M && a >= 0.0 {
@@ -219,11 +221,11 @@ fn best_panel(standing: &[(Vec2, f32)], hinge: Side, edge: f32, max_width: f32) 
                             occupied[cell] = true;
                         }
                         if cell < cell_count {
-                            on += 1.0 - (n / PANEL_HALF_THICKNESS_M).powi(2);
+                            closeness += 1.0 - (n / PANEL_HALF_THICKNESS_M).powi(2);
                         }
                     }
                 }
-                let Some((first, last, _)) = longest_run(&occupied) else {
+                let Some((first, last)) = longest_run(&occupied) else {
                     continue;
                 };
                 let capped = last >= cell_count;
@@ -245,9 +247,9 @@ fn best_panel(standing: &[(Vec2, f32)], hinge: Side, edge: f32, max_width: f32) 
                 let to_edge = (hinge_at - Vec2::new(edge, 0.0)).length();
                 let better = |p: &Panel| {
                     cells > p.cells
-                        || (cells == p.cells && on > p.on)
+                        || (cells == p.cells && closeness > p.closeness)
                         || (cells == p.cells
-                            && on == p.on
+                            && closeness == p.closeness
                             && to_edge < (p.hinge_at - Vec2::new(edge, 0.0)).length())
                 };
                 if best.as_ref().is_none_or(better) {
@@ -257,7 +259,7 @@ fn best_panel(standing: &[(Vec2, f32)], hinge: Side, edge: f32, max_width: f32) 
                         angle,
                         width,
                         cells,
-                        on,
+                        closeness,
                         capped,
                     });
                 }
@@ -267,9 +269,9 @@ fn best_panel(standing: &[(Vec2, f32)], hinge: Side, edge: f32, max_width: f32) 
     best
 }
 
-/// The longest run of occupied cells that skips at most [`MAX_GAP_CELLS`] empty ones at a time:
-/// its first and last cell and how many of its cells are occupied.
-fn longest_run(occupied: &[bool]) -> Option<(usize, usize, usize)> {
+/// The run of occupied cells that skips at most [`MAX_GAP_CELLS`] empty ones at a time holding
+/// the most occupied cells: its first and last cell.
+fn longest_run(occupied: &[bool]) -> Option<(usize, usize)> {
     let mut best: Option<(usize, usize, usize)> = None;
     let mut current: Option<(usize, usize, usize)> = None;
     let mut gap = 0;
@@ -293,17 +295,17 @@ fn longest_run(occupied: &[bool]) -> Option<(usize, usize, usize)> {
             best = Some(c);
         }
     }
-    best
+    best.map(|(first, last, _)| (first, last))
 }
 
-/// `panel` with its line fitted to the points in its slab (least squares across it), kept
-/// through the same run: the search's steps leave the far edge of a 60 cm door up to 3 cm off
-/// its line, out of the slab where handles are looked for.
-fn fit_panel(panel: Panel, standing: &[(Vec2, f32)]) -> Panel {
+/// `panel` with its line fitted to the points in its slab (their principal direction, through
+/// their mean): the search's 1 degree steps leave the far edge of a 60 cm door up to 3 cm off
+/// its line, and the hinge it found may lie a little in or out of the front.
+fn fit_panel(panel: Panel, standing: &[Vec2]) -> Panel {
     let (along, normal) = panel_frame(panel.hinge, panel.angle);
     let on: Vec<Vec2> = standing
         .iter()
-        .map(|(l, _)| *l)
+        .copied()
         .filter(|l| {
             let d = *l - panel.hinge_at;
             d.dot(normal).abs() <= PANEL_HALF_THICKNESS_M
