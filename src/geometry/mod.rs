@@ -9,6 +9,7 @@ pub mod min_area_rect;
 pub mod pinhole;
 pub mod plane;
 pub mod point_triangle;
+pub mod principal_axis;
 pub mod ransac;
 
 pub use gravity_box::GravityBox;

@@ -9,6 +9,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::geometry::clusters::cluster_roots;
+use crate::geometry::principal_axis::principal_axis;
 pub use crate::graph::parts::HandleKind;
 use crate::map::median;
 
@@ -117,17 +118,7 @@ pub fn find_handles(front: &Front, points: &[Vec3]) -> Vec<Handle> {
 fn handle_of(front: &Front, plane: f32, members: &[Vec3]) -> Option<Handle> {
     let across: Vec<Vec2> = members.iter().map(|p| front.local(*p).truncate()).collect();
     let n = across.len() as f32;
-    let mean = across.iter().copied().sum::<Vec2>() / n;
-    let (mut xx, mut xy, mut yy) = (0.0, 0.0, 0.0);
-    for q in &across {
-        let d = *q - mean;
-        xx += d.x * d.x;
-        xy += d.x * d.y;
-        yy += d.y * d.y;
-    }
-    // The major axis of the 2x2 covariance.
-    let angle = 0.5 * (2.0 * xy).atan2(xx - yy);
-    let major = Vec2::from_angle(angle);
+    let (mean, major) = principal_axis(&across)?;
     let minor = major.perp();
     let extent = |axis: Vec2| {
         let (lo, hi) = across.iter().fold((f32::MAX, f32::MIN), |(lo, hi), q| {

@@ -18,6 +18,7 @@
 use glam::{Vec2, Vec3};
 use serde::Serialize;
 
+use crate::geometry::principal_axis::principal_axis;
 use crate::graph::parts::{PartJointType, PartJson};
 use crate::perception::handles::{Front, Handle, find_handles};
 use crate::perception::parts::{Side, quantile_range};
@@ -315,17 +316,10 @@ fn fit_panel(panel: Panel, standing: &[Vec2]) -> Panel {
     if on.len() < 2 {
         return panel;
     }
-    let mean = on.iter().copied().sum::<Vec2>() / on.len() as f32;
-    let (mut xx, mut xy, mut yy) = (0.0, 0.0, 0.0);
-    for l in &on {
-        let d = *l - mean;
-        xx += d.x * d.x;
-        xy += d.x * d.y;
-        yy += d.y * d.y;
-    }
-    // The principal direction of the points, turned to run out of the front like the panel.
-    let theta = 0.5 * (2.0 * xy).atan2(xx - yy);
-    let mut direction = Vec2::new(theta.cos(), theta.sin());
+    let Some((mean, mut direction)) = principal_axis(&on) else {
+        return panel;
+    };
+    // Turned to run out of the front like the panel.
     if direction.dot(along) < 0.0 {
         direction = -direction;
     }
