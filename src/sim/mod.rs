@@ -6,6 +6,7 @@
 pub mod actions;
 pub mod arm_phases;
 pub mod graph_sync;
+pub mod motion_check;
 pub mod motion_path;
 pub mod navigation;
 pub mod pddl;

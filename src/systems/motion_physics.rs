@@ -1,145 +1,37 @@
-//! An action's motion simulated in rapier: the moving link (the robot's base with its gripper
-//! and what it holds, or a door or drawer with what stands on it) is a kinematic body driven
-//! along its path, step by step, among the rest test's bodies on the scene's own entities (a
+//! An action's motion simulated in rapier: the moving links are kinematic bodies driven along
+//! their paths, step by step, among the rest test's bodies on the scene's own entities (a
 //! `RapierSession`, which leaves them where they were: the check comes before the action is
-//! made), and the objects near its path are free to be pushed, tipped or knocked down. A motion
+//! made), and the objects near the paths are free to be pushed, tipped or knocked down. A motion
 //! that starts from a state the scene is not in yet runs in a scratch world of the tree. The
 //! grid search and the joint sweeps plan motions that touch nothing; this is the check that the
 //! physics agrees, and it catches what they cannot see (a chair nudged by the base's corner falls
-//! against the table). Which objects are near a motion: `kinematics::motion_bounds`.
+//! against the table). Which bodies take part and the verdicts: `sim::motion_check`.
 
 use std::time::Instant;
 
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use glam::Affine3A;
-use serde::Serialize;
 
 use crate::arm::reach::ArmRig;
-use crate::kinematics::contact_pieces::contact_pieces;
-use crate::kinematics::joint_sweep::world_bounds;
-use crate::kinematics::motion_bounds::{
-    EMPTY_BOX, body_bounds, link_bounds, overlaps, swept_bounds,
-};
-use crate::kinematics::rest_test::{
-    MAX_START_PENETRATION_M, REST_STEP_S, rest_bodies, start_penetrations,
-};
+use crate::kinematics::motion_bounds::EMPTY_BOX;
+use crate::kinematics::rest_test::REST_STEP_S;
 use crate::kinematics::tree::KinematicTree;
+use crate::sim::motion_check::{
+    AFTERMATH_S, ArmDepth, MotionBodies, MotionCheck, Movers, knocked, robot_link,
+};
 use crate::sim::motion_path::LinkMotion;
-use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK};
-use crate::systems::arm_bodies::{arm_colliders, arm_entities, arm_swept_bounds};
-use crate::systems::physics_validation::{BodyMaking, attach_bodies, scratch_world};
+use crate::systems::arm_bodies::{ArmBody, arm_colliders, arm_entities, arm_swept_bounds};
+use crate::systems::physics_validation::{BodyMaking, attach_bodies, convex_pieces, scratch_world};
 use crate::systems::rapier_session::RapierSession;
-
-/// An object moved farther than this (metres) or turned more than `KNOCK_TURN_DEG` was knocked.
-pub const KNOCK_DISTANCE_M: f32 = 0.01;
-pub const KNOCK_TURN_DEG: f32 = 5.0;
-/// After the motion the world runs on this long (seconds), so what was knocked has fallen.
-const AFTERMATH_S: f32 = 0.5;
-/// Objects within this distance (metres) of where the moving links pass are simulated, with
-/// what stands on them; the others hold still.
-const NEAR_M: f32 = 0.05;
 
 /// The moving links' collision group, and that of the rest of their own object (a door turns
 /// about hinges flush with its cabinet: the joint, not contact, holds them together).
 const MOVER_GROUP: Group = Group::GROUP_2;
 const OWNER_GROUP: Group = Group::GROUP_3;
 
-/// The arm going deeper than this (metres) into the scene refuses the motion.
-pub const MAX_ARM_DEPTH_M: f32 = 0.005;
-
 /// The arm's links' collision group: they touch everything but each other.
 const ARM_GROUP: Group = Group::GROUP_4;
-
-/// An object the motion moved.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Knocked {
-    pub object: String,
-    pub moved_m: f32,
-    pub turned_deg: f32,
-}
-
-/// How deep the arm went into the scene along a motion: rapier's deepest contact between one
-/// of its links and a link of the scene (the robot's own and what moves with the hand left out).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ArmDepth {
-    /// Metres; 0 when nothing of the arm came within rapier's contact distance.
-    pub depth_m: f32,
-    /// The arm's link and the scene's link of that contact.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub arm_link: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub into: Option<String>,
-}
-
-/// What one motion did to the objects around it.
-#[derive(Clone, Debug, Serialize)]
-pub struct MotionCheck {
-    /// The moving link (or the arm motion's phase).
-    pub link: String,
-    /// Simulated seconds: the motion and its aftermath.
-    pub simulated_s: f32,
-    /// The objects near its path, simulated as it passed.
-    pub near: Vec<String>,
-    /// Those it moved more than 1 cm or turned more than 5 degrees.
-    pub knocked: Vec<Knocked>,
-    /// For an arm's motion, how deep it went into the scene.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub arm_depth: Option<ArmDepth>,
-    /// Objects near the path that the last rest test found falling on their own: held still
-    /// here and not judged (their fall is not the motion's doing; the rest test reports it).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub falls_at_rest: Vec<String>,
-    pub wall_ms: f64,
-}
-
-/// What moves in one check: links of the tree driven along world poses (each with what hangs
-/// from it), and the arm's links, all at the same instants `REST_STEP_S` apart.
-pub struct Movers<'a> {
-    /// The motion in words, for the check's record.
-    pub name: String,
-    pub links: &'a [(usize, Vec<Affine3A>)],
-    /// Moving links whose own collision pieces take no part (the gripper's stand-in hand).
-    pub hidden: &'a [usize],
-    /// Links whose bodies are simulated with their hollows (what the hand goes into).
-    pub hollow: &'a [usize],
-    /// Links whose bodies hold still, the arm's contacts with them measured (what the hand
-    /// comes to take: it must not go into it).
-    pub still: &'a [usize],
-    /// Links whose bodies the moving links (not the arm) are set down on or lifted from: the
-    /// held object touching its new or old support is the set-down or the lift, not a knock
-    /// (pressing a kinematic body onto a free one that stands on the floor throws it about in
-    /// rapier, where MuJoCo's replay of the same motion finds 0.1 mm).
-    pub set_on: &'a [usize],
-    /// Links of objects the last rest test found falling on their own (`FallsAtRest`): held
-    /// still, as `still`, so that a fall that happens without the motion is not blamed on it.
-    pub falling: &'a [usize],
-    /// The arm and its links' world poses at each instant (`arm.1[k][l]`).
-    pub arm: Option<(&'a ArmRig, &'a [Vec<Affine3A>])>,
-}
-
-impl<'a> Movers<'a> {
-    /// Nothing moving yet, named `name`: the base the other fields are set on.
-    pub fn named(name: impl Into<String>) -> Self {
-        Self {
-            name: name.into(),
-            links: &[],
-            hidden: &[],
-            hollow: &[],
-            still: &[],
-            set_on: &[],
-            falling: &[],
-            arm: None,
-        }
-    }
-
-    fn instants(&self) -> usize {
-        self.arm
-            .map(|(_, poses)| poses.len())
-            .or(self.links.first().map(|(_, poses)| poses.len()))
-            .unwrap_or(0)
-    }
-}
 
 /// Drives `motion.link` (with everything under it in `tree`) along `motion` in rapier, the
 /// objects near its path free, and reports what it moved, in a scratch world of `tree`'s links:
@@ -179,117 +71,120 @@ pub fn simulate_movers_on(
     movers: &Movers,
 ) -> MotionCheck {
     let started = Instant::now();
-    let n = tree.links.len();
-    let moving: Vec<bool> = (0..n)
-        .map(|i| movers.links.iter().any(|(l, _)| tree.descends_from(i, *l)))
-        .collect();
-    let mut bodies = rest_bodies(tree);
-    // The dynamic bodies a moving link belongs to without moving themselves (a door's cabinet),
-    // and what the hand sets its object on: they do not collide with the moving links.
-    let owners: Vec<usize> = (0..bodies.len())
-        .filter(|&b| {
-            bodies[b].dynamic
-                && !moving[bodies[b].links[0]]
-                && (movers
-                    .links
-                    .iter()
-                    .any(|(l, _)| bodies[b].links.contains(l))
-                    || movers.set_on.iter().any(|l| bodies[b].links.contains(l)))
-        })
-        .collect();
-    // The robot's own links take no part in an arm's motion: its base is no obstacle to its arm,
-    // and the gripper link stands for the stowed hand, which is the arm's own hand now.
-    let robot = |l: usize| [ROBOT_LINK, GRIPPER_LINK].contains(&tree.links[l].name.as_str());
-    let left_out = |l: usize| moving[l] || (movers.arm.is_some() && robot(l));
-    for body in &mut bodies {
-        body.links.retain(|&l| !left_out(l));
-    }
-    let poses = tree.world_from_links();
     let arm_bodies = movers
         .arm
         .map(|(rig, _)| arm_colliders(rig))
         .unwrap_or_default();
-    // Each driven link's subtree, its hidden links left out: what its body carries.
-    let carried: Vec<Vec<bool>> = movers
-        .links
-        .iter()
-        .map(|(l, _)| {
-            (0..n)
-                .map(|i| tree.descends_from(i, *l) && !movers.hidden.contains(&i))
-                .collect()
-        })
-        .collect();
     let arm_swept = movers
         .arm
         .map_or(EMPTY_BOX, |(_, path)| arm_swept_bounds(&arm_bodies, path));
-    let swept = movers
-        .links
+    let taking_part = MotionBodies::new(tree, movers, arm_swept);
+    let mut session = RapierSession::begin(world);
+    let on_world = OnWorld { tree, entities };
+    let (starts, on) = attach_scene(&mut session, world, &on_world, movers, &taking_part);
+    let driven = attach_driven(&mut session, world, &on_world, movers, &taking_part);
+    let (arm_entities, spawned) = arm_entities(world, &arm_bodies);
+    let arm = movers.arm.map(|(rig, path)| {
+        attach_arm(&mut session, world, &arm_bodies, &arm_entities, path);
+        ArmInWorld {
+            rig,
+            path,
+            bodies: &arm_bodies,
+            entities: &arm_entities,
+        }
+    });
+    let depth = drive(
+        &mut session,
+        world,
+        &on_world,
+        &driven,
+        arm.as_ref(),
+        movers.instants(),
+    );
+    let aftermath = (AFTERMATH_S / REST_STEP_S).round() as usize;
+    for _ in 0..aftermath {
+        session.step(world);
+    }
+    let mut knocked: Vec<_> = on
         .iter()
-        .zip(&carried)
-        .map(|((l, path), under)| swept_bounds(tree, under, &poses, *l, path))
-        .fold(arm_swept, |(a, b), (lo, hi)| (a.min(lo), b.max(hi)));
-    let mut body_of = vec![0; n];
-    for (b, body) in bodies.iter().enumerate() {
-        for &l in &body.links {
-            body_of[l] = b;
+        .enumerate()
+        .filter(|(b, _)| !taking_part.frozen[*b])
+        .filter_map(|(b, entity)| {
+            let end = session.pose(world, (*entity)?)?;
+            knocked(&taking_part.bodies[b].name, starts[b], end)
+        })
+        .collect();
+    session.end(world);
+    if spawned {
+        for entity in arm_entities {
+            world.despawn(entity);
         }
     }
-    // Near the path, or standing on something that is (bodies come after their supports).
-    let mut near = vec![false; bodies.len()];
-    for (b, body) in bodies.iter().enumerate() {
-        let Some(&first) = body.links.first() else {
-            continue;
-        };
-        let on_near = tree.links[first]
-            .parent
-            .is_some_and(|p| !moving[p] && near[body_of[p]]);
-        near[b] = body.dynamic
-            && (on_near
-                || body_bounds(tree, &body.links, &poses)
-                    .is_some_and(|(lo, hi)| overlaps((lo, hi), swept, NEAR_M)));
+    knocked.sort_by(|a, b| a.object.cmp(&b.object));
+    let MotionBodies { near, falling, .. } = &taking_part;
+    MotionCheck {
+        link: movers.name.clone(),
+        simulated_s: (movers.instants().saturating_sub(1) + aftermath) as f32 * REST_STEP_S,
+        near: taking_part.names(|b| near[b]),
+        knocked,
+        arm_depth: movers.arm.is_some().then_some(depth),
+        falls_at_rest: taking_part.names(|b| near[b] && falling[b]),
+        wall_ms: started.elapsed().as_secs_f64() * 1e3,
     }
-    let penetrations = start_penetrations(tree, &bodies);
-    let falling = |b: usize| bodies[b].links.iter().any(|l| movers.falling.contains(l));
-    let held_still =
-        |b: usize| falling(b) || bodies[b].links.iter().any(|l| movers.still.contains(l));
-    let frozen: Vec<bool> = (0..bodies.len())
-        .map(|b| !near[b] || penetrations[b].0 > MAX_START_PENETRATION_M || held_still(b))
-        .collect();
+}
 
-    let mut session = RapierSession::begin(world);
+/// The tree a check simulates and the entity of each of its links (`entities[l]`).
+struct OnWorld<'a> {
+    tree: &'a KinematicTree,
+    entities: &'a [Entity],
+}
+
+/// The arm of a check: its rig, its links' poses at each instant, their bodies and entities.
+struct ArmInWorld<'a> {
+    rig: &'a ArmRig,
+    path: &'a [Vec<Affine3A>],
+    bodies: &'a [ArmBody],
+    entities: &'a [Entity],
+}
+
+/// The rest test's bodies that take part, as `taking_part` says (owners kept off the driven
+/// links); each body's start pose and the entity of each dynamic one.
+fn attach_scene(
+    session: &mut RapierSession,
+    world: &mut World,
+    on_world: &OnWorld,
+    movers: &Movers,
+    taking_part: &MotionBodies,
+) -> (Vec<Affine3A>, Vec<Option<Entity>>) {
     let owner_groups = |b: usize| {
-        owners
+        taking_part
+            .owners
             .contains(&b)
             .then(|| CollisionGroups::new(OWNER_GROUP, Group::ALL ^ MOVER_GROUP))
     };
-    // The fixed scene the arm comes near: its contacts with the arm are what the depth is
-    // measured on (the rest cannot be touched, and computing its contacts every step cost more
-    // than the whole check).
-    let touchable: Vec<usize> = match movers.arm {
-        Some(_) => bodies[0]
-            .links
-            .iter()
-            .copied()
-            .filter(|&l| {
-                link_bounds(tree, l).is_some_and(|(lo, hi)| {
-                    overlaps(world_bounds(&poses[l], lo, hi), arm_swept, NEAR_M)
-                })
-            })
-            .chain(movers.still.iter().copied())
-            .chain(movers.falling.iter().copied())
-            .collect(),
-        None => Vec::new(),
-    };
     let making = BodyMaking {
-        frozen: &frozen,
+        frozen: &taking_part.frozen,
         groups: &owner_groups,
         hollow: movers.hollow,
-        touchable: &touchable,
+        touchable: &taking_part.touchable,
     };
-    let (starts, on) = attach_bodies(&mut session, world, tree, entities, &bodies, &making);
-    let mut driven: Vec<(Entity, &[Affine3A])> = Vec::new();
-    for ((l, path), under) in movers.links.iter().zip(&carried) {
-        if let Some(collider) = mover_collider(tree, under, &poses, path[0]) {
+    let OnWorld { tree, entities } = *on_world;
+    attach_bodies(session, world, tree, entities, &taking_part.bodies, &making)
+}
+
+/// Each driven link as a kinematic body carrying its subtree, at its path's start; the driven
+/// entities with their paths.
+fn attach_driven<'m>(
+    session: &mut RapierSession,
+    world: &mut World,
+    on_world: &OnWorld,
+    movers: &'m Movers,
+    taking_part: &MotionBodies,
+) -> Vec<(Entity, &'m [Affine3A])> {
+    let OnWorld { tree, entities } = *on_world;
+    let mut driven = Vec::new();
+    for ((l, path), under) in movers.links.iter().zip(&taking_part.carried) {
+        if let Some(collider) = mover_collider(tree, under, &taking_part.poses, path[0]) {
             session.attach(
                 world,
                 entities[*l],
@@ -300,110 +195,85 @@ pub fn simulate_movers_on(
                     CollisionGroups::new(MOVER_GROUP, Group::ALL ^ OWNER_GROUP),
                 ),
             );
-            driven.push((entities[*l], path));
+            driven.push((entities[*l], &path[..]));
         }
     }
-    let (arm_entities, spawned) = arm_entities(world, &arm_bodies);
-    if let Some((_, path)) = movers.arm {
-        for (body, &entity) in arm_bodies.iter().zip(&arm_entities) {
-            session.attach(
-                world,
-                entity,
-                path[0][body.link],
-                (
-                    RigidBody::KinematicPositionBased,
-                    body.collider.clone(),
-                    CollisionGroups::new(ARM_GROUP, Group::ALL ^ ARM_GROUP),
-                ),
-            );
-        }
+    driven
+}
+
+/// The arm's links as kinematic bodies at the path's start.
+fn attach_arm(
+    session: &mut RapierSession,
+    world: &mut World,
+    bodies: &[ArmBody],
+    entities: &[Entity],
+    path: &[Vec<Affine3A>],
+) {
+    for (body, &entity) in bodies.iter().zip(entities) {
+        session.attach(
+            world,
+            entity,
+            path[0][body.link],
+            (
+                RigidBody::KinematicPositionBased,
+                body.collider.clone(),
+                CollisionGroups::new(ARM_GROUP, Group::ALL ^ ARM_GROUP),
+            ),
+        );
     }
+}
+
+/// Steps the session through the motion's `instants`, the driven links and the arm at their
+/// poses of each; how deep the arm went into the scene.
+fn drive(
+    session: &mut RapierSession,
+    world: &mut World,
+    on_world: &OnWorld,
+    driven: &[(Entity, &[Affine3A])],
+    arm: Option<&ArmInWorld>,
+    instants: usize,
+) -> ArmDepth {
+    let OnWorld { tree, entities } = *on_world;
     // What the arm may touch without it counting: what the robot holds (it moves with the hand,
     // or stays in the stowed one).
-    let not_scene: Vec<Entity> = (0..n)
-        .filter(|&l| tree.links[l].parent.is_some_and(robot))
+    let not_scene: Vec<Entity> = (0..tree.links.len())
+        .filter(|&l| tree.links[l].parent.is_some_and(|p| robot_link(tree, p)))
         .map(|l| entities[l])
         .collect();
-    let mut depth = ArmDepth {
-        depth_m: 0.0,
-        arm_link: None,
-        into: None,
-    };
-    let instants = movers.instants();
+    let mut depth = ArmDepth::default();
     for k in 1..instants {
-        for (entity, path) in &driven {
+        for (entity, path) in driven {
             session.drive(world, *entity, path[k]);
         }
-        let Some((rig, path)) = movers.arm else {
+        let Some(arm) = arm else {
             session.step(world);
             continue;
         };
-        for (body, &entity) in arm_bodies.iter().zip(&arm_entities) {
-            session.drive(world, entity, path[k][body.link]);
+        for (body, &entity) in arm.bodies.iter().zip(arm.entities) {
+            session.drive(world, entity, arm.path[k][body.link]);
         }
         session.step(world);
-        for (arm, other, least) in session.contacts(world, &arm_entities) {
+        for (link, other, least) in session.contacts(world, arm.entities) {
             if -least <= depth.depth_m || not_scene.contains(&other) {
                 continue;
             }
-            let name_of = |e: Entity, of: &[Entity], names: &dyn Fn(usize) -> String| {
-                of.iter().position(|&o| o == e).map(names)
-            };
+            let arm_link = arm
+                .entities
+                .iter()
+                .position(|&e| e == link)
+                .map(|b| arm.rig.arm.links[arm.bodies[b].link].name.clone());
+            let into = entities
+                .iter()
+                .position(|&e| e == other)
+                .map(|l| tree.links[l].name.clone());
             depth = ArmDepth {
                 depth_m: -least,
-                arm_link: name_of(arm, &arm_entities, &|b| {
-                    rig.arm.links[arm_bodies[b].link].name.clone()
-                }),
-                into: name_of(other, entities, &|l| tree.links[l].name.clone()),
+                arm_link,
+                into,
             };
         }
     }
-    let aftermath = (AFTERMATH_S / REST_STEP_S).round() as usize;
-    for _ in 0..aftermath {
-        session.step(world);
-    }
-    let mut knocked = Vec::new();
-    for (b, entity) in on.iter().enumerate() {
-        let Some(end) = entity
-            .filter(|_| !frozen[b])
-            .and_then(|e| session.pose(world, e))
-        else {
-            continue;
-        };
-        let moved_m = end.translation.distance(starts[b].translation);
-        let turned_deg = glam::Quat::from_mat3a(&end.matrix3)
-            .angle_between(glam::Quat::from_mat3a(&starts[b].matrix3))
-            .to_degrees();
-        if moved_m > KNOCK_DISTANCE_M || turned_deg > KNOCK_TURN_DEG {
-            knocked.push(Knocked {
-                object: bodies[b].name.clone(),
-                moved_m,
-                turned_deg,
-            });
-        }
-    }
-    session.end(world);
-    if spawned {
-        for entity in arm_entities {
-            world.despawn(entity);
-        }
-    }
-    knocked.sort_by(|a, b| a.object.cmp(&b.object));
-    MotionCheck {
-        link: movers.name.clone(),
-        simulated_s: (instants.saturating_sub(1) + aftermath) as f32 * REST_STEP_S,
-        near: (0..bodies.len())
-            .filter(|&b| near[b])
-            .map(|b| bodies[b].name.clone())
-            .collect(),
-        knocked,
-        arm_depth: movers.arm.is_some().then_some(depth),
-        falls_at_rest: (0..bodies.len())
-            .filter(|&b| near[b] && falling(b))
-            .map(|b| bodies[b].name.clone())
-            .collect(),
-        wall_ms: started.elapsed().as_secs_f64() * 1e3,
-    }
+    depth
 }
 
 /// The moving links' convex collision pieces as one compound, in the frame of the moving link
@@ -420,15 +290,7 @@ fn mover_collider(
         let (true, Some(g)) = (moving[l], link.geometry.as_ref()) else {
             continue;
         };
-        let (_, rotation, translation) =
-            (mover_from_world * poses[l]).to_scale_rotation_translation();
-        pieces.extend(
-            g.hulls
-                .iter()
-                .flat_map(|piece| contact_pieces(&piece.positions))
-                .filter_map(|points| Collider::convex_hull(&points))
-                .map(|c| (translation, rotation.normalize(), c)),
-        );
+        pieces.extend(convex_pieces(&g.hulls, mover_from_world * poses[l]));
     }
     (!pieces.is_empty()).then(|| Collider::compound(pieces))
 }

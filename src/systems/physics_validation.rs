@@ -11,6 +11,7 @@ use glam::Affine3A;
 use serde::Serialize;
 
 use crate::error::IsceneError;
+use crate::geometry::TriMesh;
 use crate::kinematics::contact_pieces::contact_pieces;
 use crate::kinematics::joint_sweep::{JointSweep, sweep_joints};
 use crate::kinematics::rest_test::{
@@ -54,6 +55,21 @@ pub(crate) struct BodyMaking<'a> {
     pub touchable: &'a [usize],
 }
 
+/// The contact pieces of `shape` (a link's hulls or its collision pieces) as convex colliders,
+/// each placed in a compound's frame by `compound_from_link`.
+pub(crate) fn convex_pieces(
+    shape: &[TriMesh],
+    compound_from_link: Affine3A,
+) -> impl Iterator<Item = (Vec3, Quat, Collider)> + '_ {
+    let (_, rotation, translation) = compound_from_link.to_scale_rotation_translation();
+    let rotation = rotation.normalize();
+    shape
+        .iter()
+        .flat_map(|piece| contact_pieces(&piece.positions))
+        .filter_map(|points| Collider::convex_hull(&points))
+        .map(move |c| (translation, rotation, c))
+}
+
 /// The collider of a dynamic body: a compound of the convex pieces of all its links (their
 /// hulls, or with `hollow` their collision pieces), with the links' own mass properties summed
 /// in the body's frame.
@@ -73,13 +89,7 @@ pub(crate) fn dynamic_collider(
         let (_, rotation, translation) = body_from_link.to_scale_rotation_translation();
         let rotation = rotation.normalize();
         let shape = if hollow { &g.collision } else { &g.hulls };
-        pieces.extend(
-            shape
-                .iter()
-                .flat_map(|piece| contact_pieces(&piece.positions))
-                .filter_map(|points| Collider::convex_hull(&points))
-                .map(|c| (translation, rotation, c)),
-        );
+        pieces.extend(convex_pieces(shape, *body_from_link));
         let link_mass = ParryMassProperties::with_inertia_matrix(
             g.inertial.center_of_mass,
             g.inertial.mass,

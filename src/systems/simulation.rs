@@ -20,12 +20,13 @@ use crate::kinematics::rest_test::{ObjectVerdict, REST_STEP_S, Verdict};
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, Change, attempt_then, robot_in_tree};
 use crate::sim::arm_phases::arm_phases;
+use crate::sim::motion_check::{MotionCheck, Movers};
 use crate::sim::motion_path::{LinkMotion, apply_motion, link_motion};
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::systems::kinematic_tree::{
     ReadTreeError, read_kinematic_tree, read_kinematic_tree_entities,
 };
-use crate::systems::motion_physics::{MAX_ARM_DEPTH_M, MotionCheck, Movers, simulate_movers_on};
+use crate::systems::motion_physics::simulate_movers_on;
 use crate::systems::physics_validation::{PhysicsReport, scene_rest_physics, scratch_world};
 use crate::systems::scene_graph::{SceneRoot, transform_of};
 
@@ -230,7 +231,7 @@ pub fn perform(world: &mut World, action: &Action, then: &[Action]) -> StepRecor
             let changes = attempt_then(&tree, &spec, arm.as_deref(), action, then)
                 .map_err(|e| e.to_string())?;
             motion = simulate_motions(world, &tree, &entities, &changes, arm.as_deref());
-            if let Some(why) = motion.iter().find_map(refusal) {
+            if let Some(why) = motion.iter().find_map(MotionCheck::refusal) {
                 return Err(why);
             }
             Ok(changes)
@@ -321,7 +322,7 @@ fn simulate_motions(
                 };
                 let check =
                     check_movers(world, &phase.tree, entities, &movers, as_the_scene_stands);
-                let refused = refusal(&check).is_some();
+                let refused = check.refusal().is_some();
                 checks.push(check);
                 if refused {
                     break;
@@ -350,7 +351,7 @@ fn simulate_motions(
                     check_movers(world, &tree, entities, &movers, as_the_scene_stands)
                 }
             };
-            let refused = refusal(&check).is_some();
+            let refused = check.refusal().is_some();
             checks.push(check);
             if refused {
                 break;
@@ -413,44 +414,6 @@ fn check_drive_with_arm(
         ..Movers::named(ROBOT_LINK)
     };
     check_movers(world, tree, entities, &movers, on_world)
-}
-
-/// Why a motion refuses its action, if it does: it knocked something, or took the arm more than
-/// [`MAX_ARM_DEPTH_M`] into the scene.
-fn refusal(check: &MotionCheck) -> Option<String> {
-    if let Some(depth) = check
-        .arm_depth
-        .as_ref()
-        .filter(|d| d.depth_m > MAX_ARM_DEPTH_M)
-    {
-        return Some(format!(
-            "moving {} would take {} {:.1} mm into {} (simulated in rapier)",
-            check.link,
-            depth.arm_link.as_deref().unwrap_or("the arm"),
-            1000.0 * depth.depth_m,
-            depth.into.as_deref().unwrap_or("the scene"),
-        ));
-    }
-    if check.knocked.is_empty() {
-        return None;
-    }
-    let what = check
-        .knocked
-        .iter()
-        .map(|k| {
-            format!(
-                "{} ({:.1} cm, {:.0} degrees)",
-                k.object,
-                100.0 * k.moved_m,
-                k.turned_deg
-            )
-        })
-        .collect::<Vec<_>>()
-        .join(", ");
-    Some(format!(
-        "moving {} would knock {what} (simulated in rapier)",
-        check.link
-    ))
 }
 
 fn robot_spec(world: &mut World) -> Option<RobotSpec> {
