@@ -208,6 +208,41 @@ impl ArmPath {
     }
 }
 
+/// Why the arm cannot make a motion; the message is what a task's trace says was tried. A
+/// `String` inside says what the arm touches, in words ([`describe`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ReachError {
+    #[error("the target is out of the arm's reach")]
+    OutOfReach,
+    #[error("the arm reaches the target only touching something ({0})")]
+    ReachesOnlyTouching(String),
+    #[error("the straight approach is blocked or out of reach {before_cm:.0} cm before the target")]
+    ApproachBlocked { before_cm: f32 },
+    #[error("at the start of the approach {0}")]
+    ApproachStartTouches(String),
+    #[error("the arm's configuration before the motion is not clear: {0}")]
+    StartNotClear(String),
+    #[error("no path to the approach: {0}")]
+    NoPathToApproach(PlanError),
+    #[error("no way back")]
+    NoWayBack,
+    #[error(
+        "the hand's first way back is blocked or out of reach after {after_cm:.0} of {of_cm:.0} cm"
+    )]
+    FirstWayBackBlocked { after_cm: f32, of_cm: f32 },
+    #[error(
+        "the straight way back (up, or out of a container) is blocked or out of reach \
+         after {after_cm:.0} of {of_cm:.0} cm"
+    )]
+    WayBackBlocked { after_cm: f32, of_cm: f32 },
+    #[error("after the lift {0}")]
+    AfterLiftTouches(String),
+    #[error("the stowed arm would touch something: {0}")]
+    StowedTouches(String),
+    #[error("no path back to the stowed arm: {0}")]
+    NoPathToStow(PlanError),
+}
+
 /// Where a configuration touches something, in words.
 pub fn describe(rig: &ArmRig, obstacles: &Obstacles, touch: &(usize, Touching)) -> String {
     let link = &rig.arm.links[touch.0].name;
@@ -247,7 +282,7 @@ pub fn reach(
     transit: &Obstacles,
     near: &Obstacles,
     held: &Held,
-) -> Result<ArmPath, String> {
+) -> Result<ArmPath, ReachError> {
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     let q_target = solve(&rig.arm, world_from_root, target, from, &rig.ik, &free_near)
         .ok_or_else(|| why_no_ik(rig, world_from_root, target, from, near, held))?;
@@ -309,16 +344,13 @@ pub fn reach_configuration(
     transit: &Obstacles,
     near: &Obstacles,
     held: &Held,
-) -> Result<ArmPath, String> {
+) -> Result<ArmPath, ReachError> {
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     // The straight stretch, solved backwards from the target so it ends exactly there.
     let back = -approach * stretch;
     let mut line = straight_line(rig, world_from_root, q_target, target, back, &free_near)
-        .map_err(|at| {
-            format!(
-                "the straight approach is blocked or out of reach {:.0} cm before the target",
-                100.0 * at * stretch
-            )
+        .map_err(|at| ReachError::ApproachBlocked {
+            before_cm: 100.0 * at * stretch,
         })?;
     line.reverse();
     let start = line[0].clone();
@@ -331,7 +363,7 @@ pub fn reach_configuration(
         &start,
         TRANSIT_MARGIN_M,
     ) {
-        return Err(format!("at the start of the approach {why}"));
+        return Err(ReachError::ApproachStartTouches(why));
     }
     let path = plan(
         from,
@@ -341,12 +373,11 @@ pub fn reach_configuration(
         &rig.plan,
     )
     .map_err(|e| match e {
-        PlanError::StartInCollision => format!(
-            "the arm's configuration before the motion is not clear: {}",
+        PlanError::StartInCollision => ReachError::StartNotClear(
             touching(rig, world_from_root, transit, held, from, TRANSIT_MARGIN_M)
-                .unwrap_or_default()
+                .unwrap_or_default(),
         ),
-        other => format!("no path to the approach: {other}"),
+        other => ReachError::NoPathToApproach(other),
     })?;
     let mut configurations = densify(&path, rig.plan.resolution);
     configurations.extend(line.into_iter().skip(1));
@@ -471,12 +502,11 @@ fn why_no_ik(
     from: &[f32],
     near: &Obstacles,
     held: &Held,
-) -> String {
+) -> ReachError {
     match solve(&rig.arm, world_from_root, target, from, &rig.ik, &|_| true) {
-        None => "the target is out of the arm's reach".to_string(),
-        Some(q) => format!(
-            "the arm reaches the target only touching something ({})",
-            touching(rig, world_from_root, near, held, &q, STRETCH_MARGIN_M).unwrap_or_default()
+        None => ReachError::OutOfReach,
+        Some(q) => ReachError::ReachesOnlyTouching(
+            touching(rig, world_from_root, near, held, &q, STRETCH_MARGIN_M).unwrap_or_default(),
         ),
     }
 }
@@ -494,7 +524,7 @@ pub fn retreat(
     transit: &Obstacles,
     near: &Obstacles,
     held: &Held,
-) -> Result<ArmPath, String> {
+) -> Result<ArmPath, ReachError> {
     retreat_through(rig, world_from_root, from, &[away], transit, near, held)
 }
 
@@ -508,20 +538,17 @@ pub fn retreat_through(
     transit: &Obstacles,
     near: &Obstacles,
     held: &Held,
-) -> Result<ArmPath, String> {
+) -> Result<ArmPath, ReachError> {
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
-    let (last, rest) = aways.split_last().ok_or("no way back")?;
+    let (last, rest) = aways.split_last().ok_or(ReachError::NoWayBack)?;
     let mut start = from.to_vec();
     let mut lines = Vec::new();
     for away in rest {
         let tool = rig.arm.tool_pose(world_from_root, &start);
         let line = straight_line(rig, world_from_root, &start, &tool, *away, &free_near).map_err(
-            |at| {
-                format!(
-                    "the hand's first way back is blocked or out of reach after {:.0} of {:.0} cm",
-                    100.0 * away.length() * at,
-                    100.0 * away.length()
-                )
+            |at| ReachError::FirstWayBackBlocked {
+                after_cm: 100.0 * away.length() * at,
+                of_cm: 100.0 * away.length(),
             },
         )?;
         start = line.last().expect("not empty").clone();
@@ -553,15 +580,13 @@ pub fn retreat_along(
     free_line: &dyn Fn(&[f32]) -> bool,
     transit: &Obstacles,
     held: &Held,
-) -> Result<ArmPath, String> {
+) -> Result<ArmPath, ReachError> {
     let tool = rig.arm.tool_pose(world_from_root, from);
     let line = straight_line(rig, world_from_root, from, &tool, away, free_line).map_err(|at| {
-        format!(
-            "the straight way back (up, or out of a container) is blocked or out of reach \
-                 after {:.0} of {:.0} cm",
-            100.0 * away.length() * at,
-            100.0 * away.length()
-        )
+        ReachError::WayBackBlocked {
+            after_cm: 100.0 * away.length() * at,
+            of_cm: 100.0 * away.length(),
+        }
     })?;
     let top = line.last().expect("not empty").clone();
     let free_transit = clear_of(rig, world_from_root, transit, held, TRANSIT_MARGIN_M);
@@ -573,24 +598,22 @@ pub fn retreat_along(
         &rig.plan,
     )
     .map_err(|e| match e {
-        PlanError::StartInCollision => format!(
-            "after the lift {}",
+        PlanError::StartInCollision => ReachError::AfterLiftTouches(
             touching(rig, world_from_root, transit, held, &top, TRANSIT_MARGIN_M)
-                .unwrap_or_default()
+                .unwrap_or_default(),
         ),
-        PlanError::GoalInCollision => format!(
-            "the stowed arm would touch something: {}",
+        PlanError::GoalInCollision => ReachError::StowedTouches(
             touching(
                 rig,
                 world_from_root,
                 transit,
                 held,
                 &rig.stow,
-                TRANSIT_MARGIN_M
+                TRANSIT_MARGIN_M,
             )
-            .unwrap_or_default()
+            .unwrap_or_default(),
         ),
-        other => format!("no path back to the stowed arm: {other}"),
+        other => ReachError::NoPathToStow(other),
     })?;
     let mut configurations = line;
     configurations.extend(densify(&path, rig.plan.resolution).into_iter().skip(1));

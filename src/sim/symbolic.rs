@@ -155,14 +155,31 @@ pub fn symbolic_scene(view: &SceneView, robot_at: &str, holding: Option<&str>) -
     s
 }
 
+/// A goal of a task that is not one the planner reads.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GoalError {
+    #[error("goal {goal:?}: {id} is not a {role} of the scene")]
+    Unknown {
+        goal: String,
+        id: String,
+        role: &'static str,
+    },
+    #[error("goal {0:?} is not one of: A on B, A in B, A open, A closed, holding A, robot at P")]
+    NotAGoal(String),
+}
+
 /// Parses one goal: `A on B`, `A in B`, `A open`, `A closed`, `holding A`, `robot at P`.
-pub fn parse_goal(text: &str, scene: &SymbolicScene) -> Result<Fact, String> {
+pub fn parse_goal(text: &str, scene: &SymbolicScene) -> Result<Fact, GoalError> {
     let words: Vec<&str> = text.split_whitespace().collect();
-    let known = |id: &str, among: &[String], role: &str| {
+    let known = |id: &str, among: &[String], role: &'static str| {
         if among.iter().any(|x| x == id) {
             Ok(id.to_string())
         } else {
-            Err(format!("goal {text:?}: {id} is not a {role} of the scene"))
+            Err(GoalError::Unknown {
+                goal: text.to_string(),
+                id: id.to_string(),
+                role,
+            })
         }
     };
     match words.as_slice() {
@@ -178,8 +195,6 @@ pub fn parse_goal(text: &str, scene: &SymbolicScene) -> Result<Fact, String> {
         [c, "closed"] => Ok(Fact::IsClosed(known(c, &scene.containers, "container")?)),
         ["holding", o] => Ok(Fact::Holding(known(o, &scene.movables, "movable object")?)),
         ["robot", "at", p] => Ok(Fact::RobotAt(known(p, &scene.places, "place")?)),
-        _ => Err(format!(
-            "goal {text:?} is not one of: A on B, A in B, A open, A closed, holding A, robot at P"
-        )),
+        _ => Err(GoalError::NotAGoal(text.to_string())),
     }
 }

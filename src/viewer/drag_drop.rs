@@ -69,6 +69,21 @@ impl DropPlan {
     }
 }
 
+/// Why a drag has nothing to drop, or nowhere to drop it.
+#[derive(Debug, thiserror::Error)]
+enum NoDrop {
+    #[error("nothing there to drag")]
+    NothingThere,
+    #[error("{0} stays where it is (its class is not movable)")]
+    NotMovable(String),
+    #[error("{0} has no link to move")]
+    NoLink(String),
+    #[error("nothing under the pointer to put {0} on")]
+    NothingUnder(String),
+    #[error("{0} has no mesh")]
+    NoMesh(String),
+}
+
 /// The drop of the object hit by the ray `grab` onto the surface hit by the ray `put`, or why
 /// there is none.
 fn plan_drop(
@@ -76,28 +91,26 @@ fn plan_drop(
     view: &SceneView,
     grab: Ray3d,
     put: Ray3d,
-) -> Result<DropPlan, String> {
+) -> Result<DropPlan, NoDrop> {
     let Some((hit, _)) = pick_link(tree, grab.origin, *grab.direction, &HIDDEN_CLASSES) else {
-        return Err("nothing there to drag".into());
+        return Err(NoDrop::NothingThere);
     };
     let object = tree.links[hit].node.clone().unwrap_or_default();
     if !view.is_movable(&object) {
-        return Err(format!(
-            "{object} stays where it is (its class is not movable)"
-        ));
+        return Err(NoDrop::NotMovable(object));
     }
     let Some(link) = view.node_link(&object) else {
-        return Err(format!("{object} has no link to move"));
+        return Err(NoDrop::NoLink(object));
     };
     // The surface under the pointer, seen through the object itself and what it carries.
     let Some((target, distance)) = pick_link_where(tree, put.origin, *put.direction, |i| {
         !view.descends_from(i, link)
             && !HIDDEN_CLASSES.contains(&tree.links[i].class.as_deref().unwrap_or(""))
     }) else {
-        return Err(format!("nothing under the pointer to put {object} on"));
+        return Err(NoDrop::NothingUnder(object));
     };
     let Some((lo, hi)) = view.local_bounds(link) else {
-        return Err(format!("{object} has no mesh"));
+        return Err(NoDrop::NoMesh(object));
     };
     let point = put.origin + *put.direction * distance;
     let bottom = view.poses[link].transform_point3(((lo + hi) / 2.0).with_z(lo.z));
@@ -126,7 +139,7 @@ pub fn drop_object(world: &mut World, from: Vec2, to: Vec2) -> Vec<String> {
     let view = SceneView::new(&tree);
     let plan = match plan_drop(&tree, &view, grab, put) {
         Ok(plan) => plan,
-        Err(why) => return vec![why],
+        Err(why) => return vec![why.to_string()],
     };
     if let Some(why) = plan.refused() {
         return vec![why];
@@ -298,7 +311,7 @@ fn preview_drag(world: &mut World) {
             });
             (ghost, line)
         }
-        Err(why) => (None, why),
+        Err(why) => (None, why.to_string()),
     };
     preview.ghost = ghost;
     let mut status = world.resource_mut::<ViewerStatus>();

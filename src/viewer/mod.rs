@@ -26,7 +26,7 @@ mod state;
 mod task_player;
 mod timeline;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use bevy::prelude::*;
 use bevy::render::RenderPlugin;
@@ -140,8 +140,7 @@ pub fn viewer_app(options: &ViewOptions, offscreen: bool) -> Result<App, IsceneE
             (Vec::new(), app)
         }
     };
-    open_doors(app.world_mut(), &options.open)
-        .map_err(|why| InputError::invalid(&options.dir, why))?;
+    open_doors(app.world_mut(), &options.open, &options.dir)?;
     let map = read_map(&options.dir)?;
     add_render_plugins(&mut app, &options.dir, offscreen);
     app.add_plugins(ViewerPlugin {
@@ -249,14 +248,17 @@ fn run_whole_task(app: &mut App, task: &std::path::Path) -> Result<(), IsceneErr
     Ok(())
 }
 
-/// Opens the main door or drawer of each object in `objects`.
-fn open_doors(world: &mut World, objects: &[String]) -> Result<(), String> {
+/// Opens the main door or drawer of each object in `objects` (`--open`, for the scene in `dir`).
+fn open_doors(world: &mut World, objects: &[String], dir: &Path) -> Result<(), IsceneError> {
     for object in objects {
-        let tree = read_kinematic_tree(world).map_err(|e| e.to_string())?;
+        let tree = read_kinematic_tree(world)?;
         let view = SceneView::new(&tree);
-        let part = view
-            .main_part(object)
-            .ok_or_else(|| format!("--open {object}: no such object with a door or drawer"))?;
+        let part = view.main_part(object).ok_or_else(|| {
+            InputError::invalid(
+                dir,
+                format!("--open {object}: no such object with a door or drawer"),
+            )
+        })?;
         let link = &tree.links[part];
         apply_change(
             world,

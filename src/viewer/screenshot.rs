@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use bevy::camera::{ImageRenderTarget, RenderTarget};
+use bevy::image::IntoDynamicImageError;
 use bevy::prelude::*;
 use bevy::render::render_resource::TextureFormat;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
@@ -144,15 +145,16 @@ fn capture(app: &mut App, path: &Path) -> Result<image::RgbImage, IsceneError> {
                 .image
                 .clone()
                 .try_into_dynamic()
-                .map(|d| d.to_rgb8())
-                .map_err(|e| format!("the captured image cannot be converted: {e}"));
+                .map(|d| d.to_rgb8());
             commands.insert_resource(Captured(picture));
         },
     );
     for _ in 0..CAPTURE_PATIENCE_FRAMES {
         app.update();
         if let Some(captured) = app.world_mut().remove_resource::<Captured>() {
-            return captured.0.map_err(IsceneError::Internal);
+            return captured.0.map_err(|e| {
+                IsceneError::Internal(format!("the captured image cannot be converted: {e}"))
+            });
         }
     }
     Err(IsceneError::Internal(format!(
@@ -163,7 +165,7 @@ fn capture(app: &mut App, path: &Path) -> Result<image::RgbImage, IsceneError> {
 
 /// A captured picture.
 #[derive(Resource)]
-struct Captured(Result<image::RgbImage, String>);
+struct Captured(Result<image::RgbImage, IntoDynamicImageError>);
 
 /// Every camera renders into the off-screen image instead of a window.
 fn aim_cameras_at_target(

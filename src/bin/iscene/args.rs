@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
+use iscene::base::InvalidValue;
 use iscene::batch::Shard;
 use iscene::cad::import::body_tree::ImportScale;
 use iscene::cad::replace::replacement::AlignMethod;
@@ -304,10 +305,12 @@ pub(crate) struct ReconstructArgs {
     pub(crate) idle: f64,
 }
 
-fn positive_rate(text: &str) -> Result<f64, String> {
+fn positive_rate(text: &str) -> Result<f64, InvalidValue> {
     match text.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("{text} is not a positive number")),
+        _ => Err(InvalidValue::whole(format!(
+            "{text} is not a positive number"
+        ))),
     }
 }
 
@@ -396,7 +399,7 @@ pub(crate) enum ImportFormat {
     Urdf,
 }
 
-pub(crate) fn parse_import_scale(s: &str) -> Result<ImportScale, String> {
+pub(crate) fn parse_import_scale(s: &str) -> Result<ImportScale, InvalidValue> {
     if s == "class" {
         return Ok(ImportScale::Class);
     }
@@ -404,27 +407,34 @@ pub(crate) fn parse_import_scale(s: &str) -> Result<ImportScale, String> {
         .ok()
         .filter(|f| f.is_finite() && *f > 0.0)
         .map(ImportScale::Factor)
-        .ok_or_else(|| format!("{s:?} is neither `class` nor a positive number"))
+        .ok_or_else(|| {
+            InvalidValue::whole(format!("{s:?} is neither `class` nor a positive number"))
+        })
 }
 
-pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), InvalidValue> {
     let (w, h) = s
         .split_once('x')
-        .ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT"))?;
+        .ok_or_else(|| InvalidValue::whole(format!("{s:?} is not WIDTHxHEIGHT")))?;
     let number = |p: &str| {
         p.parse::<u32>()
             .ok()
             .filter(|n| (16..=8192).contains(n))
-            .ok_or_else(|| format!("{p:?} in {s:?} is not a size from 16 to 8192 pixels"))
+            .ok_or_else(|| {
+                InvalidValue::whole(format!(
+                    "{p:?} in {s:?} is not a size from 16 to 8192 pixels"
+                ))
+            })
     };
     Ok((number(w)?, number(h)?))
 }
 
-pub(crate) fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), String> {
+pub(crate) fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), InvalidValue> {
     let parts: Vec<&str> = s.split(':').collect();
     let number = |p: &str| {
-        p.parse::<usize>()
-            .map_err(|_| format!("{p:?} is not a frame number (expected A:B[:STEP])"))
+        p.parse::<usize>().map_err(|_| {
+            InvalidValue::whole(format!("{p:?} is not a frame number (expected A:B[:STEP])"))
+        })
     };
     match parts[..] {
         [a, b] | [a, b, _] => {
@@ -436,15 +446,15 @@ pub(crate) fn parse_frames(s: &str) -> Result<(usize, Option<usize>, usize), Str
                 1
             };
             if step == 0 || end.is_some_and(|e| e <= start) {
-                return Err(format!("{s:?} selects no frames"));
+                return Err(InvalidValue::whole(format!("{s:?} selects no frames")));
             }
             Ok((start, end, step))
         }
-        _ => Err(format!("{s:?}: expected A:B[:STEP]")),
+        _ => Err(InvalidValue::whole(format!("{s:?}: expected A:B[:STEP]"))),
     }
 }
 
 /// `A:B` seeds, B excluded and greater than A.
-fn parse_seeds(text: &str) -> Result<(u64, u64), iscene::base::InvalidValue> {
+fn parse_seeds(text: &str) -> Result<(u64, u64), InvalidValue> {
     iscene::batch::manifest::parse_seed_range(text).map(|r| (r.start, r.end))
 }

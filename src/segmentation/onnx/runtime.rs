@@ -13,7 +13,23 @@ use crate::error::InputError;
 /// The file name scripts/setup-ort.sh installs.
 const LIBRARY_NAME: &str = "libonnxruntime.so.1.31.1";
 
-static ENVIRONMENT: OnceLock<Result<Environment, String>> = OnceLock::new();
+static ENVIRONMENT: OnceLock<Result<Environment, LoadError>> = OnceLock::new();
+
+/// Why ONNX Runtime did not load; kept for the process's life, as the environment would be.
+#[derive(Debug, thiserror::Error)]
+enum LoadError {
+    #[error("{}: loaded but unusable: {problem}", path.display())]
+    Unusable { path: PathBuf, problem: ort::Error },
+    #[error(
+        "ONNX Runtime could not be loaded; tried:\n{}\nrun scripts/setup-ort.sh, or set \
+         ORT_DYLIB_PATH to a libonnxruntime.so of version 1.31 or newer",
+        tried.join("\n")
+    )]
+    NotLoaded {
+        /// Each library tried and why it failed, in words.
+        tried: Vec<String>,
+    },
+}
 
 /// The libraries to try: only `ORT_DYLIB_PATH` when it is set (a library asked for by name is
 /// never silently replaced by another), else the checkout's `.ort/` baked in at build time
@@ -36,7 +52,7 @@ fn candidates() -> Vec<PathBuf> {
     paths
 }
 
-fn load() -> Result<Environment, String> {
+fn load() -> Result<Environment, LoadError> {
     let mut tried = Vec::new();
     for path in candidates() {
         // A bare name goes to the dynamic loader's search; a path must exist, which keeps
@@ -50,7 +66,7 @@ fn load() -> Result<Environment, String> {
                 return builder
                     .with_name("iscene")
                     .build()
-                    .map_err(|e| format!("{}: loaded but unusable: {e}", path.display()));
+                    .map_err(|problem| LoadError::Unusable { path, problem });
             }
             Err(e) => {
                 let reason = std::error::Error::source(&e)
@@ -60,10 +76,7 @@ fn load() -> Result<Environment, String> {
             }
         }
     }
-    Err(format!(
-        "ONNX Runtime could not be loaded; tried:\n{}\nrun scripts/setup-ort.sh, or set ORT_DYLIB_PATH to a libonnxruntime.so of version 1.31 or newer",
-        tried.join("\n")
-    ))
+    Err(LoadError::NotLoaded { tried })
 }
 
 /// The process's ONNX Runtime environment, loaded on first use.
@@ -71,7 +84,7 @@ pub fn environment() -> Result<&'static Environment, InputError> {
     ENVIRONMENT
         .get_or_init(load)
         .as_ref()
-        .map_err(|reason| InputError::missing(LIBRARY_NAME, reason.clone()))
+        .map_err(|reason| InputError::missing(LIBRARY_NAME, reason.to_string()))
 }
 
 /// A session for the model at `path` on one intra-op thread: frames run in parallel instead,

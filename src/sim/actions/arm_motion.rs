@@ -8,9 +8,12 @@ use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps};
-use crate::arm::reach::{ArmPath, ArmRig, Held, LIFT_M, reach, retreat, retreat_through};
+use crate::arm::reach::{
+    ArmPath, ArmRig, Held, LIFT_M, ReachError, reach, retreat, retreat_through,
+};
 use crate::geometry::TriMesh;
 use crate::sim::actions::error::ArmTries;
+use crate::sim::actions::look_ahead::LookAheadError;
 use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
 use crate::sim::navigation::NavGoal;
@@ -189,7 +192,7 @@ pub(super) fn pick_motion(
     state: &RobotInTree,
     (id, link): (&str, usize),
     around: &AroundObject,
-    then: &dyn Fn(&[Change]) -> Result<(), String>,
+    then: &dyn Fn(&[Change]) -> Result<(), LookAheadError>,
 ) -> Result<Vec<Change>, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
     let (transit, near) = (&around.with_object, &around.grasped);
@@ -230,6 +233,16 @@ pub(super) fn pick_motion(
     )
 }
 
+/// Why one grasp's motion does not plan: the arm's reach or retreat, or where the object would
+/// end up.
+#[derive(Debug, thiserror::Error)]
+enum GraspFailure {
+    #[error(transparent)]
+    Reach(#[from] ReachError),
+    #[error(transparent)]
+    Action(#[from] ActionError),
+}
+
 /// The arm's motion with the first of `candidates` (at most `MAX_GRASPS`) for which `plan`
 /// (given the grasp and its index) finds a reach, a retreat and where the object ends up, and
 /// whose changes `then` accepts; else the first that `plan` finds; else `what` fails with
@@ -239,8 +252,8 @@ fn first_grasp_that_works(
     what: &str,
     mut attempts: Vec<String>,
     candidates: Vec<Grasp>,
-    then: &dyn Fn(&[Change]) -> Result<(), String>,
-    plan: impl Fn(usize, &Grasp) -> Result<(ArmPath, ArmPath, Change), String>,
+    then: &dyn Fn(&[Change]) -> Result<(), LookAheadError>,
+    plan: impl Fn(usize, &Grasp) -> Result<(ArmPath, ArmPath, Change), GraspFailure>,
 ) -> Result<Vec<Change>, ActionError> {
     let mut first = None;
     for (i, grasp) in candidates.into_iter().take(MAX_GRASPS).enumerate() {
@@ -362,8 +375,7 @@ pub(super) fn place_motion(
                 &near,
                 &Held::default(),
             )?;
-            let attach = super::attach(view, link, host, spot)
-                .map_err(|e| e.to_string())?
+            let attach = super::attach(view, link, host, spot)?
                 .pop()
                 .expect("one attachment");
             Ok((to, back, attach))

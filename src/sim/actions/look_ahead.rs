@@ -3,7 +3,7 @@
 
 use crate::arm::reach::ArmRig;
 use crate::kinematics::tree::KinematicTree;
-use crate::sim::actions::{Action, Change, RobotInTree, attempt};
+use crate::sim::actions::{Action, ActionError, Change, RobotInTree, attempt};
 use crate::sim::motion_path::apply_to_tree;
 use crate::sim::robot::RobotSpec;
 
@@ -28,6 +28,15 @@ pub(super) fn pick_ahead<'a>(object: &str, then: &'a [Action]) -> &'a [Action] {
     &[]
 }
 
+/// An action after a pick that does not plan once the pick is made.
+#[derive(Debug, thiserror::Error)]
+#[error("then {action}: {source}")]
+pub(super) struct LookAheadError {
+    /// The action, in words.
+    action: String,
+    source: ActionError,
+}
+
 /// Whether `ahead` plans, in turn, from `tree` after the robot went from `from` to `at` and
 /// made the changes `picked`; else why not, naming the action that does not.
 pub(super) fn plans_after(
@@ -37,7 +46,7 @@ pub(super) fn plans_after(
     (from, at): (&RobotInTree, &RobotInTree),
     picked: &[Change],
     ahead: &[Action],
-) -> Result<(), String> {
+) -> Result<(), LookAheadError> {
     let mut after = tree.clone();
     let drive = Change::MoveBase {
         from: from.base,
@@ -49,8 +58,11 @@ pub(super) fn plans_after(
         apply_to_tree(&mut after, change);
     }
     for action in ahead {
-        let changes = attempt(&after, robot, Some(rig), action)
-            .map_err(|e| format!("then {}: {e}", action.in_words()))?;
+        let changes =
+            attempt(&after, robot, Some(rig), action).map_err(|source| LookAheadError {
+                action: action.in_words(),
+                source,
+            })?;
         for change in &changes {
             apply_to_tree(&mut after, change);
         }

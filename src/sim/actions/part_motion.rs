@@ -9,8 +9,8 @@ use glam::{Affine3A, Mat3, Vec3};
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::PREGRASP_M;
 use crate::arm::reach::{
-    ArmRig, Held, STRETCH_MARGIN_M, configurations_at, describe, follow, reach_configuration,
-    retreat_along,
+    ArmPath, ArmRig, Held, ReachError, STRETCH_MARGIN_M, configurations_at, describe, follow,
+    reach_configuration, retreat_along,
 };
 use crate::geometry::TriMesh;
 use crate::graph::build::surface_points;
@@ -241,7 +241,7 @@ pub(super) fn work_part(
         ) {
             Ok(there) => there,
             Err(why) => {
-                why_not.push(why);
+                why_not.push(why.to_string());
                 continue;
             }
         };
@@ -316,7 +316,7 @@ fn let_go(
     still: &Obstacles,
     part: &Obstacles,
     transit: &Obstacles,
-) -> Result<crate::arm::reach::ArmPath, String> {
+) -> Result<ArmPath, LetGoError> {
     let tool = rig.arm.tool_pose(root, last);
     let back = -tool.transform_vector3(Vec3::Z).normalize();
     let to_base = Vec3::from(root.translation - tool.translation)
@@ -352,12 +352,18 @@ fn let_go(
                 &Held::default(),
             ) {
                 Ok(path) => return Ok(path),
-                Err(e) => why.push(format!("{words} {:.0} cm: {e}", 100.0 * distance)),
+                Err(e) => why.push((format!("{words} {:.0} cm", 100.0 * distance), e)),
             }
         }
     }
-    Err(why.join("; "))
+    Err(LetGoError(why))
 }
+
+/// Every way the hand tried to let go of a handle (a direction and a distance, in words), and
+/// why each failed.
+#[derive(Debug, thiserror::Error)]
+#[error("{}", .0.iter().map(|(way, e)| format!("{way}: {e}")).collect::<Vec<_>>().join("; "))]
+struct LetGoError(Vec<(String, ReachError)>);
 
 /// The handle on a closed part's front (its `mesh` in the world, the front facing `outward`):
 /// of those the perception finds, a door's farthest from its hinge (`axis`: a point and a
