@@ -141,10 +141,25 @@ pub fn read_model(dir: &Path, id: &str) -> Result<CadModel, InputError> {
     })
 }
 
+/// Why a model's .glb holds no part meshes this reader can use.
+#[derive(Debug, thiserror::Error)]
+enum GlbError {
+    #[error("not a glTF binary: {0}")]
+    NotGltf(#[from] gltf::Error),
+    #[error("no binary chunk")]
+    NoBinaryChunk,
+    #[error("node {0}: no positions")]
+    NoPositions(String),
+    #[error("node {0}: no indices")]
+    NoIndices(String),
+    #[error("node {0}: indices are not triangles of its vertices")]
+    NotTriangles(String),
+}
+
 /// The mesh of every named node of a .glb, in the node's own frame.
-fn part_meshes(bytes: &[u8]) -> Result<Vec<(String, TriMesh)>, String> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format!("not a glTF binary: {e}"))?;
-    let blob = gltf.blob.as_deref().ok_or("no binary chunk")?;
+fn part_meshes(bytes: &[u8]) -> Result<Vec<(String, TriMesh)>, GlbError> {
+    let gltf = gltf::Gltf::from_slice(bytes)?;
+    let blob = gltf.blob.as_deref().ok_or(GlbError::NoBinaryChunk)?;
     let mut out = Vec::new();
     for node in gltf.nodes() {
         let (Some(name), Some(mesh)) = (node.name(), node.mesh()) else {
@@ -155,20 +170,18 @@ fn part_meshes(bytes: &[u8]) -> Result<Vec<(String, TriMesh)>, String> {
             let reader = primitive.reader(|b| (b.index() == 0).then_some(blob));
             let positions: Vec<Vec3> = reader
                 .read_positions()
-                .ok_or_else(|| format!("node {name}: no positions"))?
+                .ok_or_else(|| GlbError::NoPositions(name.to_string()))?
                 .map(Vec3::from_array)
                 .collect();
             let indices: Vec<u32> = reader
                 .read_indices()
-                .ok_or_else(|| format!("node {name}: no indices"))?
+                .ok_or_else(|| GlbError::NoIndices(name.to_string()))?
                 .into_u32()
                 .collect();
             if !indices.len().is_multiple_of(3)
                 || indices.iter().any(|&i| i as usize >= positions.len())
             {
-                return Err(format!(
-                    "node {name}: indices are not triangles of its vertices"
-                ));
+                return Err(GlbError::NotTriangles(name.to_string()));
             }
             part.append(&TriMesh {
                 positions,

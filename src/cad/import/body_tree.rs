@@ -10,7 +10,7 @@
 
 use glam::{Affine3A, Mat3, Vec3};
 
-use crate::base::{JointKind, JointSpec};
+use crate::base::{InvalidValue, JointKind, JointSpec};
 use crate::cad::model::{CadModel, CadPart};
 use crate::classes::ClassTable;
 use crate::geometry::TriMesh;
@@ -141,10 +141,37 @@ impl From<String> for ModelFileError {
     }
 }
 
+impl From<InvalidValue> for ModelFileError {
+    fn from(problem: InvalidValue) -> Self {
+        Self::Malformed(problem.to_string())
+    }
+}
+
 impl From<&str> for ModelFileError {
     fn from(problem: &str) -> Self {
         Self::Malformed(problem.to_string())
     }
+}
+
+/// Why a file's body tree makes no model; the import skips the file and lists it with this.
+#[derive(Debug, thiserror::Error)]
+pub enum UnusableModel {
+    #[error("the model has no collision geometry")]
+    NoCollisionGeometry,
+    #[error("the model is flat ({0})")]
+    Flat(Vec3),
+    #[error("no class {0:?} in assets/classes.json")]
+    UnknownClass(String),
+    #[error("scale {0} is not a positive number")]
+    BadScale(f32),
+    #[error("no vertices")]
+    NoVertices,
+    #[error("body {0:?} comes before its parent")]
+    BeforeItsParent(String),
+    #[error("joint {name:?} is {kind:?}")]
+    UnsupportedJoint { name: String, kind: JointKind },
+    #[error("part {0:?} has no geometry")]
+    EmptyPart(String),
 }
 
 /// A part being assembled: the bodies welded into it and its frame in the file's model frame.
@@ -166,7 +193,7 @@ pub fn canonical_model(
     id: &str,
     class: &str,
     scale: ImportScale,
-) -> Result<CadModel, String> {
+) -> Result<CadModel, UnusableModel> {
     let drafts = welded_parts(tree)?;
     let closed_mesh = |drafts: &[PartDraft]| {
         let mut mesh = TriMesh::default();
@@ -177,25 +204,25 @@ pub fn canonical_model(
     };
     let (min, max) = closed_mesh(&drafts)
         .bounds()
-        .ok_or("the model has no collision geometry")?;
+        .ok_or(UnusableModel::NoCollisionGeometry)?;
     let turn = Mat3::from_rotation_z(front_turn(&drafts, (min + max) / 2.0));
     let turned_extent = (turn * (max - min)).abs();
     if turned_extent.min_element() <= 0.0 {
-        return Err(format!("the model is flat ({turned_extent})"));
+        return Err(UnusableModel::Flat(turned_extent));
     }
     let factor = match scale {
         ImportScale::Factor(f) => f,
         ImportScale::Class => {
             let typical = ClassTable::builtin()
                 .get(class)
-                .ok_or_else(|| format!("no class {class:?} in assets/classes.json"))?
+                .ok_or_else(|| UnusableModel::UnknownClass(class.to_string()))?
                 .size;
             // The geometric mean of the per-axis ratios keeps the model's proportions.
             geometric_mean(typical / turned_extent)
         }
     };
     if !(factor.is_finite() && factor > 0.0) {
-        return Err(format!("scale {factor} is not a positive number"));
+        return Err(UnusableModel::BadScale(factor));
     }
     // A rotation about z and a uniform scale commute: frames turn, their offsets and the meshes
     // scale, and every frame stays rigid.
@@ -214,7 +241,9 @@ pub fn canonical_model(
             d.joint.limits = d.joint.limits.map(|(lo, hi)| (lo * factor, hi * factor));
         }
     }
-    let (min, max) = closed_mesh(&drafts).bounds().ok_or("no vertices")?;
+    let (min, max) = closed_mesh(&drafts)
+        .bounds()
+        .ok_or(UnusableModel::NoVertices)?;
     let bottom_centre = Vec3::new((min.x + max.x) / 2.0, (min.y + max.y) / 2.0, min.z);
     for d in &mut drafts {
         d.model_from_part.translation -= glam::Vec3A::from(bottom_centre);
@@ -266,7 +295,7 @@ fn geometric_mean(v: Vec3) -> f32 {
 
 /// Bodies welded into parts: the root and every body with a joint start a part, the others join
 /// their parent's. Part frames are at the joint's origin.
-fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
+fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, UnusableModel> {
     let mut drafts: Vec<PartDraft> = Vec::new();
     // Per body: its frame in the model, and the part it belongs to.
     let mut model_from_body: Vec<Affine3A> = Vec::with_capacity(tree.bodies.len());
@@ -276,7 +305,7 @@ fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
         let parent_frame = match body.parent {
             None if index == 0 => Affine3A::IDENTITY,
             Some(p) if p < index => model_from_body[p],
-            _ => return Err(format!("body {:?} comes before its parent", body.name)),
+            _ => return Err(UnusableModel::BeforeItsParent(body.name.clone())),
         };
         let frame = parent_frame * body.parent_from_body;
         model_from_body.push(frame);
@@ -290,7 +319,12 @@ fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
                     JointKind::Prismatic => {
                         JointSpec::prismatic(joint.axis, joint.limits.0, joint.limits.1)
                     }
-                    other => return Err(format!("joint {:?} is {other:?}", joint.name)),
+                    kind => {
+                        return Err(UnusableModel::UnsupportedJoint {
+                            name: joint.name.clone(),
+                            kind,
+                        });
+                    }
                 };
                 drafts.push(PartDraft {
                     name,
@@ -356,7 +390,7 @@ fn welded_parts(tree: &BodyTree) -> Result<Vec<PartDraft>, String> {
         }
     }
     if let Some(empty) = drafts.iter().find(|d| d.mesh.is_empty()) {
-        return Err(format!("part {:?} has no geometry", empty.name));
+        return Err(UnusableModel::EmptyPart(empty.name.clone()));
     }
     Ok(drafts)
 }

@@ -548,14 +548,13 @@ impl Reader {
     }
 
     /// The mesh asset `name` (scaled), read on first use.
-    fn mesh(&mut self, name: &str) -> Result<TriMesh, String> {
-        let asset = self
-            .meshes
-            .get_mut(name)
-            .ok_or("no mesh asset of that name")?;
+    fn mesh(&mut self, name: &str) -> Result<TriMesh, AssetError> {
+        let asset = self.meshes.get_mut(name).ok_or(AssetError::NoMesh)?;
         if asset.mesh.is_none() {
-            let mesh = read_mesh_file(&asset.file)
-                .map_err(|e| format!("{}: {e}", asset.file.display()))?;
+            let mesh = read_mesh_file(&asset.file).map_err(|source| AssetError::MeshFile {
+                file: asset.file.clone(),
+                source,
+            })?;
             asset.mesh = Some(mesh.transformed(&Affine3A::from_scale(asset.scale)));
         }
         Ok(asset.mesh.clone().unwrap_or_default())
@@ -567,20 +566,20 @@ impl Reader {
         &mut self,
         material: Option<&str>,
         rgba: Option<[f32; 4]>,
-    ) -> Result<[f32; 4], String> {
+    ) -> Result<[f32; 4], AssetError> {
         let Some(name) = material else {
             return Ok(rgba.unwrap_or([0.5, 0.5, 0.5, 1.0]));
         };
         let material = self
             .materials
             .get(name)
-            .ok_or_else(|| format!("no material {name:?}"))?;
+            .ok_or_else(|| AssetError::NoMaterial(name.to_string()))?;
         let mut color = material.rgba;
         if let Some(texture_name) = material.texture.clone() {
             let texture = self
                 .textures
                 .get_mut(&texture_name)
-                .ok_or_else(|| format!("no texture {texture_name:?}"))?;
+                .ok_or_else(|| AssetError::NoTexture(texture_name.clone()))?;
             let mean = match (texture.mean, &texture.file) {
                 (Some(mean), _) => mean,
                 (None, Some(file)) => {
@@ -598,10 +597,34 @@ impl Reader {
     }
 }
 
+/// An asset a geom names that is missing or unreadable.
+#[derive(Debug, thiserror::Error)]
+enum AssetError {
+    #[error("no mesh asset of that name")]
+    NoMesh,
+    #[error("{}: {source}", file.display())]
+    MeshFile {
+        file: PathBuf,
+        source: crate::cad::import::mesh_files::MeshFileError,
+    },
+    #[error("no material {0:?}")]
+    NoMaterial(String),
+    #[error("no texture {0:?}")]
+    NoTexture(String),
+    #[error("texture {}: {source}", file.display())]
+    Texture {
+        file: PathBuf,
+        source: image::ImageError,
+    },
+}
+
 /// The mean colour of an image file in linear RGB (its pixels are sRGB).
-fn mean_linear_color(file: &Path) -> Result<Vec3, String> {
+fn mean_linear_color(file: &Path) -> Result<Vec3, AssetError> {
     let image = image::open(file)
-        .map_err(|e| format!("texture {}: {e}", file.display()))?
+        .map_err(|source| AssetError::Texture {
+            file: file.to_path_buf(),
+            source,
+        })?
         .to_rgb8();
     let mut sum = glam::DVec3::ZERO;
     for p in image.pixels() {

@@ -4,6 +4,8 @@
 use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
 use roxmltree::Node;
 
+use crate::base::InvalidValue;
+
 /// Child elements of `node` named `tag`.
 pub fn elements<'a, 'input>(
     node: Node<'a, 'input>,
@@ -41,7 +43,7 @@ pub fn euler_order(seq: &str) -> Option<EulerRot> {
 }
 
 /// An element's pose in its parent's frame: `pos` and one of the orientation attributes.
-pub fn pose(node: Node, degrees: bool, euler: EulerRot) -> Result<Affine3A, String> {
+pub fn pose(node: Node, degrees: bool, euler: EulerRot) -> Result<Affine3A, InvalidValue> {
     let translation = match node.attribute("pos") {
         Some(s) => vec3(node, "pos", s)?,
         None => Vec3::ZERO,
@@ -55,14 +57,14 @@ pub fn pose(node: Node, degrees: bool, euler: EulerRot) -> Result<Affine3A, Stri
         let [w, x, y, z] = numbers::<4>(node, "quat", s)?;
         let q = Quat::from_xyzw(x, y, z, w);
         if q.length() < 1e-9 {
-            return Err(format!("{}: quat is zero", at(node)));
+            return Err(InvalidValue::at(at(node), "quat is zero"));
         }
         q.normalize()
     } else if let Some(s) = node.attribute("axisangle") {
         let [x, y, z, a] = numbers::<4>(node, "axisangle", s)?;
         let axis = Vec3::new(x, y, z);
         if axis.length() < 1e-9 {
-            return Err(format!("{}: axisangle has a zero axis", at(node)));
+            return Err(InvalidValue::at(at(node), "axisangle has a zero axis"));
         }
         Quat::from_axis_angle(axis.normalize(), a * unit)
     } else if let Some(s) = node.attribute("euler") {
@@ -74,13 +76,16 @@ pub fn pose(node: Node, degrees: bool, euler: EulerRot) -> Result<Affine3A, Stri
         let y = Vec3::new(v[3], v[4], v[5]);
         let y = (y - x * x.dot(y)).normalize_or_zero();
         if x == Vec3::ZERO || y == Vec3::ZERO {
-            return Err(format!("{}: xyaxes are not two independent axes", at(node)));
+            return Err(InvalidValue::at(
+                at(node),
+                "xyaxes are not two independent axes",
+            ));
         }
         Quat::from_mat3(&Mat3::from_cols(x, y, x.cross(y)))
     } else if let Some(s) = node.attribute("zaxis") {
         let z = vec3(node, "zaxis", s)?;
         if z.length() < 1e-9 {
-            return Err(format!("{}: zaxis is zero", at(node)));
+            return Err(InvalidValue::at(at(node), "zaxis is zero"));
         }
         Quat::from_rotation_arc(Vec3::Z, z.normalize())
     } else {
@@ -89,24 +94,35 @@ pub fn pose(node: Node, degrees: bool, euler: EulerRot) -> Result<Affine3A, Stri
     Ok(Affine3A::from_rotation_translation(rotation, translation))
 }
 
-pub fn parse_numbers(node: Node, name: &str, text: &str) -> Result<Vec<f32>, String> {
+/// The numbers of attribute `name` (its `text`) of `node`.
+pub fn parse_numbers(node: Node, name: &str, text: &str) -> Result<Vec<f32>, InvalidValue> {
     text.split_whitespace()
         .map(|t| {
             t.parse::<f32>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("{}: {name}: {t:?} is not a number", at(node)))
+                .ok_or_else(|| InvalidValue::at(at(node), format!("{name}: {t:?} is not a number")))
         })
         .collect()
 }
 
-pub fn numbers<const N: usize>(node: Node, name: &str, text: &str) -> Result<[f32; N], String> {
+/// Exactly `N` numbers of attribute `name` (its `text`) of `node`.
+pub fn numbers<const N: usize>(
+    node: Node,
+    name: &str,
+    text: &str,
+) -> Result<[f32; N], InvalidValue> {
     let values = parse_numbers(node, name, text)?;
-    <[f32; N]>::try_from(values.as_slice())
-        .map_err(|_| format!("{}: {name} has {} numbers, not {N}", at(node), values.len()))
+    <[f32; N]>::try_from(values.as_slice()).map_err(|_| {
+        InvalidValue::at(
+            at(node),
+            format!("{name} has {} numbers, not {N}", values.len()),
+        )
+    })
 }
 
-pub fn vec3(node: Node, name: &str, text: &str) -> Result<Vec3, String> {
+/// Three numbers of attribute `name` (its `text`) of `node`.
+pub fn vec3(node: Node, name: &str, text: &str) -> Result<Vec3, InvalidValue> {
     numbers::<3>(node, name, text).map(Vec3::from)
 }
 
@@ -114,9 +130,9 @@ pub fn vec3(node: Node, name: &str, text: &str) -> Result<Vec3, String> {
 mod tests {
     use super::*;
 
-    fn pose_of(attributes: &str, degrees: bool) -> Result<Affine3A, String> {
+    fn pose_of(attributes: &str, degrees: bool) -> Result<Affine3A, InvalidValue> {
         let text = format!("<geom {attributes}/>");
-        let doc = roxmltree::Document::parse(&text).map_err(|e| e.to_string())?;
+        let doc = roxmltree::Document::parse(&text).expect("XML");
         pose(doc.root_element(), degrees, EulerRot::XYZ)
     }
 
@@ -152,6 +168,10 @@ mod tests {
         assert!((xy.transform_vector3(Vec3::Z) - Vec3::Z).length() < 1e-5);
         assert!((xy.transform_vector3(Vec3::X) - Vec3::Y).length() < 1e-5);
         let bad = pose_of(r#"pos="0 zero 0""#, false).expect_err("bad");
-        assert!(bad.contains("line 1") && bad.contains("zero"), "{bad}");
+        assert_eq!(bad.key, "<geom> at line 1");
+        assert_eq!(
+            bad.to_string(),
+            r#"<geom> at line 1: pos: "zero" is not a number"#
+        );
     }
 }

@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use crate::base::JointSpec;
 use crate::cad::import::class_words::class_of_name;
 use crate::cad::import::imported_model_id;
-use crate::cad::import::mesh_files::obj_groups;
+use crate::cad::import::mesh_files::{MeshFileError, obj_groups};
 use crate::cad::model::{CadModel, CadPart};
 use crate::geometry::TriMesh;
 
@@ -110,7 +110,7 @@ pub enum Sh3dError {
     NoCatalogueInFolder { path: PathBuf },
     /// The catalogue's properties file could not be read out of the zip.
     #[error("{}: {problem}", path.display())]
-    BadMember { path: PathBuf, problem: String },
+    BadMember { path: PathBuf, problem: MemberError },
     #[error("{}: {member}: {source}", path.display())]
     BadEntry {
         path: PathBuf,
@@ -124,7 +124,63 @@ pub enum Sh3dError {
 #[error("entry #{index}: {problem}")]
 pub struct EntryError {
     pub index: usize,
-    pub problem: String,
+    pub problem: EntryProblem,
+}
+
+/// What is wrong with an entry's fields.
+#[derive(Debug, thiserror::Error)]
+pub enum EntryProblem {
+    #[error("no {0}")]
+    Missing(&'static str),
+    #[error("{0} is not a number")]
+    NotANumber(&'static str),
+    #[error("{key} {value} is not a positive size")]
+    NotAPositiveSize { key: &'static str, value: f32 },
+    #[error("modelRotation {0:?} is not 9 numbers")]
+    BadRotation(String),
+}
+
+/// A member of a catalogue's zip that cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum MemberError {
+    #[error("{name} is not in the catalogue: {source}")]
+    Absent {
+        name: String,
+        source: zip::result::ZipError,
+    },
+    #[error("{name} expands past {} MB", MAX_ENTRY_BYTES >> 20)]
+    TooBig { name: String },
+    #[error("reading {name}: {source}")]
+    Unreadable {
+        name: String,
+        source: std::io::Error,
+    },
+}
+
+/// Why an entry's model cannot be used: the import lists the entry with it and goes on.
+#[derive(Debug, thiserror::Error)]
+enum UnusableEntry {
+    #[error(transparent)]
+    Member(#[from] MemberError),
+    #[error("its size {0:?} m is not furniture's (at most {MAX_SIZE_M} m)")]
+    NotFurnitureSized([f32; 3]),
+    #[error("OBJ: {0}")]
+    Obj(#[from] MeshFileError),
+    #[error("group {0:?} has a vertex that is not a number")]
+    NotANumber(String),
+    #[error("no triangles")]
+    NoTriangles,
+    #[error(
+        "{0} triangles, more than the {MAX_TRIANGLES} an imported model may have (its convex \
+         decomposition would take minutes)"
+    )]
+    TooManyTriangles(usize),
+    #[error("no vertices")]
+    NoVertices,
+    #[error("no part of the model spans volume")]
+    NoVolume,
+    #[error("the model is flat ({0:?})")]
+    Flat(Vec3),
 }
 
 /// Reads a catalogue file (`*.sh3f` or `sweethome3d.jar`) into models of the project's classes.
@@ -165,10 +221,12 @@ pub fn import_catalogue(path: &Path) -> Result<ImportedCatalogue, Sh3dError> {
             _ => imported.skipped += 1,
         }
     }
-    let models: Vec<Result<CadModel, String>> = files
+    // Each entry's model, or the line that lists it as failed.
+    let models: Vec<_> = files
         .into_par_iter()
         .map(|(entry, class, read)| {
-            read.and_then(|(obj, materials)| entry_model(&entry, class, &obj, &materials))
+            read.map_err(UnusableEntry::from)
+                .and_then(|(obj, materials)| entry_model(&entry, class, &obj, &materials))
                 .map_err(|e| format!("{} ({}): {e}", entry.id, entry.model))
         })
         .collect();
@@ -226,15 +284,15 @@ pub fn parse_catalogue(text: &str) -> Result<Vec<CatalogueEntry>, EntryError> {
         .collect()
 }
 
-fn entry_of(fields: &BTreeMap<String, String>) -> Result<CatalogueEntry, String> {
-    let text = |key: &str| fields.get(key).cloned().ok_or_else(|| format!("no {key}"));
-    let centimetres = |key: &str| -> Result<f32, String> {
+fn entry_of(fields: &BTreeMap<String, String>) -> Result<CatalogueEntry, EntryProblem> {
+    let text = |key: &'static str| fields.get(key).cloned().ok_or(EntryProblem::Missing(key));
+    let centimetres = |key: &'static str| -> Result<f32, EntryProblem> {
         let value: f32 = text(key)?
             .trim()
             .parse()
-            .map_err(|_| format!("{key} is not a number"))?;
+            .map_err(|_| EntryProblem::NotANumber(key))?;
         if !(value.is_finite() && value > 0.0) {
-            return Err(format!("{key} {value} is not a positive size"));
+            return Err(EntryProblem::NotAPositiveSize { key, value });
         }
         Ok(value / 100.0)
     };
@@ -245,10 +303,10 @@ fn entry_of(fields: &BTreeMap<String, String>) -> Result<CatalogueEntry, String>
                 .split_whitespace()
                 .map(str::parse)
                 .collect::<Result<_, _>>()
-                .map_err(|_| format!("modelRotation {text:?} is not 9 numbers"))?;
+                .map_err(|_| EntryProblem::BadRotation(text.clone()))?;
             let rows: [f32; 9] = values
                 .try_into()
-                .map_err(|_| format!("modelRotation {text:?} is not 9 numbers"))?;
+                .map_err(|_| EntryProblem::BadRotation(text.clone()))?;
             Mat3::from_cols_array(&rows).transpose()
         }
     };
@@ -337,7 +395,11 @@ fn unescape(text: &str) -> String {
     out
 }
 
-fn read_text<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, name: &str) -> Result<String, String> {
+/// The text file `name` of the zip.
+fn read_text<R: Read + Seek>(
+    zip: &mut zip::ZipArchive<R>,
+    name: &str,
+) -> Result<String, MemberError> {
     let bytes = read_bytes(zip, name)?;
     // The catalogues are ISO 8859-1 with \u escapes for anything else; Latin-1 maps byte to
     // code point.
@@ -346,18 +408,27 @@ fn read_text<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, name: &str) -> Result
 
 /// The file `name` of the zip, refused past [`MAX_ENTRY_BYTES`] whatever its header claims (a
 /// small archive can expand to gigabytes).
-fn read_bytes<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, name: &str) -> Result<Vec<u8>, String> {
-    let file = zip
-        .by_name(name)
-        .map_err(|e| format!("{name} is not in the catalogue: {e}"))?;
-    let too_big = || format!("{name} expands past {} MB", MAX_ENTRY_BYTES >> 20);
+fn read_bytes<R: Read + Seek>(
+    zip: &mut zip::ZipArchive<R>,
+    name: &str,
+) -> Result<Vec<u8>, MemberError> {
+    let file = zip.by_name(name).map_err(|source| MemberError::Absent {
+        name: name.to_string(),
+        source,
+    })?;
+    let too_big = || MemberError::TooBig {
+        name: name.to_string(),
+    };
     if file.size() > MAX_ENTRY_BYTES {
         return Err(too_big());
     }
     let mut bytes = Vec::new();
     file.take(MAX_ENTRY_BYTES + 1)
         .read_to_end(&mut bytes)
-        .map_err(|e| format!("reading {name}: {e}"))?;
+        .map_err(|source| MemberError::Unreadable {
+            name: name.to_string(),
+            source,
+        })?;
     if bytes.len() as u64 > MAX_ENTRY_BYTES {
         return Err(too_big());
     }
@@ -371,7 +442,7 @@ type ModelFiles = (Vec<u8>, BTreeMap<String, Vec<u8>>);
 fn model_files<R: Read + Seek>(
     zip: &mut zip::ZipArchive<R>,
     entry: &CatalogueEntry,
-) -> Result<ModelFiles, String> {
+) -> Result<ModelFiles, MemberError> {
     let obj_name = entry.model.trim_start_matches('/');
     let obj = read_bytes(zip, obj_name)?;
     let folder = Path::new(obj_name)
@@ -406,20 +477,13 @@ fn entry_model(
     class: &str,
     obj: &[u8],
     materials: &BTreeMap<String, Vec<u8>>,
-) -> Result<CadModel, String> {
+) -> Result<CadModel, UnusableEntry> {
     if entry.size.max_element() > MAX_SIZE_M {
-        return Err(format!(
-            "its size {:?} m is not furniture's (at most {MAX_SIZE_M} m)",
-            entry.size.to_array()
-        ));
+        return Err(UnusableEntry::NotFurnitureSized(entry.size.to_array()));
     }
     let (mesh, color) = obj_mesh(obj, materials)?;
     if mesh.triangles.len() > MAX_TRIANGLES {
-        return Err(format!(
-            "{} triangles, more than the {MAX_TRIANGLES} an imported model may have (its convex \
-             decomposition would take minutes)",
-            mesh.triangles.len()
-        ));
+        return Err(UnusableEntry::TooManyTriangles(mesh.triangles.len()));
     }
     let mesh = canonical_mesh(&mesh, entry.model_rotation, entry.size)?;
     Ok(CadModel {
@@ -448,24 +512,20 @@ pub fn model_id(catalogue_id: &str) -> String {
 fn obj_mesh(
     obj: &[u8],
     materials: &BTreeMap<String, Vec<u8>>,
-) -> Result<(TriMesh, [f32; 3]), String> {
+) -> Result<(TriMesh, [f32; 3]), UnusableEntry> {
     let (groups, loaded) = obj_groups(obj, |p| {
         let name = p.to_string_lossy().into_owned();
         match materials.get(&name) {
             Some(bytes) => tobj::load_mtl_buf(&mut Cursor::new(bytes.as_slice())),
             None => Err(tobj::LoadError::OpenFileFailed),
         }
-    })
-    .map_err(|e| format!("OBJ: {e}"))?;
+    })?;
     let mut mesh = TriMesh::default();
     let mut weighted = Vec3::ZERO;
     let mut weight = 0.0;
     for group in groups {
         if group.mesh.positions.iter().any(|p| !p.is_finite()) {
-            return Err(format!(
-                "group {:?} has a vertex that is not a number",
-                group.name
-            ));
+            return Err(UnusableEntry::NotANumber(group.name.clone()));
         }
         if let Some(diffuse) = group
             .material
@@ -479,7 +539,7 @@ fn obj_mesh(
         mesh.append(&group.mesh);
     }
     if mesh.triangles.is_empty() {
-        return Err("no triangles".into());
+        return Err(UnusableEntry::NoTriangles);
     }
     let color = if weight > 0.0 {
         (weighted / weight).clamp(Vec3::ZERO, Vec3::ONE).to_array()
@@ -491,11 +551,15 @@ fn obj_mesh(
 
 /// `mesh` turned upright by `model_rotation`, into the canonical axes, scaled to `size` and
 /// with its origin at the bottom centre of its box; simplified to [`SIMPLIFY_CELLS`].
-fn canonical_mesh(mesh: &TriMesh, model_rotation: Mat3, size: Vec3) -> Result<TriMesh, String> {
+fn canonical_mesh(
+    mesh: &TriMesh,
+    model_rotation: Mat3,
+    size: Vec3,
+) -> Result<TriMesh, UnusableEntry> {
     // Sweet Home 3D (x, y up, z front) to canonical (x, -y front, z up).
     let to_canonical = Mat3::from_cols(Vec3::X, Vec3::Z, -Vec3::Y);
     let turned = mesh.transformed(&Affine3A::from_mat3(to_canonical * model_rotation));
-    let (min, max) = turned.bounds().ok_or("no vertices")?;
+    let (min, max) = turned.bounds().ok_or(UnusableEntry::NoVertices)?;
     // Simplified before it is measured, so that the box is exactly the catalogue's size.
     let cell = ((max - min).max_element() / SIMPLIFY_CELLS)
         .max(MIN_CELL_M * (max - min).max_element() / size.max_element());
@@ -507,10 +571,10 @@ fn canonical_mesh(mesh: &TriMesh, model_rotation: Mat3, size: Vec3) -> Result<Tr
     for piece in simplified.convex_decomposition(DECOMPOSITION_RESOLUTION, MAX_CONVEX_PIECES) {
         solid.append(&piece);
     }
-    let (min, max) = solid.bounds().ok_or("no part of the model spans volume")?;
+    let (min, max) = solid.bounds().ok_or(UnusableEntry::NoVolume)?;
     let extent = max - min;
     if extent.min_element() <= 0.0 {
-        return Err(format!("the model is flat ({extent:?})"));
+        return Err(UnusableEntry::Flat(extent));
     }
     let scale = size / extent;
     let bottom_centre = Vec3::new((min.x + max.x) / 2.0, (min.y + max.y) / 2.0, min.z);

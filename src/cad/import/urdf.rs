@@ -255,19 +255,39 @@ fn geometry_mesh(geometry: &urdf_rs::Geometry, folder: &Path) -> Result<TriMesh,
     })
 }
 
+/// A mesh file name of a URDF file that names no file this reader may read.
+#[derive(Debug, thiserror::Error)]
+enum MeshNameError {
+    #[error(transparent)]
+    OutsideFolder(#[from] crate::file_name::FileNameError),
+    #[error("{0:?} names no file in the package")]
+    NoFileInPackage(String),
+    #[error(
+        "{filename:?}: no folder {package:?} holding it around the URDF file (no ROS package \
+         path is searched)"
+    )]
+    NoPackage { filename: String, package: String },
+}
+
+impl From<MeshNameError> for ModelFileError {
+    fn from(e: MeshNameError) -> Self {
+        Self::Malformed(e.to_string())
+    }
+}
+
 /// Where a mesh `filename` of a URDF file in `folder` is.
-fn mesh_path(filename: &str, folder: &Path) -> Result<PathBuf, String> {
+fn mesh_path(filename: &str, folder: &Path) -> Result<PathBuf, MeshNameError> {
     // A package:// name is looked up in the folders around the file, as ROS would; any other
     // name must lie inside the file's own folder.
     if let Some(path) = filename.strip_prefix("file://") {
-        return inside_folder(folder, Path::new(path)).map_err(|e| e.to_string());
+        return Ok(inside_folder(folder, Path::new(path))?);
     }
     let Some(rest) = filename.strip_prefix("package://") else {
-        return inside_folder(folder, Path::new(filename)).map_err(|e| e.to_string());
+        return Ok(inside_folder(folder, Path::new(filename))?);
     };
     let (package, relative) = rest
         .split_once('/')
-        .ok_or_else(|| format!("{filename:?} names no file in the package"))?;
+        .ok_or_else(|| MeshNameError::NoFileInPackage(filename.to_string()))?;
     for dir in folder.ancestors() {
         for candidate in [dir.to_path_buf(), dir.join(package)] {
             if candidate.file_name().is_some_and(|n| n == package)
@@ -277,8 +297,8 @@ fn mesh_path(filename: &str, folder: &Path) -> Result<PathBuf, String> {
             }
         }
     }
-    Err(format!(
-        "{filename:?}: no folder {package:?} holding it around the URDF file (no ROS package \
-         path is searched)"
-    ))
+    Err(MeshNameError::NoPackage {
+        filename: filename.to_string(),
+        package: package.to_string(),
+    })
 }
