@@ -95,6 +95,13 @@ pub struct GravityReport {
     pub aligned_from_world: [f32; 16],
 }
 
+impl GravityReport {
+    /// The rotation that turns the map's world into the aligned one (gravity along -z).
+    pub fn aligned_from_world(&self) -> Affine3A {
+        Affine3A::from_mat4(glam::Mat4::from_cols_array(&self.aligned_from_world))
+    }
+}
+
 /// Decides the up direction: the given gravity unless `estimate` asks to ignore it, else the
 /// estimate from `map_mesh` with the cameras' hint, else +z. `floor_points` (world frame), when
 /// there are any, put the floor at z = 0 by their median height.
@@ -198,7 +205,7 @@ mod tests {
         let leveled = report.leveled_to_floor_deg.expect("leveled");
         assert!((leveled - 1.5).abs() < 0.05, "{leveled}");
         // The floor is now level at z = 0 in the aligned frame.
-        let aligned = Affine3A::from_mat4(glam::Mat4::from_cols_array(&report.aligned_from_world));
+        let aligned = report.aligned_from_world();
         for p in tilted_floor(1.5).iter().take(1200) {
             assert!(aligned.transform_point3(*p).z.abs() < 0.005, "{p}");
         }

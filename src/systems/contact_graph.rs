@@ -4,7 +4,9 @@
 use std::collections::HashMap;
 
 use bevy::prelude::*;
-use glam::Affine3A;
+use glam::Vec3;
+
+use crate::geometry::TriMesh;
 
 use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh, SightedOutline};
 use crate::error::IsceneError;
@@ -18,7 +20,7 @@ use crate::systems::ingest::InputSequence;
 use crate::systems::panoptic_mapping::{PanopticMap, PanopticSurface};
 use crate::systems::scene_graph::attach_contact_graph;
 use crate::systems::scene_nodes::graph_order;
-use crate::systems::stages::record_failure;
+use crate::systems::stages::StageError;
 
 /// How the stage finds gravity.
 #[derive(Resource, Clone, Copy, Debug, Default)]
@@ -33,116 +35,52 @@ pub struct GravityConfig {
 #[derive(Resource, Clone, Debug)]
 pub struct SceneGravity(pub GravityReport);
 
-fn contact_graph_stage(world: &mut World) -> Result<(), IsceneError> {
-    let mut query = world.query::<(Entity, &SceneEntity, &Panoptic, &SegmentMesh)>();
-    let mut entities: Vec<(Entity, String, Panoptic, crate::geometry::TriMesh)> = query
-        .iter(world)
-        .map(|(e, id, p, m)| (e, id.0.clone(), p.clone(), m.0.clone()))
-        .collect();
-    entities.sort_by_key(|(e, ..)| graph_order(*e));
-    let outlines: Vec<Vec<Vec<glam::Vec3>>> = entities
-        .iter()
-        .map(|(e, ..)| {
-            world
-                .get::<SightedOutline>(*e)
-                .map(|o| o.0.clone())
-                .unwrap_or_default()
-        })
-        .collect();
-    let Some(map) = world.get_resource::<PanopticMap>() else {
-        return Ok(());
+/// ContactGraph, first: gravity, from the sequence's file or estimated from the map and the floor
+/// entities, which aligns the world. No map, no graph: the stage leaves nothing.
+fn resolve_scene_gravity(
+    mut commands: Commands,
+    entities: Query<(Entity, &Panoptic, &SegmentMesh)>,
+    map: Option<Res<PanopticMap>>,
+    sequence: Res<InputSequence>,
+    config: Option<Res<GravityConfig>>,
+) {
+    let Some(map) = map else {
+        return;
     };
-    let sequence = &world.resource::<InputSequence>().0;
-    let estimate = world
-        .get_resource::<GravityConfig>()
-        .is_some_and(|c| c.estimate);
-    let floor_points: Vec<glam::Vec3> = entities
+    let mut floors: Vec<(Entity, &SegmentMesh)> = entities
         .iter()
-        .filter(|(_, _, p, _)| p.class == "floor")
-        .flat_map(|(_, _, _, m)| m.positions.iter().copied())
+        .filter(|(_, p, _)| p.class == "floor")
+        .map(|(e, _, m)| (e, m))
+        .collect();
+    floors.sort_by_key(|(e, _)| graph_order(*e));
+    let floor_points: Vec<Vec3> = floors
+        .iter()
+        .flat_map(|(_, m)| m.0.positions.iter().copied())
         .collect();
     let gravity = resolve_gravity(
-        sequence.gravity,
-        estimate,
-        camera_up_hint(sequence.frames.iter().map(|f| f.world_from_camera)),
+        sequence.0.gravity,
+        config.is_some_and(|c| c.estimate),
+        camera_up_hint(sequence.0.frames.iter().map(|f| f.world_from_camera)),
         || extract_mesh(&map.0.tsdf, 1.0).mesh,
         &floor_points,
     );
-    let aligned_from_world =
-        Affine3A::from_mat4(glam::Mat4::from_cols_array(&gravity.aligned_from_world));
-    let voxel_size = map.0.tsdf.voxel_size;
-    let precise_depth = world
-        .get_resource::<PanopticSurface>()
-        .is_some_and(|s| s.precise_depth.is_some());
-    entities.extend(spawn_counters(world, aligned_from_world, &entities));
-    let aligned: Vec<crate::geometry::TriMesh> = entities
-        .iter()
-        .map(|(_, _, _, m)| m.transformed(&aligned_from_world))
-        .collect();
-    // Counters spawned above have no outline.
-    let aligned_outlines: Vec<Vec<Vec<glam::Vec3>>> = outlines
-        .iter()
-        .map(|frames| {
-            frames
-                .iter()
-                .map(|points| {
-                    points
-                        .iter()
-                        .map(|&p| aligned_from_world.transform_point3(p))
-                        .collect()
-                })
-                .collect()
-        })
-        .collect();
-    let no_outline = Vec::new();
-    let graph_entities: Vec<GraphEntity> = entities
-        .iter()
-        .zip(&aligned)
-        .enumerate()
-        .map(|(k, ((_, id, p, _), mesh))| GraphEntity {
-            id,
-            class: &p.class,
-            kind: p.kind,
-            mesh,
-            sighted: aligned_outlines.get(k).unwrap_or(&no_outline),
-        })
-        .collect();
-    let built = build_contact_graph_with_surfaces(
-        &graph_entities,
-        &ContactGraphParams::for_voxel(voxel_size, precise_depth),
-    );
-    let graph = built.graph;
-    let by_id: HashMap<String, Entity> = entities
-        .iter()
-        .map(|(e, id, _, _)| (id.clone(), *e))
-        .collect();
-    // The entities' meshes join the aligned world with their boxes.
-    for ((e, _, _, _), mesh) in entities.iter().zip(aligned) {
-        world.entity_mut(*e).insert(SegmentMesh(mesh));
-    }
-    for (node, surface) in graph.nodes.iter().zip(built.surfaces) {
-        world
-            .entity_mut(by_id[&node.id])
-            .insert(ObservedSurface(surface));
-    }
-    attach_contact_graph(world, &graph, &by_id)
-        .map_err(|problem| IsceneError::Internal(format!("contact graph: {problem}")))?;
-    world.insert_resource(SceneGravity(gravity));
-    Ok(())
+    commands.insert_resource(SceneGravity(gravity));
 }
 
-/// Finds the counter tops among the map's surface no entity claims (graph/counters.rs) and
-/// spawns a `counter` entity for each, its mesh the top's points (world frame, no triangles: the
-/// map saw a surface, not a solid; the contact graph stretches its box down to the floor).
+/// ContactGraph, second: a `counter` entity for each counter top among the map's surface that
+/// no entity claims (graph/counters.rs), its mesh the top's points (world frame, no triangles:
+/// the map saw a surface, not a solid; the contact graph stretches its box down to the floor).
 fn spawn_counters(
-    world: &mut World,
-    aligned_from_world: Affine3A,
-    entities: &[(Entity, String, Panoptic, crate::geometry::TriMesh)],
-) -> Vec<(Entity, String, Panoptic, crate::geometry::TriMesh)> {
-    let Some(surface) = world.get_resource::<PanopticSurface>() else {
-        return Vec::new();
+    mut commands: Commands,
+    ids: Query<&SceneEntity>,
+    gravity: Option<Res<SceneGravity>>,
+    surface: Option<Res<PanopticSurface>>,
+) {
+    let (Some(gravity), Some(surface)) = (gravity, surface) else {
+        return;
     };
-    let unclaimed: Vec<glam::Vec3> = surface
+    let aligned_from_world = gravity.0.aligned_from_world();
+    let unclaimed: Vec<Vec3> = surface
         .voxels
         .iter()
         .filter(|(_, entity)| *entity == 0)
@@ -150,39 +88,112 @@ fn spawn_counters(
         .collect();
     let world_from_aligned = aligned_from_world.inverse();
     let tops = find_counter_tops(&unclaimed, &CounterParams::default());
-    let mut spawned = Vec::new();
     let mut k = 0;
     for top in tops {
         // The next free id (a segmenter never names a counter, but stay safe).
         let id = loop {
             k += 1;
             let id = format!("counter_{k}");
-            if !entities.iter().any(|(_, other, _, _)| *other == id) {
+            if !ids.iter().any(|other| other.0 == id) {
                 break id;
             }
         };
-        let panoptic = Panoptic {
-            instance: COUNTER_INSTANCE_BASE + k,
-            class: COUNTER_CLASS.into(),
-            kind: crate::classes::EntityKind::Rigid,
-        };
-        let mesh = crate::geometry::TriMesh {
+        let mesh = TriMesh {
             positions: top
                 .iter()
                 .map(|p| world_from_aligned.transform_point3(*p))
                 .collect(),
             triangles: Vec::new(),
         };
-        let entity = world
-            .spawn((
-                SceneEntity(id.clone()),
-                panoptic.clone(),
-                SegmentMesh(mesh.clone()),
-            ))
-            .id();
-        spawned.push((entity, id, panoptic, mesh));
+        commands.spawn((
+            SceneEntity(id),
+            Panoptic {
+                instance: COUNTER_INSTANCE_BASE + k,
+                class: COUNTER_CLASS.into(),
+                kind: crate::classes::EntityKind::Rigid,
+            },
+            SegmentMesh(mesh),
+        ));
     }
-    spawned
+}
+
+/// ContactGraph, last: the entities' meshes join the aligned world, and their contact graph
+/// (`graph::build`) is hung into the ECS as the support tree, each node with the surface it was
+/// built from.
+fn build_contact_graph(
+    mut commands: Commands,
+    mut entities: Query<(
+        Entity,
+        &SceneEntity,
+        &Panoptic,
+        &mut SegmentMesh,
+        Option<&SightedOutline>,
+    )>,
+    gravity: Option<Res<SceneGravity>>,
+    map: Option<Res<PanopticMap>>,
+    surface: Option<Res<PanopticSurface>>,
+) {
+    let (Some(gravity), Some(map)) = (gravity, map) else {
+        return;
+    };
+    let aligned_from_world = gravity.0.aligned_from_world();
+    let mut order: Vec<Entity> = entities.iter().map(|(e, ..)| e).collect();
+    order.sort_by_key(|e| graph_order(*e));
+    for &e in &order {
+        let (.., mut mesh, _) = entities.get_mut(e).expect("queried");
+        mesh.0 = mesh.0.transformed(&aligned_from_world);
+    }
+    let aligned_outlines: Vec<Vec<Vec<Vec3>>> = order
+        .iter()
+        .map(|&e| {
+            let (.., outline) = entities.get(e).expect("queried");
+            outline.map_or_else(Vec::new, |o| {
+                o.0.iter()
+                    .map(|points| {
+                        points
+                            .iter()
+                            .map(|&p| aligned_from_world.transform_point3(p))
+                            .collect()
+                    })
+                    .collect()
+            })
+        })
+        .collect();
+    let graph_entities: Vec<GraphEntity> = order
+        .iter()
+        .zip(&aligned_outlines)
+        .map(|(&e, sighted)| {
+            let (_, id, p, mesh, _) = entities.get(e).expect("queried");
+            GraphEntity {
+                id: &id.0,
+                class: &p.class,
+                kind: p.kind,
+                mesh: &mesh.0,
+                sighted,
+            }
+        })
+        .collect();
+    let precise_depth = surface.is_some_and(|s| s.precise_depth.is_some());
+    let built = build_contact_graph_with_surfaces(
+        &graph_entities,
+        &ContactGraphParams::for_voxel(map.0.tsdf.voxel_size, precise_depth),
+    );
+    let by_id: HashMap<String, Entity> = order
+        .iter()
+        .map(|&e| (entities.get(e).expect("queried").1.0.clone(), e))
+        .collect();
+    for (node, surface) in built.graph.nodes.iter().zip(built.surfaces) {
+        commands
+            .entity(by_id[&node.id])
+            .insert(ObservedSurface(surface));
+    }
+    let graph = built.graph;
+    commands.queue(move |world: &mut World| {
+        if let Err(problem) = attach_contact_graph(world, &graph, &by_id) {
+            let error = IsceneError::Internal(format!("contact graph: {problem}"));
+            world.resource_mut::<StageError>().0.get_or_insert(error);
+        }
+    });
 }
 
 /// Counters' instance numbers start here, clear of the map's instances.
@@ -196,8 +207,8 @@ impl Plugin for ContactGraphPlugin {
         use crate::systems::ReconstructionStage as Stage;
         app.add_systems(
             crate::systems::Reconstruct,
-            contact_graph_stage
-                .pipe(record_failure)
+            (resolve_scene_gravity, spawn_counters, build_contact_graph)
+                .chain()
                 .in_set(Stage::ContactGraph),
         );
     }

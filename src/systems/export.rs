@@ -88,7 +88,7 @@ fn export_kinematic_tree(
 
 /// The gravity-aligned world's frame, once the ContactGraph stage has found it.
 fn aligned_from_world(gravity: &SceneGravity) -> glam::Affine3A {
-    glam::Affine3A::from_mat4(glam::Mat4::from_cols_array(&gravity.0.aligned_from_world))
+    gravity.0.aligned_from_world()
 }
 
 /// The 2D occupancy grid of the map and the kinematic tree, in the gravity-aligned world.

@@ -7,7 +7,6 @@ use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use bevy::prelude::*;
-use glam::{Affine3A, Mat4};
 use rayon::prelude::*;
 
 use crate::components::LinkBody;
@@ -36,8 +35,7 @@ pub fn paint_links_as_seen(world: &mut World, tree: &mut KinematicTree, entities
         return;
     };
     let tsdf = &map.0.tsdf;
-    let map_from_aligned =
-        Affine3A::from_mat4(Mat4::from_cols_array(&gravity.0.aligned_from_world)).inverse();
+    let map_from_aligned = gravity.0.aligned_from_world().inverse();
     let labels: HashMap<&str, HashSet<SegmentLabel>> = world
         .get_resource::<PanopticSurface>()
         .map(|s| {

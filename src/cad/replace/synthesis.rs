@@ -115,7 +115,9 @@ fn mirrored_alignments(
                 return None;
             }
             let mirrored = model.mirrored(format!("{}{MIRRORED_SUFFIX}", model.id));
-            let mirrored = DatabaseModel::new(mirrored).ok()?;
+            let mirrored = DatabaseModel::new(mirrored)
+                .inspect_err(|e| tracing::warn!("{}: no mirrored model ({e})", model.id))
+                .ok()?;
             let layout_error = placed_layout_error(object, &mirrored, &a.world_from_model);
             if layout_error >= MIRROR_AGREES {
                 return None;
