@@ -259,10 +259,7 @@ fn map_live_with_previews(
         app.insert_resource(InputSequence(seen.clone()));
         app.insert_resource(PanopticMap(map.clone()));
         app.insert_resource(IngestReport::default());
-        app.world_mut().run_schedule(Reconstruct);
-        if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
-            return Err(err);
-        }
+        run_stages(&mut app)?;
         cad_cache = app
             .world_mut()
             .remove_resource::<CadAlignmentCache>()
@@ -321,20 +318,7 @@ fn write_live_status(
 pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, IsceneError> {
     check_voxel_size(options.voxel)?;
     check_memory_budget(options.max_memory_gb)?;
-    let target = OutputTarget::claim(
-        "--out",
-        &options.out,
-        OutputCommand::Reconstruct,
-        &[
-            options.input.as_deref(),
-            options.cad.as_deref(),
-            options.models.as_deref(),
-        ]
-        .into_iter()
-        .flatten()
-        .collect::<Vec<_>>(),
-        options.force,
-    )?;
+    let target = claim_output(options)?;
     // Read before rendering or mapping, so a broken database fails at once.
     let cad_library = options
         .cad
@@ -382,10 +366,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
             app.insert_resource(InputSequence(sequence));
         }
     }
-    app.world_mut().run_schedule(Reconstruct);
-    if let Some(err) = app.world_mut().resource_mut::<StageError>().0.take() {
-        return Err(err);
-    }
+    run_stages(&mut app)?;
     let mut report = collect_report(app.world_mut(), options, sequence_dir, format, rendered);
     report.timings.splice(0..0, timings);
     report.live = live_report;
@@ -395,6 +376,35 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     )?;
     staged.commit()?;
     Ok(report)
+}
+
+/// The output folder `--out`, claimed: a folder that holds what another command wrote, or one
+/// of the inputs, is refused (`io::output_folder`).
+fn claim_output(options: &ReconstructOptions) -> Result<OutputTarget, IsceneError> {
+    let inputs: Vec<&Path> = [
+        options.input.as_deref(),
+        options.cad.as_deref(),
+        options.models.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    OutputTarget::claim(
+        "--out",
+        &options.out,
+        OutputCommand::Reconstruct,
+        &inputs,
+        options.force,
+    )
+}
+
+/// Runs the `Reconstruct` schedule; the first stage that failed, if one did.
+fn run_stages(app: &mut App) -> Result<(), IsceneError> {
+    app.world_mut().run_schedule(Reconstruct);
+    match app.world_mut().resource_mut::<StageError>().0.take() {
+        Some(err) => Err(err),
+        None => Ok(()),
+    }
 }
 
 /// The sequence folder to map, and whether it was rendered here: a specification (or none, the
