@@ -137,16 +137,14 @@ fn build_contact_graph(
         return;
     };
     let aligned_from_world = gravity.0.aligned_from_world();
-    let mut order: Vec<Entity> = entities.iter().map(|(e, ..)| e).collect();
-    order.sort_by_key(|e| graph_order(*e));
-    for &e in &order {
-        let (.., mut mesh, _) = entities.get_mut(e).expect("queried");
+    for (.., mut mesh, _) in &mut entities {
         mesh.0 = mesh.0.transformed(&aligned_from_world);
     }
-    let aligned_outlines: Vec<Vec<Vec<Vec3>>> = order
+    let mut rows: Vec<_> = entities.iter().collect();
+    rows.sort_by_key(|(e, ..)| graph_order(*e));
+    let aligned_outlines: Vec<Vec<Vec<Vec3>>> = rows
         .iter()
-        .map(|&e| {
-            let (.., outline) = entities.get(e).expect("queried");
+        .map(|(.., outline)| {
             outline.map_or_else(Vec::new, |o| {
                 o.0.iter()
                     .map(|points| {
@@ -159,18 +157,15 @@ fn build_contact_graph(
             })
         })
         .collect();
-    let graph_entities: Vec<GraphEntity> = order
+    let graph_entities: Vec<GraphEntity> = rows
         .iter()
         .zip(&aligned_outlines)
-        .map(|(&e, sighted)| {
-            let (_, id, p, mesh, _) = entities.get(e).expect("queried");
-            GraphEntity {
-                id: &id.0,
-                class: &p.class,
-                kind: p.kind,
-                mesh: &mesh.0,
-                sighted,
-            }
+        .map(|((_, id, p, mesh, _), sighted)| GraphEntity {
+            id: &id.0,
+            class: &p.class,
+            kind: p.kind,
+            mesh: &mesh.0,
+            sighted,
         })
         .collect();
     let precise_depth = surface.is_some_and(|s| s.precise_depth.is_some());
@@ -178,10 +173,8 @@ fn build_contact_graph(
         &graph_entities,
         &ContactGraphParams::for_voxel(map.0.tsdf.voxel_size, precise_depth),
     );
-    let by_id: HashMap<String, Entity> = order
-        .iter()
-        .map(|&e| (entities.get(e).expect("queried").1.0.clone(), e))
-        .collect();
+    let by_id: HashMap<String, Entity> =
+        rows.iter().map(|(e, id, ..)| (id.0.clone(), *e)).collect();
     for (node, surface) in built.graph.nodes.iter().zip(built.surfaces) {
         commands
             .entity(by_id[&node.id])
