@@ -10,6 +10,7 @@ use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::TriMesh;
 use crate::geometry::plane::{Plane, fit_plane};
 use crate::map::{SegmentLabel, TsdfMap, extract_mesh};
+use crate::panoptic::face_pieces::Slab;
 use crate::panoptic::instances::{ClassId, InstanceCounts, InstanceId};
 
 /// The class names the mapper knows, with their ids (the class table's order).
@@ -232,16 +233,20 @@ fn merge_coplanar_walls(
     }
 }
 
-/// A piece of an object that instance fusion kept apart (a patch of the oven's top under an
-/// instance of its own) joins the instance of its class it touches (surface voxels 26-adjacent)
-/// when it has at most `share` of that instance's voxels. Two objects of one class that touch
-/// are both whole, and neither is that much smaller than the other. Layout is left alone (a
-/// wall's corner touches the next wall).
+/// A piece of an object that instance fusion kept apart joins the instance of its class it
+/// touches (surface voxels 26-adjacent): a small piece (a patch of the oven's top under an
+/// instance of its own) when it has at most `share` of that instance's voxels, and a slab of a
+/// large class lying over a face of it (a cabinet's front, `face_pieces`; within two voxels)
+/// whatever its size. Two objects of one class that touch are both whole, neither much smaller
+/// than the other nor a face of it. Layout is left alone (a wall's corner touches the next
+/// wall).
 fn absorb_fragments(
     groups: &mut BTreeMap<(ClassId, InstanceId), Group>,
     voxels: &[(IVec3, SegmentLabel)],
     is_object: impl Fn(ClassId) -> bool,
+    is_large: impl Fn(ClassId) -> bool,
     share: f32,
+    voxel_size: f32,
 ) {
     let mut group_of_label: BTreeMap<SegmentLabel, (ClassId, InstanceId)> = BTreeMap::new();
     for (key, g) in groups.iter().filter(|(k, _)| is_object(k.0)) {
@@ -277,16 +282,25 @@ fn absorb_fragments(
         }
         k
     };
+    let no_voxels = Vec::new();
+    let voxels_in = |k: &(ClassId, InstanceId)| voxels_of.get(k).unwrap_or(&no_voxels);
     for small in order {
         let size = groups[&small].voxels;
-        if size as f32 > share * largest[&small.0] as f32 {
+        let piece = voxels_in(&small);
+        let fragment = size as f32 <= share * largest[&small.0] as f32;
+        let slab = is_large(small.0)
+            .then(|| Slab::of(piece, voxel_size))
+            .flatten();
+        if !fragment && slab.is_none() {
             continue;
         }
+        // A front stands a little proud of its carcass: a voxel may lie between them.
+        let reach = if slab.is_some() { 2 } else { 1 };
         let mut touching: BTreeMap<(ClassId, InstanceId), usize> = BTreeMap::new();
         for v in voxels_of.get(&small).into_iter().flatten() {
-            for dz in -1..=1 {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
+            for dz in -reach..=reach {
+                for dy in -reach..=reach {
+                    for dx in -reach..=reach {
                         if let Some(&other) = group_at.get(&(*v + IVec3::new(dx, dy, dz))) {
                             let other = resolve(&host_of, other);
                             if other.0 == small.0 && other != small {
@@ -299,7 +313,10 @@ fn absorb_fragments(
         }
         let host = touching
             .into_iter()
-            .filter(|(_, n)| size as f32 <= share * *n as f32)
+            .filter(|(k, n)| {
+                (fragment && size as f32 <= share * *n as f32)
+                    || slab.is_some_and(|s| s.lies_on_face_of(piece, voxels_in(k), voxel_size))
+            })
             .max_by_key(|(k, n)| (*n, std::cmp::Reverse(*k)))
             .map(|(k, _)| k);
         if let Some(host) = host {
@@ -352,7 +369,21 @@ pub fn extract_entities(
             .get(classes.name(c))
             .is_some_and(|info| info.kind != EntityKind::Layout)
     };
-    absorb_fragments(&mut groups, &voxels, is_object, params.fragment_share);
+    // Faces are pieces of furniture and appliances, not of cups and books (a book lying on
+    // another is a slab too).
+    let is_large = |c: ClassId| {
+        table
+            .get(classes.name(c))
+            .is_some_and(|info| info.size.max_element() >= params.small_object_size)
+    };
+    absorb_fragments(
+        &mut groups,
+        &voxels,
+        is_object,
+        is_large,
+        params.fragment_share,
+        map.voxel_size,
+    );
     let mut entities: Vec<PanopticEntity> = Vec::new();
     let mut per_class_count: BTreeMap<String, usize> = BTreeMap::new();
     for ((class_id, instance), g) in groups {
@@ -447,12 +478,60 @@ mod tests {
             ((9, 5), group(&[5], 1)),
             ((9, 6), group(&[6], 100)),
         ]);
-        absorb_fragments(&mut groups, &voxels, |c| c != 9, 0.05);
+        absorb_fragments(&mut groups, &voxels, |c| c != 9, |_| false, 0.05, 0.02);
         assert_eq!(groups[&(1, 1)].labels, vec![1, 2], "the piece joins");
         assert_eq!(groups[&(1, 1)].voxels, 102);
         assert!(groups.contains_key(&(1, 3)), "a touching twin stays whole");
         assert!(groups.contains_key(&(2, 4)), "another class stays");
         assert!(groups.contains_key(&(9, 5)), "layout is left alone");
+    }
+
+    #[test]
+    fn a_cabinet_s_front_kept_apart_joins_its_carcass_and_a_neighbour_seen_from_the_front_does_not()
+    {
+        // 2 cm voxels, class 5 (a large class): a carcass 60 x 56 x 86 cm seen without its front
+        // (label 1), its front a slab one voxel in front of it (label 2), and the front of the
+        // next cabinet beside it (label 3).
+        let mut voxels = Vec::new();
+        for x in 0..=30 {
+            for y in 0..=28 {
+                for z in 0..=43 {
+                    let side = x == 0 || x == 30 || y == 28 || z == 0 || z == 43;
+                    if side {
+                        voxels.push((IVec3::new(x, y, z), 1));
+                    }
+                }
+            }
+        }
+        for x in 1..=29 {
+            for z in 1..=42 {
+                voxels.push((IVec3::new(x, -2, z), 2));
+                voxels.push((IVec3::new(x + 31, -2, z), 3));
+            }
+        }
+        let count = |l: SegmentLabel| voxels.iter().filter(|(_, k)| *k == l).count();
+        let mut groups = BTreeMap::from([
+            ((5, 1), group(&[1], count(1))),
+            ((5, 2), group(&[2], count(2))),
+            ((5, 3), group(&[3], count(3))),
+        ]);
+        absorb_fragments(&mut groups, &voxels, |_| true, |c| c == 5, 0.05, 0.02);
+        assert_eq!(
+            groups[&(5, 1)].labels,
+            vec![1, 2],
+            "the front joins its carcass"
+        );
+        assert!(
+            groups.contains_key(&(5, 3)),
+            "the neighbour's front stays its own"
+        );
+        // A small class's slabs are left as they are.
+        let mut groups = BTreeMap::from([
+            ((5, 1), group(&[1], count(1))),
+            ((5, 2), group(&[2], count(2))),
+        ]);
+        absorb_fragments(&mut groups, &voxels, |_| true, |_| false, 0.05, 0.02);
+        assert!(groups.contains_key(&(5, 2)));
     }
 
     #[test]

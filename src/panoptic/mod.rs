@@ -4,6 +4,7 @@
 
 pub mod carve;
 pub mod entities;
+pub mod face_pieces;
 pub mod fusion;
 pub mod instances;
 pub mod live;
