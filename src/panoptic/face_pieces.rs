@@ -84,7 +84,6 @@ impl Slab {
             .map(|(_, normal, band)| (normal, band))
             .expect("the search has steps");
         let major = normal.perp();
-        let across = narrowest_band(piece.iter().map(|v| flat(v).dot(normal)), SLAB_SHARE);
         let along = extent(piece, |v| flat(v).dot(major));
         let up = extent(piece, |v| v.z as f32);
         // In whole voxels: a front a little turned to the grid spreads by a fraction of one.
