@@ -62,9 +62,8 @@ impl Slab {
         // drawer's sides), so the plane is the one near them across which the voxels lie
         // thinnest.
         let first = major_axis(piece.iter().map(flat)).perp();
-        let band_along = |normal: Vec2| {
-            narrowest_band(piece.iter().map(|v| flat(v).dot(normal)), SLAB_SHARE)
-        };
+        let band_along =
+            |normal: Vec2| narrowest_band(piece.iter().map(|v| flat(v).dot(normal)), SLAB_SHARE);
         let width = |(lo, hi): (f32, f32)| hi - lo;
         // A body is no slab whichever way it is turned.
         if width(band_along(first)) * voxel_size > SEARCH_BAND_M {
@@ -72,8 +71,8 @@ impl Slab {
         }
         let (normal, across) = (-NORMAL_SEARCH_STEPS..=NORMAL_SEARCH_STEPS)
             .map(|k| {
-                let normal = Vec2::from_angle((k as f32 * NORMAL_STEP_DEG).to_radians())
-                    .rotate(first);
+                let normal =
+                    Vec2::from_angle((k as f32 * NORMAL_STEP_DEG).to_radians()).rotate(first);
                 (k, normal, band_along(normal))
             })
             .min_by(|a, b| {
@@ -110,12 +109,10 @@ impl Slab {
         let (s_lo, s_hi) = self.across;
         // The body behind the slab on one side, its face at the slab's other side.
         let (r_lo, r_hi) = self.reach;
-        let behind_plus = hi - s_hi >= depth
-            && s_lo <= lo + overhang
-            && (s_lo >= lo - overhang || r_hi >= lo);
-        let behind_minus = s_lo - lo >= depth
-            && s_hi >= hi - overhang
-            && (s_hi <= hi + overhang || r_lo <= hi);
+        let behind_plus =
+            hi - s_hi >= depth && s_lo <= lo + overhang && (s_lo >= lo - overhang || r_hi >= lo);
+        let behind_minus =
+            s_lo - lo >= depth && s_hi >= hi - overhang && (s_hi <= hi + overhang || r_lo <= hi);
         if !(behind_plus || behind_minus) {
             return false;
         }

@@ -534,8 +534,20 @@ mod tests {
         // bar handles standing 3 cm out; its back 4 cm from a wall at y = 0.6 and its left side
         // 1 cm from a wall at x = -0.31. Seen: the front, the top and the right side.
         let mut points = panel(Vec3::new(-0.3, 0.0, 0.0), Vec3::X, 0.6, Vec3::Z, 0.86);
-        points.extend(panel(Vec3::new(-0.3, 0.0, 0.86), Vec3::X, 0.6, Vec3::Y, 0.56));
-        points.extend(panel(Vec3::new(0.3, 0.0, 0.0), Vec3::Y, 0.56, Vec3::Z, 0.86));
+        points.extend(panel(
+            Vec3::new(-0.3, 0.0, 0.86),
+            Vec3::X,
+            0.6,
+            Vec3::Y,
+            0.56,
+        ));
+        points.extend(panel(
+            Vec3::new(0.3, 0.0, 0.0),
+            Vec3::Y,
+            0.56,
+            Vec3::Z,
+            0.86,
+        ));
         let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
         let bar = |x: f32| {
             (0..=12).flat_map(move |i| {
@@ -549,7 +561,10 @@ mod tests {
         ];
         let behind = walls_behind(&bbox, &walls);
         assert_eq!(behind.len(), 2);
-        assert!(behind[0].direction.x > 0.99, "the side's wall is the nearer");
+        assert!(
+            behind[0].direction.x > 0.99,
+            "the side's wall is the nearer"
+        );
         let perceive = |points: &[Vec3]| {
             front_among_walls(&behind, |d| perceive_front(&bbox, d, points, false))
         };
