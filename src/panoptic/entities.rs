@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::{IVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::classes::{ClassTable, EntityKind};
+use crate::classes::{ClassInfo, ClassTable, EntityKind};
 use crate::geometry::TriMesh;
 use crate::geometry::plane::{Plane, fit_plane};
 use crate::map::{SegmentLabel, TsdfMap, extract_mesh};
@@ -98,6 +98,11 @@ impl Default for ExtractionParams {
 }
 
 impl ExtractionParams {
+    /// Whether `class` is a small thing (`small_object_size`): a cup, a book, not furniture.
+    pub fn is_small(&self, class: &ClassInfo) -> bool {
+        class.size.max_element() < self.small_object_size
+    }
+
     /// The fewest surface voxels of `voxel_size` metres an entity of `kind` needs to be kept
     /// (`small`: a small-object class).
     pub fn min_surface_voxels(&self, kind: EntityKind, small: bool, voxel_size: f32) -> usize {
@@ -297,7 +302,7 @@ fn absorb_fragments(
         // A front stands a little proud of its carcass: a voxel may lie between them.
         let reach = if slab.is_some() { 2 } else { 1 };
         let mut touching: BTreeMap<(ClassId, InstanceId), usize> = BTreeMap::new();
-        for v in voxels_of.get(&small).into_iter().flatten() {
+        for v in piece {
             for dz in -reach..=reach {
                 for dy in -reach..=reach {
                     for dx in -reach..=reach {
@@ -374,7 +379,7 @@ pub fn extract_entities(
     let is_large = |c: ClassId| {
         table
             .get(classes.name(c))
-            .is_some_and(|info| info.size.max_element() >= params.small_object_size)
+            .is_some_and(|info| !params.is_small(info))
     };
     absorb_fragments(
         &mut groups,
@@ -390,7 +395,7 @@ pub fn extract_entities(
         let class = classes.name(class_id).to_string();
         let info = table.get(&class);
         let kind = info.map_or(EntityKind::Rigid, |c| c.kind);
-        let small = info.is_some_and(|c| c.size.max_element() < params.small_object_size);
+        let small = info.is_some_and(|c| params.is_small(c));
         if g.voxels < params.min_surface_voxels(kind, small, map.voxel_size) {
             continue;
         }

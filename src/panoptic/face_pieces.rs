@@ -66,11 +66,15 @@ impl Slab {
             |normal: Vec2| narrowest_band(piece.iter().map(|v| flat(v).dot(normal)), SLAB_SHARE);
         let width = |(lo, hi): (f32, f32)| hi - lo;
         // A body is no slab whichever way it is turned.
-        if width(band_along(first)) * voxel_size > SEARCH_BAND_M {
+        let first_band = band_along(first);
+        if width(first_band) * voxel_size > SEARCH_BAND_M {
             return None;
         }
         let (normal, across) = (-NORMAL_SEARCH_STEPS..=NORMAL_SEARCH_STEPS)
             .map(|k| {
+                if k == 0 {
+                    return (k, first, first_band);
+                }
                 let normal =
                     Vec2::from_angle((k as f32 * NORMAL_STEP_DEG).to_radians()).rotate(first);
                 (k, normal, band_along(normal))
