@@ -19,7 +19,8 @@ use crate::cad::replace::sizing::pose_scale;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::{CadPlacement, ContactGraph};
-use crate::perception::fronts::{fitted_to_front, perceive_front};
+use crate::perception::fronts::{PerceivedFront, fitted_to_front, perceive_front};
+use crate::perception::handles::HandleKind;
 use crate::perception::parts::opens_as_flap;
 
 /// Objects with fewer segment points than this keep their segment mesh: too little was seen to
@@ -28,6 +29,9 @@ pub const MIN_OBJECT_POINTS: usize = 30;
 
 /// An object whose box comes this close (metres) to a wall has its back to it.
 const BACK_TO_WALL_M: f32 = 0.15;
+/// Walls whose normals are closer than this cosine (about 60 degrees) are on the same side of an
+/// object, not a corner.
+const CORNER_COS: f32 = 0.5;
 /// The objects an object holds define its top when they rest at most this far (metres) under
 /// its box's top.
 const TOP_FROM_CHILDREN_M: f32 = 0.1;
@@ -83,24 +87,43 @@ pub fn observed_objects<'a>(
             if p.len() < MIN_OBJECT_POINTS {
                 return None;
             }
-            let facing = if has_front {
-                facing_from_walls(&bbox, &walls).or_else(|| {
-                    let to_middle = room_middle? - bbox.center;
-                    Some(Facing {
-                        direction: to_middle.with_z(0.0).try_normalize()?,
-                        confidence: FACES_ROOM_CONFIDENCE,
-                        against_wall: false,
-                    })
-                })
-            } else {
-                None
-            };
             let articulated = table
                 .get(&n.class)
                 .is_some_and(|c| c.kind == EntityKind::Articulated);
-            let front = facing
-                .filter(|_| articulated)
-                .and_then(|f| perceive_front(&bbox, f.direction, p, opens_as_flap(&n.class)));
+            let flaps = opens_as_flap(&n.class);
+            let behind = if has_front {
+                walls_behind(&bbox, &walls)
+            } else {
+                Vec::new()
+            };
+            let faces_room = || {
+                let to_middle = room_middle? - bbox.center;
+                Some(Facing {
+                    direction: to_middle.with_z(0.0).try_normalize()?,
+                    confidence: FACES_ROOM_CONFIDENCE,
+                    against_wall: false,
+                })
+            };
+            let (facing, front) = if !has_front {
+                (None, None)
+            } else if articulated && !behind.is_empty() {
+                let (facing, front) =
+                    front_among_walls(&behind, |d| perceive_front(&bbox, d, p, flaps));
+                if facing.direction != behind[0].direction {
+                    tracing::debug!(
+                        "{}: in a corner, faces {} (its front's evidence), not away from the nearer wall",
+                        n.id,
+                        facing.direction
+                    );
+                }
+                (Some(facing), front)
+            } else {
+                let facing = behind.first().copied().or_else(faces_room);
+                let front = facing
+                    .filter(|_| articulated)
+                    .and_then(|f| perceive_front(&bbox, f.direction, p, flaps));
+                (facing, front)
+            };
             // An open door or drawer (or what stands in front) is no part of the closed object
             // the models are fitted as.
             let (bbox, points) = fitted_to_front(&bbox, front.as_ref(), p);
@@ -118,28 +141,63 @@ pub fn observed_objects<'a>(
         .collect()
 }
 
-/// Facing the inward normal (made horizontal) of the wall nearest to the box, if one is within
-/// `BACK_TO_WALL_M` of it.
-fn facing_from_walls(bbox: &GravityBox, walls: &[Plane]) -> Option<Facing> {
-    walls
+/// Facing away from each wall within `BACK_TO_WALL_M` of the box (its inward normal made
+/// horizontal), the nearest first.
+fn walls_behind(bbox: &GravityBox, walls: &[Plane]) -> Vec<Facing> {
+    let mut behind: Vec<(f32, Vec3)> = walls
         .iter()
-        .map(|w| {
+        .filter_map(|w| {
             let gap = bbox
                 .corners()
                 .iter()
                 .map(|c| w.signed_distance(*c))
                 .fold(f32::MAX, f32::min);
-            (gap, w)
+            let direction = w.normal.with_z(0.0).try_normalize()?;
+            (gap <= BACK_TO_WALL_M).then_some((gap, direction))
         })
-        .filter(|(gap, _)| *gap <= BACK_TO_WALL_M)
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .and_then(|(_, w)| {
-            Some(Facing {
-                direction: w.normal.with_z(0.0).try_normalize()?,
-                confidence: 1.0,
-                against_wall: true,
-            })
+        .collect();
+    behind.sort_by(|a, b| a.0.total_cmp(&b.0));
+    behind
+        .into_iter()
+        .map(|(_, direction)| Facing {
+            direction,
+            confidence: 1.0,
+            against_wall: true,
         })
+        .collect()
+}
+
+/// Which of the walls `behind` (nearest first, at least one) an articulated object has its back
+/// to, with its front perceived that way. Standing in a corner, its side is as near a wall as
+/// its back: the front is the face where bar handles, open doors or open drawers are seen, the
+/// nearest wall's way when no other face shows more.
+///
+/// Knobs are no evidence here: a side panel seen at a glancing angle, a few centimetres from its
+/// wall, shows bumps of depth noise that read as knobs (the kitchen's fridge: four on its side
+/// against its front's two bars), while a bar is a line of points over 8 cm or more.
+fn front_among_walls(
+    behind: &[Facing],
+    perceive: impl Fn(Vec3) -> Option<PerceivedFront>,
+) -> (Facing, Option<PerceivedFront>) {
+    let evidence = |front: &Option<PerceivedFront>| {
+        front.as_ref().map_or(0, |f| {
+            let bars = f.handles.iter().filter(|h| h.kind == HandleKind::Bar);
+            bars.count() + f.open_drawers.len() + f.open_doors.len()
+        })
+    };
+    let nearest = behind[0];
+    let mut best = (nearest, perceive(nearest.direction));
+    for &other in &behind[1..] {
+        // Another wall along the same side (a wall split in two) is no other face.
+        if other.direction.dot(nearest.direction) > CORNER_COS {
+            continue;
+        }
+        let front = perceive(other.direction);
+        if evidence(&front) > evidence(&best.1) {
+            best = (other, front);
+        }
+    }
+    best
 }
 
 /// How candidates are chosen and aligned (`--align`).
@@ -473,5 +531,82 @@ mod tests {
             record("chair_2")
         );
         assert!(placed("chair_2"));
+    }
+
+    /// Points every 2 cm over `corner + i u + j v`, `i` up to `a` and `j` up to `b` metres.
+    fn panel(corner: Vec3, u: Vec3, a: f32, v: Vec3, b: f32) -> Vec<Vec3> {
+        let (n_u, n_v) = ((a / 0.02).round() as usize, (b / 0.02).round() as usize);
+        (0..=n_u)
+            .flat_map(|i| (0..=n_v).map(move |j| corner + 0.02 * (i as f32 * u + j as f32 * v)))
+            .collect()
+    }
+
+    #[test]
+    fn a_cabinet_in_a_corner_faces_where_its_handles_are_not_away_from_the_nearer_wall() {
+        // A cabinet 0.6 wide, 0.56 deep and 0.86 high, its front at y = 0 facing -y with two
+        // bar handles standing 3 cm out; its back 4 cm from a wall at y = 0.6 and its left side
+        // 1 cm from a wall at x = -0.31. Seen: the front, the top and the right side.
+        let mut points = panel(Vec3::new(-0.3, 0.0, 0.0), Vec3::X, 0.6, Vec3::Z, 0.86);
+        points.extend(panel(
+            Vec3::new(-0.3, 0.0, 0.86),
+            Vec3::X,
+            0.6,
+            Vec3::Y,
+            0.56,
+        ));
+        points.extend(panel(
+            Vec3::new(0.3, 0.0, 0.0),
+            Vec3::Y,
+            0.56,
+            Vec3::Z,
+            0.86,
+        ));
+        let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
+        let bar = |x: f32| {
+            (0..=12).flat_map(move |i| {
+                let p = Vec3::new(x, -0.03, 0.3 + 0.02 * i as f32);
+                [p, p + 0.01 * Vec3::Y]
+            })
+        };
+        let walls = [
+            Plane::from_point_normal(Vec3::new(0.0, 0.6, 0.0), Vec3::NEG_Y),
+            Plane::from_point_normal(Vec3::new(-0.31, 0.0, 0.0), Vec3::X),
+        ];
+        let behind = walls_behind(&bbox, &walls);
+        assert_eq!(behind.len(), 2);
+        assert!(
+            behind[0].direction.x > 0.99,
+            "the side's wall is the nearer"
+        );
+        let perceive = |points: &[Vec3]| {
+            front_among_walls(&behind, |d| perceive_front(&bbox, d, points, false))
+        };
+        // Without handles the nearer wall decides, as for an object against one wall.
+        let (facing, _) = perceive(&points);
+        assert!(facing.direction.x > 0.99, "{facing:?}");
+        // Knobs are no evidence: noise on a glancing side panel reads as knobs.
+        let knob = |x: f32| {
+            (0..12).map(move |i| {
+                let a = i as f32 / 12.0 * std::f32::consts::TAU;
+                Vec3::new(x + 0.015 * a.cos(), -0.03, 0.6 + 0.015 * a.sin())
+            })
+        };
+        points.extend(knob(-0.2).chain(knob(0.2)));
+        let seen_knobs = perceive_front(&bbox, Vec3::NEG_Y, &points, false).expect("a front");
+        assert_eq!(seen_knobs.handles.len(), 2, "{:?}", seen_knobs.handles);
+        assert!(
+            seen_knobs
+                .handles
+                .iter()
+                .all(|h| h.kind == HandleKind::Knob)
+        );
+        let (facing, _) = perceive(&points);
+        assert!(facing.direction.x > 0.99, "{facing:?}");
+        points.extend(bar(-0.25).chain(bar(0.25)));
+        let (facing, front) = perceive(&points);
+        assert!(facing.direction.y < -0.99, "{facing:?}");
+        let bars = front.expect("a front").handles;
+        let bars = bars.iter().filter(|h| h.kind == HandleKind::Bar);
+        assert_eq!(bars.count(), 2);
     }
 }
