@@ -34,6 +34,7 @@ use crate::systems::stages::{StageError, StageMarks};
 
 pub use crate::cad::replace::replacement::AlignMethod;
 pub use crate::segmentation::SegmentationChoice;
+pub use crate::segmentation::onnx::OnnxDevice;
 
 #[derive(Clone, Debug)]
 pub struct ReconstructOptions {
@@ -48,6 +49,8 @@ pub struct ReconstructOptions {
     pub segment_every: usize,
     /// The onnx backend's model folder; `None` for ../shared/data/models.
     pub models: Option<PathBuf>,
+    /// Where the onnx backend's networks run (`--onnx-device`).
+    pub onnx_device: OnnxDevice,
     /// Joint fusion, or the Voxblox++ baseline.
     pub fusion: InstanceFusion,
     /// Ignore the sequence's gravity file and estimate gravity from the map.
@@ -80,6 +83,7 @@ impl ReconstructOptions {
             segmentation: SegmentationChoice::Oracle,
             segment_every: 1,
             models: None,
+            onnx_device: OnnxDevice::Cpu,
             fusion: InstanceFusion::Joint,
             estimate_gravity: false,
             cad: None,
@@ -120,6 +124,9 @@ pub struct ReconstructReport {
 /// What the panoptic map holds.
 #[derive(Clone, Debug, Serialize)]
 pub struct PanopticReport {
+    /// The segmentation service, and for onnx where its networks ran: "oracle", "none",
+    /// "onnx on cpu", "onnx on cuda".
+    pub segmentation: String,
     pub fusion: String,
     pub voxel_size_m: f32,
     pub blocks: usize,
@@ -335,6 +342,7 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
         },
         segmentation: options.segmentation,
         models: options.models.clone(),
+        onnx_device: options.onnx_device,
         progress: options.progress,
     };
     // Staged before the work, so that a live session's previews land in the output's own folder.
@@ -463,6 +471,18 @@ fn open_sequence(
 }
 
 /// report.json's figures, read from the world the stages and the export left.
+/// The segmentation service as report.json names it, with the onnx backend's device.
+fn segmentation_name(options: &ReconstructOptions) -> String {
+    match options.segmentation {
+        SegmentationChoice::Oracle => "oracle".into(),
+        SegmentationChoice::None => "none".into(),
+        SegmentationChoice::Onnx => match options.onnx_device {
+            OnnxDevice::Cpu => "onnx on cpu".into(),
+            OnnxDevice::Cuda => "onnx on cuda".into(),
+        },
+    }
+}
+
 fn collect_report(
     world: &mut World,
     options: &ReconstructOptions,
@@ -475,6 +495,7 @@ fn collect_report(
         world.get_resource::<PanopticSurface>(),
     ) {
         (Some(map), Some(surface)) => Some(PanopticReport {
+            segmentation: segmentation_name(options),
             fusion: options.fusion.name().into(),
             voxel_size_m: options.voxel,
             blocks: map.0.tsdf.blocks.len(),

@@ -13,7 +13,7 @@ use crate::panoptic::{
     ClassIds, ExtractionParams, MapperParams, PanopticEntity, PanopticMapper, carve_objects,
     extract_entities, map_sequence,
 };
-use crate::segmentation::onnx::{OnnxModels, OnnxParams, OnnxSegmentation};
+use crate::segmentation::onnx::{OnnxDevice, OnnxModels, OnnxParams, OnnxSegmentation};
 use crate::segmentation::oracle::OracleSegmentation;
 use crate::segmentation::{SegmentationChoice, SegmentationService};
 use crate::systems::ingest::InputSequence;
@@ -26,6 +26,8 @@ pub struct MappingConfig {
     pub segmentation: SegmentationChoice,
     /// The onnx backend's model folder; `None` for the shared data's.
     pub models: Option<std::path::PathBuf>,
+    /// Where the onnx backend's networks run.
+    pub onnx_device: OnnxDevice,
     pub progress: bool,
 }
 
@@ -36,6 +38,7 @@ impl Default for MappingConfig {
             params: MapperParams::new(0.02, crate::panoptic::InstanceFusion::Joint),
             segmentation: SegmentationChoice::Oracle,
             models: None,
+            onnx_device: OnnxDevice::Cpu,
             progress: false,
         }
     }
@@ -77,7 +80,10 @@ pub fn segmentation_service(
             OnnxSegmentation::for_sequence(
                 sequence,
                 &OnnxModels::in_dir(&dir),
-                OnnxParams::default(),
+                OnnxParams {
+                    device: config.onnx_device,
+                    ..OnnxParams::default()
+                },
             )
             .map(|o| Some(Box::new(o) as Box<dyn SegmentationService>))
         }

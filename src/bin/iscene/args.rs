@@ -11,6 +11,7 @@ use iscene::panoptic::InstanceFusion;
 use iscene::render::noise::NoiseChoice;
 use iscene::scene::generate::RoomStyle;
 use iscene::segmentation::SegmentationChoice;
+use iscene::segmentation::onnx::OnnxDevice;
 
 #[derive(Parser)]
 #[command(
@@ -265,6 +266,10 @@ pub(crate) struct ReconstructArgs {
     /// coco.names); default ../shared/data/models.
     #[arg(long)]
     pub(crate) models: Option<PathBuf>,
+    /// Where the onnx backend's networks run: ONNX Runtime's CPU provider, or its CUDA
+    /// provider (needs the onnxruntime-gpu library through ORT_DYLIB_PATH; docs/live.md).
+    #[arg(long, value_enum, default_value_t = OnnxDevice::Cpu)]
+    pub(crate) onnx_device: OnnxDevice,
     /// Map like this baseline instead of the joint fusion (for the ablation).
     #[arg(long, value_enum)]
     pub(crate) baseline: Option<InstanceFusion>,
@@ -326,6 +331,9 @@ pub(crate) enum BenchCommand {
         /// Folder of the models; default ../shared/data/models.
         #[arg(long, default_value = iscene::segmentation::onnx::OnnxModels::DEFAULT_DIR)]
         models: PathBuf,
+        /// Where the networks run (`reconstruct --onnx-device`).
+        #[arg(long, value_enum, default_value_t = OnnxDevice::Cpu)]
+        onnx_device: OnnxDevice,
     },
     /// TSDF integration speed, map memory and depth agreement on held-out frames of a sequence.
     Tsdf {

@@ -33,12 +33,14 @@ pub(crate) fn bench(command: BenchCommand) -> Result<(), IsceneError> {
             sequence,
             frames,
             models,
+            onnx_device,
         } => {
             let report = iscene::segmentation::onnx::bench::bench_segmentation(
                 &iscene::segmentation::onnx::bench::SegmentationBenchOptions {
                     sequence,
                     frames,
                     models,
+                    device: onnx_device,
                 },
             )?;
             print_json(&report)

@@ -41,6 +41,7 @@ pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<()
         segmentation: args.segmentation,
         segment_every: args.segment_every as usize,
         models: args.models,
+        onnx_device: args.onnx_device,
         fusion: args.baseline.unwrap_or(InstanceFusion::Joint),
         estimate_gravity: args.estimate_gravity,
         cad: args.cad,

@@ -9,18 +9,22 @@ use crate::error::{InputError, IsceneError};
 use crate::io::Sequence;
 use crate::segmentation::SegmentationService;
 use crate::segmentation::geometric::{GeometricParams, segment_depth};
-use crate::segmentation::onnx::{OnnxModels, OnnxParams, OnnxSegmentation};
+use crate::segmentation::onnx::{OnnxDevice, OnnxModels, OnnxParams, OnnxSegmentation};
 
 pub struct SegmentationBenchOptions {
     pub sequence: PathBuf,
     pub frames: (usize, Option<usize>, usize),
     pub models: PathBuf,
+    /// Where the networks run.
+    pub device: OnnxDevice,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SegmentationBenchReport {
     pub sequence: PathBuf,
     pub frames: usize,
+    /// Where the networks ran.
+    pub device: OnnxDevice,
     /// Loading ONNX Runtime and the models, and the layout survey (once per sequence).
     pub setup_s: f64,
     /// Per frame on one thread: both networks, the layout labels and the masks (the geometric
@@ -53,7 +57,10 @@ pub fn bench_segmentation(
         let backend = OnnxSegmentation::for_sequence(
             &sequence,
             &OnnxModels::in_dir(&options.models),
-            OnnxParams::default(),
+            OnnxParams {
+                device: options.device,
+                ..OnnxParams::default()
+            },
         )?;
         let setup_s = clock.elapsed().as_secs_f64();
         let true_class: BTreeMap<u16, String> = sequence
@@ -106,6 +113,7 @@ pub fn bench_segmentation(
         Ok(SegmentationBenchReport {
             sequence: options.sequence.clone(),
             frames: times.len(),
+            device: options.device,
             setup_s,
             mean_ms_per_frame: times.iter().sum::<f64>() / times.len() as f64,
             median_ms_per_frame: sorted[sorted.len() / 2],

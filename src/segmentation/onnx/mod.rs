@@ -25,6 +25,7 @@ use crate::io::{Frame, Sequence};
 use crate::segmentation::geometric::GeometricSegmentation;
 use crate::segmentation::onnx::layout::{LayoutLabel, LayoutParams, RoomLayout};
 use crate::segmentation::onnx::masks::{MaskInputs, MaskParams, ObjectDetection, panoptic_masks};
+pub use crate::segmentation::onnx::runtime::OnnxDevice;
 use crate::segmentation::onnx::yolox::Detection;
 use crate::segmentation::{PanopticFrame, SegmentationService};
 
@@ -83,6 +84,8 @@ pub struct OnnxParams {
     pub nms_iou: f32,
     pub masks: MaskParams,
     pub layout: LayoutParams,
+    /// Where the two networks run.
+    pub device: OnnxDevice,
 }
 
 impl Default for OnnxParams {
@@ -92,6 +95,7 @@ impl Default for OnnxParams {
             nms_iou: 0.45,
             masks: MaskParams::default(),
             layout: LayoutParams::default(),
+            device: OnnxDevice::Cpu,
         }
     }
 }
@@ -174,8 +178,8 @@ impl OnnxSegmentation {
 
     fn open_networks(&self) -> Result<Networks, InputError> {
         Ok(Networks {
-            detector: runtime::open_session(&self.models.detector)?,
-            semantic: runtime::open_session(&self.models.semantic)?,
+            detector: runtime::open_session(&self.models.detector, self.params.device)?,
+            semantic: runtime::open_session(&self.models.semantic, self.params.device)?,
         })
     }
 

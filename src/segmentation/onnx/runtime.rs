@@ -87,9 +87,23 @@ pub fn environment() -> Result<&'static Environment, InputError> {
         .map_err(|reason| InputError::missing(LIBRARY_NAME, reason.to_string()))
 }
 
-/// A session for the model at `path` on one intra-op thread: frames run in parallel instead,
-/// one session per worker.
-pub fn open_session(path: &Path) -> Result<Session, InputError> {
+/// Where the networks run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum OnnxDevice {
+    /// ONNX Runtime's CPU provider, one intra-op thread per session (the default).
+    #[default]
+    Cpu,
+    /// ONNX Runtime's CUDA provider on GPU 0. Needs a library built with it (the
+    /// onnxruntime-gpu wheel's, with libonnxruntime_providers_cuda.so beside it) and CUDA's
+    /// runtime libraries on the loader's path; without them the run stops, it never falls back
+    /// to the CPU unasked.
+    Cuda,
+}
+
+/// A session for the model at `path` on `device`. On the CPU one intra-op thread: frames run in
+/// parallel instead, one session per worker.
+pub fn open_session(path: &Path, device: OnnxDevice) -> Result<Session, InputError> {
     if !path.is_file() {
         return Err(InputError::missing(
             path,
@@ -100,10 +114,26 @@ pub fn open_session(path: &Path) -> Result<Session, InputError> {
     let fail = |e: &dyn std::fmt::Display| {
         InputError::invalid(path, format!("not a usable ONNX model: {e}"))
     };
-    Session::builder(env)
+    let builder = Session::builder(env)
         .map_err(|e| fail(&e))?
         .with_intra_threads(1)
-        .map_err(|e| fail(&e))?
-        .commit_from_file(path)
-        .map_err(|e| fail(&e))
+        .map_err(|e| fail(&e))?;
+    let mut builder = match device {
+        OnnxDevice::Cpu => builder,
+        OnnxDevice::Cuda => builder
+            .with_execution_providers([ort::ep::CUDA::default().build().error_on_failure()])
+            .map_err(|e| {
+                InputError::invalid(
+                    path,
+                    format!(
+                        "--onnx-device cuda: ONNX Runtime's CUDA provider did not start ({}); \
+                         it needs the onnxruntime-gpu library (ORT_DYLIB_PATH, with \
+                         libonnxruntime_providers_cuda.so beside it) and CUDA's libraries on \
+                         LD_LIBRARY_PATH (docs/live.md)",
+                        e.to_string().trim()
+                    ),
+                )
+            })?,
+    };
+    builder.commit_from_file(path).map_err(|e| fail(&e))
 }
