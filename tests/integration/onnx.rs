@@ -411,3 +411,35 @@ fn a_missing_model_is_a_clear_error_with_exit_code_2() {
     assert!(stderr.contains("yolox_nano.onnx"), "{stderr}");
     assert!(!out.path().join("result").exists());
 }
+
+/// CI's library (the CPU wheel's) has no CUDA provider: asking for it stops the run with a clear
+/// error instead of mapping on the CPU behind the user's back. (On the H200 with the
+/// onnxruntime-gpu library the same command maps: docs/live.md.)
+#[test]
+fn cuda_without_its_provider_is_a_clear_error_with_exit_code_2() {
+    let out = tempfile::tempdir().expect("tempdir");
+    let target = out.path().join("result");
+    let input = common::shared_data("rgbd/7scenes-redkitchen");
+    let (code, _, stderr) = common::iscene(
+        &[
+            "reconstruct",
+            input.to_str().expect("utf-8"),
+            "--segmentation",
+            "onnx",
+            "--onnx-device",
+            "cuda",
+            "--frames",
+            "0:10",
+            "--out",
+            target.to_str().expect("utf-8"),
+        ],
+        &common::root(),
+    );
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("yolox_nano.onnx"), "{stderr}");
+    assert!(
+        stderr.contains("--onnx-device cuda: ONNX Runtime's CUDA provider did not start"),
+        "{stderr}"
+    );
+    assert!(!target.exists(), "no output left behind");
+}

@@ -11,7 +11,7 @@ pub mod runtime;
 pub mod yolox;
 
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Condvar, Mutex};
 
 use image::RgbImage;
 use ort::session::Session;
@@ -106,13 +106,29 @@ struct Networks {
     semantic: Session,
 }
 
+/// The pairs not in use, and how many are open in all.
+#[derive(Default)]
+struct NetworkPool {
+    idle: Vec<Networks>,
+    open: usize,
+}
+
+/// Pairs open at most on a GPU. Each CUDA session starts its own kernels and memory arena, and
+/// the sessions share one device: with one pair per CPU worker (16 on the H200 machine) their
+/// start-up and contention cost more than the networks (100 frames of 7-Scenes took 41 s to map
+/// that way, 14.7-15.1 s with four pairs, 10.3-11.5 s with two, all with cuDNN's exhaustive
+/// search). Two pairs overlap one frame's pre- and post-processing with another's inference.
+const MAX_GPU_NETWORKS: usize = 2;
+
 pub struct OnnxSegmentation {
     models: OnnxModels,
     /// Per detector label, the project class and its semantic labels.
     class_of_label: Vec<Option<(String, Vec<u8>)>>,
     layout: RoomLayout,
     params: OnnxParams,
-    pool: Mutex<Vec<Networks>>,
+    pool: Mutex<NetworkPool>,
+    /// Signalled when a pair goes back to the pool.
+    returned: Condvar,
 }
 
 /// Labels compare without case or spaces ("dining table" is the names file's "diningtable").
@@ -164,10 +180,11 @@ impl OnnxSegmentation {
             class_of_label,
             layout: RoomLayout::survey(sequence, params.layout)?,
             params,
-            pool: Mutex::new(Vec::new()),
+            pool: Mutex::new(NetworkPool::default()),
+            returned: Condvar::new(),
         };
         // Open one pair now, so a missing library or model fails before any mapping starts.
-        let networks = backend.open_networks()?;
+        let networks = backend.take_networks()?;
         backend.give_back(networks);
         Ok(backend)
     }
@@ -183,18 +200,37 @@ impl OnnxSegmentation {
         })
     }
 
+    /// A pair from the pool: an idle one, else a new one while the device allows more (on the
+    /// CPU one per worker; on a GPU `MAX_GPU_NETWORKS`), else the next one given back.
     fn take_networks(&self) -> Result<Networks, InputError> {
-        let pooled = self.pool.lock().map(|mut p| p.pop()).unwrap_or(None);
-        match pooled {
-            Some(n) => Ok(n),
-            None => self.open_networks(),
+        let limit = match self.params.device {
+            OnnxDevice::Cpu => usize::MAX,
+            OnnxDevice::Cuda => MAX_GPU_NETWORKS,
+        };
+        let poisoned = |_| InputError::invalid(&self.models.detector, "a network worker panicked");
+        let mut pool = self.pool.lock().map_err(poisoned)?;
+        loop {
+            if let Some(n) = pool.idle.pop() {
+                return Ok(n);
+            }
+            if pool.open < limit {
+                pool.open += 1;
+                drop(pool);
+                let opened = self.open_networks();
+                if opened.is_err() {
+                    self.pool.lock().map_err(poisoned)?.open -= 1;
+                }
+                return opened;
+            }
+            pool = self.returned.wait(pool).map_err(poisoned)?;
         }
     }
 
     fn give_back(&self, networks: Networks) {
         if let Ok(mut pool) = self.pool.lock() {
-            pool.push(networks);
+            pool.idle.push(networks);
         }
+        self.returned.notify_one();
     }
 
     /// The detector's boxes on `image`, with labels mapped to project classes (others dropped).
