@@ -49,6 +49,10 @@ pub struct ClassInfo {
     pub voc: Vec<String>,
     /// Classes a segmenter confuses this one with (used by the oracle's noise model).
     pub confusable: Vec<String>,
+    /// The front is one of the two long vertical faces (a microwave is always wider than deep):
+    /// an object standing free, with no wall behind it, faces along its box's short axis.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub front_on_long_side: bool,
 }
 
 impl ClassInfo {

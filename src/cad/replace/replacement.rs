@@ -32,6 +32,9 @@ const BACK_TO_WALL_M: f32 = 0.15;
 /// Walls whose normals are closer than this cosine (about 60 degrees) are on the same side of an
 /// object, not a corner.
 const CORNER_COS: f32 = 0.5;
+/// A box whose long side is at least this many times its short one has long sides to tell (a
+/// microwave's are 1.25-1.35 times its depth; the boxes seen of free-standing ones 1.1-1.35).
+const LONG_SIDE_RATIO: f32 = 1.1;
 /// The objects an object holds define its top when they rest at most this far (metres) under
 /// its box's top.
 const TOP_FROM_CHILDREN_M: f32 = 0.1;
@@ -91,6 +94,7 @@ pub fn observed_objects<'a>(
                 .get(&n.class)
                 .is_some_and(|c| c.kind == EntityKind::Articulated);
             let flaps = opens_as_flap(&n.class);
+            let long_side = table.get(&n.class).is_some_and(|c| c.front_on_long_side);
             let behind = if has_front {
                 walls_behind(&bbox, &walls)
             } else {
@@ -108,7 +112,7 @@ pub fn observed_objects<'a>(
                 (None, None)
             } else if articulated && !behind.is_empty() {
                 let (facing, front) =
-                    front_among_walls(&behind, |d| perceive_front(&bbox, d, p, flaps));
+                    front_among_faces(&behind, |d| perceive_front(&bbox, d, p, flaps));
                 if facing.direction != behind[0].direction {
                     tracing::debug!(
                         "{}: in a corner, faces {} (its front's evidence), not away from the nearer wall",
@@ -116,6 +120,13 @@ pub fn observed_objects<'a>(
                         facing.direction
                     );
                 }
+                (Some(facing), front)
+            } else if let Some(long) = (articulated && behind.is_empty() && long_side)
+                .then(|| long_faces(&bbox, faces_room().map(|f| f.direction)))
+                .flatten()
+            {
+                let (facing, front) =
+                    front_among_faces(&long, |d| perceive_front(&bbox, d, p, flaps));
                 (Some(facing), front)
             } else {
                 let facing = behind.first().copied().or_else(faces_room);
@@ -167,16 +178,17 @@ fn walls_behind(bbox: &GravityBox, walls: &[Plane]) -> Vec<Facing> {
         .collect()
 }
 
-/// Which of the walls `behind` (nearest first, at least one) an articulated object has its back
-/// to, with its front perceived that way. Standing in a corner, its side is as near a wall as
-/// its back: the front is the face where bar handles, open doors or open drawers are seen, the
-/// nearest wall's way when no other face shows more.
+/// Which of the `faces` (facings, the prior's first, at least one) an articulated object's front
+/// is, with the front perceived that way: the face where bar handles, open doors or open drawers
+/// are seen, the first when no other face shows more. The faces are those away from the walls
+/// within `BACK_TO_WALL_M` (in a corner, a side is as near a wall as the back), or the two long
+/// faces of a class whose front is on a long side.
 ///
 /// Knobs are no evidence here: a side panel seen at a glancing angle, a few centimetres from its
 /// wall, shows bumps of depth noise that read as knobs (the kitchen's fridge: four on its side
 /// against its front's two bars), while a bar is a line of points over 8 cm or more.
-fn front_among_walls(
-    behind: &[Facing],
+fn front_among_faces(
+    faces: &[Facing],
     perceive: impl Fn(Vec3) -> Option<PerceivedFront>,
 ) -> (Facing, Option<PerceivedFront>) {
     let evidence = |front: &Option<PerceivedFront>| {
@@ -185,11 +197,11 @@ fn front_among_walls(
             bars.count() + f.open_drawers.len() + f.open_doors.len()
         })
     };
-    let nearest = behind[0];
-    let mut best = (nearest, perceive(nearest.direction));
-    for &other in &behind[1..] {
+    let first = faces[0];
+    let mut best = (first, perceive(first.direction));
+    for &other in &faces[1..] {
         // Another wall along the same side (a wall split in two) is no other face.
-        if other.direction.dot(nearest.direction) > CORNER_COS {
+        if other.direction.dot(first.direction) > CORNER_COS {
             continue;
         }
         let front = perceive(other.direction);
@@ -198,6 +210,30 @@ fn front_among_walls(
         }
     }
     best
+}
+
+/// The outward normals of `bbox`'s two long vertical faces, the one nearer `toward` (the room's
+/// middle) first, as facings of a free-standing object; `None` when the box is too near square
+/// (sides within `LONG_SIDE_RATIO`) to tell its long sides.
+fn long_faces(bbox: &GravityBox, toward: Option<Vec3>) -> Option<[Facing; 2]> {
+    let (sin, cos) = bbox.yaw.sin_cos();
+    let normal = if bbox.size.x >= LONG_SIDE_RATIO * bbox.size.y {
+        Vec3::new(-sin, cos, 0.0)
+    } else if bbox.size.y >= LONG_SIDE_RATIO * bbox.size.x {
+        Vec3::new(cos, sin, 0.0)
+    } else {
+        return None;
+    };
+    let normal = if toward.is_some_and(|t| t.dot(normal) < 0.0) {
+        -normal
+    } else {
+        normal
+    };
+    Some([normal, -normal].map(|direction| Facing {
+        direction,
+        confidence: FACES_ROOM_CONFIDENCE,
+        against_wall: false,
+    }))
 }
 
 /// How candidates are chosen and aligned (`--align`).
@@ -579,7 +615,7 @@ mod tests {
             "the side's wall is the nearer"
         );
         let perceive = |points: &[Vec3]| {
-            front_among_walls(&behind, |d| perceive_front(&bbox, d, points, false))
+            front_among_faces(&behind, |d| perceive_front(&bbox, d, points, false))
         };
         // Without handles the nearer wall decides, as for an object against one wall.
         let (facing, _) = perceive(&points);
@@ -608,5 +644,53 @@ mod tests {
         let bars = front.expect("a front").handles;
         let bars = bars.iter().filter(|h| h.kind == HandleKind::Bar);
         assert_eq!(bars.count(), 2);
+    }
+
+    #[test]
+    fn a_free_standing_microwave_faces_along_its_short_axis_where_its_handle_is() {
+        // A microwave 0.5 wide (x) and 0.38 deep (y), 0.3 high, on a table in the room's middle,
+        // seen all round; the room's middle lies off its short side (+x, a little -y).
+        let mut points = Vec::new();
+        for (corner, u, a, v, b) in [
+            (Vec3::new(-0.25, -0.19, 0.75), Vec3::X, 0.5, Vec3::Z, 0.3),
+            (Vec3::new(-0.25, 0.19, 0.75), Vec3::X, 0.5, Vec3::Z, 0.3),
+            (Vec3::new(-0.25, -0.19, 0.75), Vec3::Y, 0.38, Vec3::Z, 0.3),
+            (Vec3::new(0.25, -0.19, 0.75), Vec3::Y, 0.38, Vec3::Z, 0.3),
+            (Vec3::new(-0.25, -0.19, 1.05), Vec3::X, 0.5, Vec3::Y, 0.38),
+        ] {
+            points.extend(panel(corner, u, a, v, b));
+        }
+        let bbox = GravityBox::enclosing(&points, 0.0).expect("box");
+        let toward = Vec3::new(1.0, -0.3, 0.0).normalize();
+        let faces = long_faces(&bbox, Some(toward)).expect("long sides");
+        // The short face (+x) is nearest the room's middle; the long face on its side comes first.
+        assert!(faces[0].direction.y < -0.99, "{:?}", faces[0]);
+        assert!(faces[1].direction.y > 0.99, "{:?}", faces[1]);
+        let perceive = |points: &[Vec3]| {
+            front_among_faces(&faces, |d| perceive_front(&bbox, d, points, false))
+        };
+        let (facing, _) = perceive(&points);
+        assert!(
+            facing.direction.y < -0.99,
+            "no evidence: the prior's long face, {facing:?}"
+        );
+        // A bar handle on the far long face (+y) turns it.
+        points.extend((0..=10).flat_map(|i| {
+            let p = Vec3::new(0.18, 0.22, 0.8 + 0.02 * i as f32);
+            [p, p - 0.01 * Vec3::Y]
+        }));
+        let (facing, front) = perceive(&points);
+        assert!(facing.direction.y > 0.99, "{facing:?}");
+        assert!(
+            front
+                .expect("a front")
+                .handles
+                .iter()
+                .any(|h| h.kind == HandleKind::Bar)
+        );
+        // A box near square has no long sides to tell.
+        let square =
+            GravityBox::enclosing(&[Vec3::ZERO, Vec3::new(0.5, 0.48, 0.3)], 0.0).expect("box");
+        assert!(long_faces(&square, Some(toward)).is_none());
     }
 }
