@@ -200,7 +200,7 @@ fn front_among_faces(
     let first = faces[0];
     let mut best = (first, perceive(first.direction));
     for &other in &faces[1..] {
-        // Another wall along the same side (a wall split in two) is no other face.
+        // A face along the first (a wall split in two behind the same side) is no other face.
         if other.direction.dot(first.direction) > CORNER_COS {
             continue;
         }
