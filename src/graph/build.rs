@@ -238,16 +238,25 @@ pub fn build_contact_graph_with_surfaces(
     let mut supports = infer_supports(&support_input, &params.support);
     // A counter stands on the floor, whatever share of the floor around it was seen, and never
     // hangs on the wall behind it (a wall cabinet would have been found above it, not a top at
-    // counter height).
+    // counter height). So does a unit hanging too low for a wall unit over a floor nobody saw
+    // (`stands_with_its_foot_hidden`).
     let floor = shaped
         .iter()
         .position(|(i, _)| entities[*i].class == "floor");
     if let Some(floor) = floor
         && let Some(&plane) = shaped[floor].1.planes.first()
     {
-        for (k, (i, _)) in shaped.iter().enumerate() {
+        for (k, (i, shape)) in shaped.iter().enumerate() {
             let unsupported = matches!(supports[k], None | Some(SupportChoice::Wall { .. }));
-            if entities[*i].class == COUNTER_CLASS && unsupported {
+            if unsupported
+                && (entities[*i].class == COUNTER_CLASS
+                    || stands_with_its_foot_hidden(
+                        entities[*i].class,
+                        &shape.bbox,
+                        &plane,
+                        &shaped[floor].1.points,
+                    ))
+            {
                 supports[k] = Some(SupportChoice::Below {
                     parent: floor,
                     plane,
@@ -415,6 +424,53 @@ fn square_with_room(
 
 /// The class of the counters found from geometry (graph/counters.rs).
 pub const COUNTER_CLASS: &str = "counter";
+
+/// Classes that stand on the floor or hang on a wall as a wall unit.
+const FLOOR_OR_WALL_UNITS: [&str; 4] = ["cabinet", "fridge", "oven", "dishwasher"];
+/// A wall unit hangs with its bottom at least this high (metres) above the floor: above a
+/// counter's top (0.9 m) and the working room over it; the generator hangs them at 1.4-1.6 m.
+const LOWEST_WALL_UNIT_M: f32 = 0.9;
+/// Floor points under an object's footprint (shrunk by `FOOT_MARGIN_M`) that show the floor was
+/// seen beneath it.
+const FLOOR_SEEN_BENEATH_POINTS: usize = 10;
+const FOOT_MARGIN_M: f32 = 0.05;
+
+/// Whether an object of `class` that nothing holds from below (or that only touches a wall)
+/// stands on the floor with its lower part unseen: it is a unit that stands on the floor or
+/// hangs on a wall, it hangs lower than a wall unit would, and no floor point lies under its
+/// footprint. A nightstand behind a bed, seen over the bed as its top 20 cm with a drawer
+/// pulled out, otherwise hung on the wall behind it with a box 20-38 cm high and one drawer
+/// instead of three (seeds 3, 21, 38, 43); a unit truly hanging that low leaves the floor under
+/// it in view.
+fn stands_with_its_foot_hidden(
+    class: &str,
+    bbox: &GravityBox,
+    floor: &Plane,
+    floor_points: &[Vec3],
+) -> bool {
+    if !FLOOR_OR_WALL_UNITS.contains(&class) {
+        return false;
+    }
+    let bottom = bbox.center.with_z(bbox.bottom_z());
+    let above_floor = floor.signed_distance(bottom);
+    if above_floor >= LOWEST_WALL_UNIT_M {
+        return false;
+    }
+    let foot = GravityBox {
+        center: bbox.center.with_z(bottom.z - 0.5 * above_floor),
+        yaw: bbox.yaw,
+        size: Vec3::new(
+            (bbox.size.x - 2.0 * FOOT_MARGIN_M).max(0.0),
+            (bbox.size.y - 2.0 * FOOT_MARGIN_M).max(0.0),
+            above_floor + 2.0 * FOOT_MARGIN_M,
+        ),
+    };
+    floor_points
+        .iter()
+        .filter(|p| foot.contains(**p, 0.0))
+        .count()
+        < FLOOR_SEEN_BENEATH_POINTS
+}
 /// A counter claims the points of other objects within this distance (metres) of its solid:
 /// a voxel and a half, the reach of a label bleeding onto its front.
 const COUNTER_CLAIM_M: f32 = 0.03;
@@ -631,6 +687,46 @@ mod tests {
         let node = graph.node("counter_1").expect("counter");
         let bottom = node.bbox.center[2] - node.bbox.size[2] / 2.0;
         assert!(bottom.abs() < 0.02, "{:?}", node.bbox);
+    }
+
+    #[test]
+    fn a_cabinet_seen_as_its_top_over_an_unseen_floor_stands_on_it_a_wall_unit_still_hangs() {
+        // A floor seen only in front of a wall at y = 3 (y < 2.3); against the wall a cabinet
+        // seen as its top 20 cm (0.35-0.55 m: a bed hid the rest), and a wall unit at 1.4-1.9 m.
+        let floor = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.02), Vec3::new(4.0, 2.3, 0.0));
+        let wall = TriMesh::cuboid(Vec3::new(0.0, 3.0, 0.0), Vec3::new(4.0, 3.02, 2.5));
+        let low = TriMesh::cuboid(Vec3::new(1.0, 2.4, 0.35), Vec3::new(1.45, 3.0, 0.55));
+        let high = TriMesh::cuboid(Vec3::new(2.5, 2.65, 1.4), Vec3::new(3.3, 3.0, 1.9));
+        let graph_with = |floor: &TriMesh| {
+            let entity = |id, class, kind, mesh| GraphEntity {
+                id,
+                class,
+                kind,
+                mesh,
+                sighted: &[],
+            };
+            let entities = [
+                entity("floor", "floor", EntityKind::Layout, floor),
+                entity("wall_0", "wall", EntityKind::Layout, &wall),
+                entity("cabinet_1", "cabinet", EntityKind::Articulated, &low),
+                entity("cabinet_2", "cabinet", EntityKind::Articulated, &high),
+            ];
+            build_contact_graph(&entities, &ContactGraphParams::default())
+        };
+        let graph = graph_with(&floor);
+        assert_eq!(graph.parent_of("cabinet_1"), Some("floor"), "{graph:?}");
+        let node = graph.node("cabinet_1").expect("cabinet");
+        let bottom = node.bbox.center[2] - node.bbox.size[2] / 2.0;
+        assert!(
+            bottom.abs() < 0.02,
+            "its box reaches the floor: {:?}",
+            node.bbox
+        );
+        assert_eq!(graph.parent_of("cabinet_2"), Some("wall_0"), "{graph:?}");
+        // With the floor under it seen, the low unit hangs where it was seen.
+        let seen = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.02), Vec3::new(4.0, 3.0, 0.0));
+        let graph = graph_with(&seen);
+        assert_ne!(graph.parent_of("cabinet_1"), Some("floor"), "{graph:?}");
     }
 
     #[test]
