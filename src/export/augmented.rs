@@ -11,8 +11,8 @@ use std::collections::{HashMap, HashSet};
 use glam::{Affine3A, IVec3, Mat4, Vec3};
 
 use crate::cad::db::database::CadDatabase;
+use crate::geometry::surface_points::surface_points;
 use crate::graph::ContactGraph;
-use crate::graph::build::surface_points;
 use crate::panoptic::PanopticEntity;
 use crate::panoptic::panoptic_dir::class_color;
 

@@ -11,6 +11,7 @@ pub mod plane;
 pub mod point_triangle;
 pub mod principal_axis;
 pub mod ransac;
+pub mod surface_points;
 
 pub use gravity_box::GravityBox;
 pub use mesh::TriMesh;

@@ -8,18 +8,15 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::classes::{ClassTable, EntityKind};
-use crate::geometry::clusters::in_largest_cluster;
-use crate::geometry::ransac::{RansacParams, ransac_planes};
+use crate::geometry::ransac::RansacParams;
 use crate::geometry::{GravityBox, Plane, TriMesh};
-use crate::graph::layout_plane::layout_plane;
+use crate::graph::entity_shape::{Shape, layout_shape, lies_on, object_shape, room_center};
+use crate::graph::floor_units::stands_with_its_foot_hidden;
 use crate::graph::proximal::{PROXIMAL_MARGIN, ProximalMargins, proximal_edges};
 use crate::graph::sighted_extent::reach_sighted;
-use crate::graph::sparse_ends::keep_dense_extent;
 use crate::graph::support::{SupportChoice, SupportEntity, SupportParams, infer_supports, rest_on};
 use crate::graph::{ContactGraph, GraphEdge, GraphNode};
 
-/// Layout boxes are slabs this thick behind their surface (as in the ground truth).
-pub const LAYOUT_THICKNESS: f32 = 0.1;
 /// A map's clustering cell is at least this (metres): in a 1 cm map a monitor's neck, a voxel
 /// or two thick, parted its stand from its screen on a 2 cm grid, and its box lost the stand.
 const MIN_MAP_CLUSTER_CELL_M: f32 = 0.04;
@@ -34,6 +31,25 @@ pub struct GraphEntity<'a> {
     /// What precise frames measured of its outline, a list per frame (`panoptic::sighted`),
     /// world frame; empty for most.
     pub sighted: &'a [Vec<Vec3>],
+}
+
+#[cfg(test)]
+impl<'a> GraphEntity<'a> {
+    /// An entity with no outline measured by precise frames (most of them).
+    pub(crate) fn unsighted(
+        id: &'a str,
+        class: &'a str,
+        kind: EntityKind,
+        mesh: &'a TriMesh,
+    ) -> Self {
+        Self {
+            id,
+            class,
+            kind,
+            mesh,
+            sighted: &[],
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -137,15 +153,6 @@ impl Default for ContactGraphParams {
             sighted_max_shrink: 0.02,
         }
     }
-}
-
-/// An entity's geometry for the graph: surface points (with their normals for objects), box,
-/// planes.
-struct Shape {
-    points: Vec<Vec3>,
-    normals: Vec<Vec3>,
-    bbox: GravityBox,
-    planes: Vec<Plane>,
 }
 
 /// Builds the contact graph of `entities`; entities without a usable surface (fewer than three
@@ -397,12 +404,6 @@ fn off_support(shape: &Shape, plane: &Plane, params: &ContactGraphParams) -> Opt
     (kept.len() < shape.points.len() && kept.len() * 2 >= shape.points.len()).then_some(kept)
 }
 
-/// Whether a surface point with normal `n` lies on `surface` (less than `band` in front of it, or
-/// behind it) and faces the way it does: then it is that surface, whatever label it took.
-fn lies_on(surface: &Plane, p: Vec3, n: Vec3, band: f32) -> bool {
-    surface.signed_distance(p) < band && n.dot(surface.normal) > 0.85
-}
-
 /// `bbox`, or the box of `points` square with the room (walls' yaw `room_yaw`, if there are
 /// walls) when its footprint is nearly as small.
 fn square_with_room(
@@ -424,53 +425,6 @@ fn square_with_room(
 
 /// The class of the counters found from geometry (graph/counters.rs).
 pub const COUNTER_CLASS: &str = "counter";
-
-/// Classes that stand on the floor or hang on a wall as a wall unit.
-const FLOOR_OR_WALL_UNITS: [&str; 4] = ["cabinet", "fridge", "oven", "dishwasher"];
-/// A wall unit hangs with its bottom at least this high (metres) above the floor: above a
-/// counter's top (0.9 m) and the working room over it; the generator hangs them at 1.4-1.6 m.
-const LOWEST_WALL_UNIT_M: f32 = 0.9;
-/// Floor points under an object's footprint (shrunk by `FOOT_MARGIN_M`) that show the floor was
-/// seen beneath it.
-const FLOOR_SEEN_BENEATH_POINTS: usize = 10;
-const FOOT_MARGIN_M: f32 = 0.05;
-
-/// Whether an object of `class` that nothing holds from below (or that only touches a wall)
-/// stands on the floor with its lower part unseen: it is a unit that stands on the floor or
-/// hangs on a wall, it hangs lower than a wall unit would, and no floor point lies under its
-/// footprint. A nightstand behind a bed, seen over the bed as its top 20 cm with a drawer
-/// pulled out, otherwise hung on the wall behind it with a box 20-38 cm high and one drawer
-/// instead of three (seeds 3, 21, 38, 43); a unit truly hanging that low leaves the floor under
-/// it in view.
-fn stands_with_its_foot_hidden(
-    class: &str,
-    bbox: &GravityBox,
-    floor: &Plane,
-    floor_points: &[Vec3],
-) -> bool {
-    if !FLOOR_OR_WALL_UNITS.contains(&class) {
-        return false;
-    }
-    let bottom = bbox.center.with_z(bbox.bottom_z());
-    let above_floor = floor.signed_distance(bottom);
-    if above_floor >= LOWEST_WALL_UNIT_M {
-        return false;
-    }
-    let foot = GravityBox {
-        center: bbox.center.with_z(bottom.z - 0.5 * above_floor),
-        yaw: bbox.yaw,
-        size: Vec3::new(
-            (bbox.size.x - 2.0 * FOOT_MARGIN_M).max(0.0),
-            (bbox.size.y - 2.0 * FOOT_MARGIN_M).max(0.0),
-            above_floor + 2.0 * FOOT_MARGIN_M,
-        ),
-    };
-    floor_points
-        .iter()
-        .filter(|p| foot.contains(**p, 0.0))
-        .count()
-        < FLOOR_SEEN_BENEATH_POINTS
-}
 /// A counter claims the points of other objects within this distance (metres) of its solid:
 /// a voxel and a half, the reach of a label bleeding onto its front.
 const COUNTER_CLAIM_M: f32 = 0.03;
@@ -488,178 +442,10 @@ fn counter_solid(top: &GravityBox) -> GravityBox {
     }
 }
 
-/// The middle of the room: the centre of the floor if there is one, else of everything.
-fn room_center(entities: &[GraphEntity]) -> Vec3 {
-    let mean = |meshes: &mut dyn Iterator<Item = &TriMesh>| {
-        let (sum, n) = meshes
-            .flat_map(|m| m.positions.iter())
-            .fold((Vec3::ZERO, 0usize), |(s, n), p| (s + *p, n + 1));
-        (n > 0).then(|| sum / n as f32)
-    };
-    mean(
-        &mut entities
-            .iter()
-            .filter(|e| e.class == "floor")
-            .map(|e| e.mesh),
-    )
-    .or_else(|| mean(&mut entities.iter().map(|e| e.mesh)))
-    .unwrap_or(Vec3::ZERO)
-}
-
-fn layout_shape(
-    entity: &GraphEntity,
-    room_center: Vec3,
-    params: &ContactGraphParams,
-) -> Option<Shape> {
-    let points = surface_points(entity.mesh, params.sample_spacing).points;
-    if points.len() < 3 {
-        return None;
-    }
-    // The layout piece is its largest plane; voxels a noisy segmentation gave it elsewhere (a
-    // cabinet side labelled wall) would make its slab thick.
-    let main = ransac_planes(
-        &points,
-        &RansacParams {
-            max_planes: 1,
-            ..params.ransac
-        },
-    );
-    let inliers: Vec<Vec3> = match main.first() {
-        Some(p) => p.inliers.iter().map(|&i| points[i as usize]).collect(),
-        None => points,
-    };
-    let plane = layout_plane(entity.class, &inliers, room_center)?;
-    // The slab's face is the fitted plane itself: the inliers' spread in front of it is noise
-    // (up to the RANSAC threshold) and would push the face into the room.
-    let behind = -plane.normal * LAYOUT_THICKNESS;
-    let slab: Vec<Vec3> = inliers
-        .iter()
-        .map(|p| *p - plane.normal * plane.signed_distance(*p))
-        .flat_map(|p| [p, p + behind])
-        .collect();
-    let bbox = if entity.class == "wall" {
-        GravityBox::enclosing(&slab, plane.normal.y.atan2(plane.normal.x))?
-    } else {
-        GravityBox::minimal(&slab)?
-    };
-    Some(Shape {
-        points: inliers,
-        normals: Vec::new(),
-        bbox,
-        planes: vec![plane],
-    })
-}
-
-fn object_shape(
-    entity: &GraphEntity,
-    claiming: &[Plane],
-    solids: &[GravityBox],
-    largest_piece: bool,
-    params: &ContactGraphParams,
-) -> Option<Shape> {
-    let surface = surface_points(entity.mesh, params.sample_spacing);
-    let on_layout = |p: Vec3, n: Vec3| {
-        claiming
-            .iter()
-            .any(|l| lies_on(l, p, n, params.layout_band))
-            || solids.iter().any(|s| s.contains(p, 0.0))
-    };
-    let (points, normals): (Vec<Vec3>, Vec<Vec3>) = surface
-        .points
-        .iter()
-        .zip(&surface.normals)
-        .filter(|(p, n)| !on_layout(**p, **n))
-        .unzip();
-    // Stray pieces (label bleeding onto a neighbour) would stretch the box. A counter's top is
-    // one piece already, seen in strips between what stands on it.
-    let keep = if largest_piece {
-        in_largest_cluster(&points, params.cluster_cell)
-    } else {
-        vec![true; points.len()]
-    };
-    let (points, normals) = kept(points, normals, &keep);
-    if points.len() < 3 {
-        return None;
-    }
-    let bbox = GravityBox::minimal(&points)?;
-    let (points, normals, bbox) = match params.sparse_ends {
-        Some(ends) if largest_piece => {
-            let keep = keep_dense_extent(&points, bbox.yaw, ends.bin, ends.share);
-            if keep.iter().filter(|k| **k).count() < 3 {
-                (points, normals, bbox)
-            } else {
-                let (points, normals) = kept(points, normals, &keep);
-                let bbox = GravityBox::minimal(&points)?;
-                (points, normals, bbox)
-            }
-        }
-        _ => (points, normals, bbox),
-    };
-    let planes = ransac_planes(&points, &params.ransac)
-        .into_iter()
-        .map(|p| p.plane)
-        .collect();
-    Some(Shape {
-        points,
-        normals,
-        bbox,
-        planes,
-    })
-}
-
-/// The points and their normals where `keep` is true.
-fn kept(points: Vec<Vec3>, normals: Vec<Vec3>, keep: &[bool]) -> (Vec<Vec3>, Vec<Vec3>) {
-    points
-        .into_iter()
-        .zip(normals)
-        .zip(keep)
-        .filter(|(_, k)| **k)
-        .map(|(pn, _)| pn)
-        .unzip()
-}
-
-/// Points on a mesh's surface with the surface's unit normal at each (zero where undefined).
-pub struct SurfacePoints {
-    pub points: Vec<Vec3>,
-    pub normals: Vec<Vec3>,
-}
-
-/// The mesh's vertices, plus points on a barycentric grid inside every triangle with an edge
-/// longer than `spacing`, so no two neighbouring surface points are farther apart than that.
-pub fn surface_points(mesh: &TriMesh, spacing: f32) -> SurfacePoints {
-    let (mut points, mut normals): (Vec<Vec3>, Vec<Vec3>) = mesh
-        .positions
-        .iter()
-        .copied()
-        .zip(mesh.vertex_normals())
-        .filter(|(p, _)| p.is_finite())
-        .unzip();
-    for t in 0..mesh.triangles.len() {
-        let [a, b, c] = mesh.triangle(t);
-        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-        if !longest.is_finite() || longest <= spacing {
-            continue;
-        }
-        let normal = mesh.face_normal(t);
-        let k = (longest / spacing).ceil() as usize;
-        for i in 0..=k {
-            for j in 0..=(k - i) {
-                // Corners are vertices already.
-                if (i == k) || (j == k) || (i == 0 && j == 0) {
-                    continue;
-                }
-                let (u, v) = (i as f32 / k as f32, j as f32 / k as f32);
-                points.push(a + (b - a) * u + (c - a) * v);
-                normals.push(normal);
-            }
-        }
-    }
-    SurfacePoints { points, normals }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::surface_points::surface_points;
 
     #[test]
     fn a_counter_against_a_wall_stands_on_the_floor_not_on_the_wall() {
@@ -669,17 +455,10 @@ mod tests {
         let floor = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.02), Vec3::new(4.0, 3.0, 0.0));
         let wall = TriMesh::cuboid(Vec3::new(0.0, 3.0, 0.0), Vec3::new(4.0, 3.02, 2.0));
         let top = TriMesh::cuboid(Vec3::new(1.0, 2.4, 0.88), Vec3::new(3.0, 3.0, 0.9));
-        let entity = |id, class, kind, mesh| GraphEntity {
-            id,
-            class,
-            kind,
-            mesh,
-            sighted: &[],
-        };
         let entities = [
-            entity("floor", "floor", EntityKind::Layout, &floor),
-            entity("wall_0", "wall", EntityKind::Layout, &wall),
-            entity("counter_1", COUNTER_CLASS, EntityKind::Rigid, &top),
+            GraphEntity::unsighted("floor", "floor", EntityKind::Layout, &floor),
+            GraphEntity::unsighted("wall_0", "wall", EntityKind::Layout, &wall),
+            GraphEntity::unsighted("counter_1", COUNTER_CLASS, EntityKind::Rigid, &top),
         ];
         let graph = build_contact_graph(&entities, &ContactGraphParams::default());
         assert_eq!(graph.parent_of("counter_1"), Some("floor"), "{graph:?}");
@@ -687,46 +466,6 @@ mod tests {
         let node = graph.node("counter_1").expect("counter");
         let bottom = node.bbox.center[2] - node.bbox.size[2] / 2.0;
         assert!(bottom.abs() < 0.02, "{:?}", node.bbox);
-    }
-
-    #[test]
-    fn a_cabinet_seen_as_its_top_over_an_unseen_floor_stands_on_it_a_wall_unit_still_hangs() {
-        // A floor seen only in front of a wall at y = 3 (y < 2.3); against the wall a cabinet
-        // seen as its top 20 cm (0.35-0.55 m: a bed hid the rest), and a wall unit at 1.4-1.9 m.
-        let floor = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.02), Vec3::new(4.0, 2.3, 0.0));
-        let wall = TriMesh::cuboid(Vec3::new(0.0, 3.0, 0.0), Vec3::new(4.0, 3.02, 2.5));
-        let low = TriMesh::cuboid(Vec3::new(1.0, 2.4, 0.35), Vec3::new(1.45, 3.0, 0.55));
-        let high = TriMesh::cuboid(Vec3::new(2.5, 2.65, 1.4), Vec3::new(3.3, 3.0, 1.9));
-        let graph_with = |floor: &TriMesh| {
-            let entity = |id, class, kind, mesh| GraphEntity {
-                id,
-                class,
-                kind,
-                mesh,
-                sighted: &[],
-            };
-            let entities = [
-                entity("floor", "floor", EntityKind::Layout, floor),
-                entity("wall_0", "wall", EntityKind::Layout, &wall),
-                entity("cabinet_1", "cabinet", EntityKind::Articulated, &low),
-                entity("cabinet_2", "cabinet", EntityKind::Articulated, &high),
-            ];
-            build_contact_graph(&entities, &ContactGraphParams::default())
-        };
-        let graph = graph_with(&floor);
-        assert_eq!(graph.parent_of("cabinet_1"), Some("floor"), "{graph:?}");
-        let node = graph.node("cabinet_1").expect("cabinet");
-        let bottom = node.bbox.center[2] - node.bbox.size[2] / 2.0;
-        assert!(
-            bottom.abs() < 0.02,
-            "its box reaches the floor: {:?}",
-            node.bbox
-        );
-        assert_eq!(graph.parent_of("cabinet_2"), Some("wall_0"), "{graph:?}");
-        // With the floor under it seen, the low unit hangs where it was seen.
-        let seen = TriMesh::cuboid(Vec3::new(0.0, 0.0, -0.02), Vec3::new(4.0, 3.0, 0.0));
-        let graph = graph_with(&seen);
-        assert_ne!(graph.parent_of("cabinet_1"), Some("floor"), "{graph:?}");
     }
 
     #[test]

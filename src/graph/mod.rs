@@ -3,6 +3,8 @@
 pub mod build;
 pub mod contact_graph;
 pub mod counters;
+pub mod entity_shape;
+pub mod floor_units;
 pub mod gravity;
 pub mod layout_plane;
 pub mod parts;

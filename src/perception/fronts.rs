@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use glam::{Affine3A, Vec3};
 
+use crate::geometry::surface_points::surface_points;
 use crate::geometry::{GravityBox, TriMesh};
-use crate::graph::build::surface_points;
 use crate::perception::handles::{Front, Handle, HandleKind, find_handles};
 use crate::perception::open_doors::{OpenDoor, open_doors};
 use crate::perception::open_drawers::{OpenDrawer, open_drawers};

@@ -10,7 +10,7 @@ use bevy::prelude::*;
 use rayon::prelude::*;
 
 use crate::components::LinkBody;
-use crate::graph::build::surface_points;
+use crate::geometry::surface_points::surface_points;
 use crate::kinematics::link::LinkGeometry;
 use crate::kinematics::tree::KinematicTree;
 use crate::map::SegmentLabel;

@@ -27,6 +27,21 @@ fn backend(sequence: &Sequence) -> OnnxSegmentation {
     .unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// `iscene reconstruct` of 7-Scenes redkitchen with the onnx backend and the flags `extra`, into
+/// `out`, from the checkout's root: exit code, stdout, stderr.
+fn reconstruct_with_onnx(extra: &[&str], out: &Path) -> (i32, String, String) {
+    let input = common::shared_data("rgbd/7scenes-redkitchen");
+    let mut args = vec![
+        "reconstruct",
+        input.to_str().expect("utf-8"),
+        "--segmentation",
+        "onnx",
+    ];
+    args.extend_from_slice(extra);
+    args.extend(["--out", out.to_str().expect("utf-8")]);
+    common::iscene(&args, &common::root())
+}
+
 #[test]
 fn frame_500_detections_match_the_reference_run() {
     let sequence = kitchen();
@@ -176,20 +191,7 @@ fn the_survey_estimates_gravity_within_2_degrees_and_finds_the_floor() {
 fn the_kitchen_reconstructs_with_table_chairs_cups_and_a_counter_holding_the_monitors_and_its_exports_rest()
  {
     let out = tempfile::tempdir().expect("tempdir");
-    let input = common::shared_data("rgbd/7scenes-redkitchen");
-    let (code, _, stderr) = common::iscene(
-        &[
-            "reconstruct",
-            input.to_str().expect("utf-8"),
-            "--segmentation",
-            "onnx",
-            "--frames",
-            "0::2",
-            "--out",
-            out.path().to_str().expect("utf-8"),
-        ],
-        &common::root(),
-    );
+    let (code, _, stderr) = reconstruct_with_onnx(&["--frames", "0::2"], out.path());
     assert_eq!(code, 0, "{stderr}");
     let graph: serde_json::Value = serde_json::from_slice(
         &std::fs::read(out.path().join("contact_graph.json")).expect("contact_graph.json"),
@@ -391,21 +393,14 @@ fn a_missing_model_is_a_clear_error_with_exit_code_2() {
         models.join("coco.names"),
     )
     .expect("copy names");
-    let input = common::shared_data("rgbd/7scenes-redkitchen");
-    let (code, _, stderr) = common::iscene(
+    let (code, _, stderr) = reconstruct_with_onnx(
         &[
-            "reconstruct",
-            input.to_str().expect("utf-8"),
-            "--segmentation",
-            "onnx",
             "--frames",
             "0:10",
             "--models",
             models.to_str().expect("utf-8"),
-            "--out",
-            out.path().join("result").to_str().expect("utf-8"),
         ],
-        &common::root(),
+        &out.path().join("result"),
     );
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("yolox_nano.onnx"), "{stderr}");
@@ -419,22 +414,8 @@ fn a_missing_model_is_a_clear_error_with_exit_code_2() {
 fn cuda_without_its_provider_is_a_clear_error_with_exit_code_2() {
     let out = tempfile::tempdir().expect("tempdir");
     let target = out.path().join("result");
-    let input = common::shared_data("rgbd/7scenes-redkitchen");
-    let (code, _, stderr) = common::iscene(
-        &[
-            "reconstruct",
-            input.to_str().expect("utf-8"),
-            "--segmentation",
-            "onnx",
-            "--onnx-device",
-            "cuda",
-            "--frames",
-            "0:10",
-            "--out",
-            target.to_str().expect("utf-8"),
-        ],
-        &common::root(),
-    );
+    let (code, _, stderr) =
+        reconstruct_with_onnx(&["--onnx-device", "cuda", "--frames", "0:10"], &target);
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("yolox_nano.onnx"), "{stderr}");
     assert!(

@@ -13,7 +13,7 @@ use crate::arm::reach::{
     reach_configuration, retreat_along,
 };
 use crate::geometry::TriMesh;
-use crate::graph::build::surface_points;
+use crate::geometry::surface_points::surface_points;
 use crate::kinematics::JointKind;
 use crate::perception::fronts::model_handles;
 use crate::perception::handles::{Handle, HandleKind};
