@@ -27,6 +27,11 @@ const RIM_INSET_M: f32 = 0.006;
 /// Room left between the object and the palm, metres: more than the planner's clearance on
 /// the last stretch (`reach::STRETCH_MARGIN_M`, 4 mm).
 const PALM_CLEARANCE_M: f32 = 0.006;
+/// How far a pitched side grasp's approach dips below the horizontal, radians (30 degrees).
+const SIDE_PITCH: f32 = std::f32::consts::FRAC_PI_6;
+/// How far a leaning rim grasp's approach leans from the vertical, radians (30 degrees): at 45
+/// the hand's far end, tilted with it, met the table under a bowl.
+const RIM_LEAN: f32 = std::f32::consts::FRAC_PI_6;
 /// How far back along its approach the hand starts its straight last stretch, metres.
 pub const PREGRASP_M: f32 = 0.1;
 
@@ -118,7 +123,7 @@ pub fn grasps(
         }
     }
     if rim {
-        let mut rims = Vec::new();
+        let (mut rims, mut pitched_rims) = (Vec::new(), Vec::new());
         for (outward, half) in [
             (axis_x, 0.5 * size.x),
             (-axis_x, 0.5 * size.x),
@@ -133,12 +138,29 @@ pub fn grasps(
                 width: RIM_WIDTH_M,
             });
         }
-        // The rim nearest the robot first.
-        rims.sort_by(|a, b| {
-            let d = |g: &Grasp| g.world_from_tool.translation.truncate().distance(robot);
-            d(a).total_cmp(&d(b))
-        });
+        // The same with the hand leaning out over the side: a bowl carried into a microwave
+        // leaves the wrist low and outside the cavity, not over the bowl.
+        for (outward, half) in [
+            (axis_x, 0.5 * size.x),
+            (-axis_x, 0.5 * size.x),
+            (axis_y, 0.5 * size.y),
+            (-axis_y, 0.5 * size.y),
+        ] {
+            let at = top + outward * (half - RIM_INSET_M);
+            let approach = -(Vec3::Z * RIM_LEAN.cos() + outward * RIM_LEAN.sin()).normalize();
+            pitched_rims.push(Grasp {
+                kind: GraspKind::Rim,
+                world_from_tool: tool_pose(at, approach, outward),
+                approach,
+                width: RIM_WIDTH_M,
+            });
+        }
+        // The rim nearest the robot first; leaning after upright.
+        let d = |g: &Grasp| g.world_from_tool.translation.truncate().distance(robot);
+        rims.sort_by(|a, b| d(a).total_cmp(&d(b)));
+        pitched_rims.sort_by(|a, b| d(a).total_cmp(&d(b)));
         out.extend(rims);
+        out.extend(pitched_rims);
     }
     // Side grasps: in from each horizontal side, across the other horizontal side or the height.
     let mut sides = Vec::new();
@@ -160,6 +182,24 @@ pub fn grasps(
                 });
             }
         }
+        // The same across the other side with the hand pitched down: its wrist rides higher,
+        // clear of the surface the object stands on (level at a cup's middle, 6 cm over a
+        // table, the Panda's sixth link met the table) and of a low shelf's top it is carried
+        // under.
+        if fits(across_width) {
+            let approach = (inward * SIDE_PITCH.cos() - Vec3::Z * SIDE_PITCH.sin()).normalize();
+            let nearest = points
+                .iter()
+                .map(|p| (world_from_object.transform_point3(*p) - centre).dot(approach))
+                .fold(f32::INFINITY, f32::min);
+            let at = centre + approach * (nearest + hand.reach_in()).min(0.0);
+            sides.push(Grasp {
+                kind: GraspKind::Side,
+                world_from_tool: tool_pose(at, approach, across),
+                approach,
+                width: across_width,
+            });
+        }
     }
     // Facing the robot: coming in away from it first.
     sides.sort_by(|a, b| {
@@ -169,6 +209,16 @@ pub fn grasps(
     });
     out.extend(sides);
     out
+}
+
+/// `grasps` with the most level approaches first (from the side, then pitched, then from
+/// above), each group in its own order. A caller tries only the first few: a cup's two top and
+/// four rim grasps came before every side grasp, and into a container the hand carries the
+/// object in level through its front (from above, a forearm over a cup in a cabinet's level
+/// met the cabinet).
+pub fn most_level_first(mut grasps: Vec<Grasp>) -> Vec<Grasp> {
+    grasps.sort_by_key(|g| std::cmp::Reverse((g.approach.z * 10.0).round() as i32));
+    grasps
 }
 
 /// The tool pose at `at` pointing along `approach` with the fingers closing along `closing`.

@@ -28,6 +28,9 @@ const STRETCH_MAX_JUMP: f32 = 0.25;
 /// How strongly a hand following a path keeps its joints towards the middle of their ranges
 /// (`IkSettings::centering`).
 const FOLLOW_CENTERING: f32 = 0.1;
+/// How many other configurations at the target a reach tries when its last stretch fails from
+/// the first.
+const OTHER_TARGET_CONFIGURATIONS: usize = 4;
 /// How high a retreat lifts the hand before it plans back, metres.
 pub const LIFT_M: f32 = 0.1;
 
@@ -286,17 +289,40 @@ pub fn reach(
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     let q_target = solve(&rig.arm, world_from_root, target, from, &rig.ik, &free_near)
         .ok_or_else(|| why_no_ik(rig, world_from_root, target, from, near, held))?;
-    reach_configuration(
+    let from_target = |q: &[f32]| {
+        reach_configuration(
+            rig,
+            world_from_root,
+            from,
+            (q, target),
+            approach,
+            stretch,
+            transit,
+            near,
+            held,
+        )
+    };
+    let first = from_target(&q_target);
+    if !matches!(
+        first,
+        Err(ReachError::ApproachBlocked { .. } | ReachError::ApproachStartTouches(_))
+    ) {
+        return first;
+    }
+    // The same tool pose with the elbow or the wrist the other way may leave the last stretch
+    // clear: a side grasp of a cup 6 cm over a table had link 6 under the hand.
+    let others = distinct_configurations(
         rig,
         world_from_root,
-        from,
-        (&q_target, target),
-        approach,
-        stretch,
-        transit,
-        near,
-        held,
-    )
+        target,
+        &free_near,
+        vec![q_target],
+        OTHER_TARGET_CONFIGURATIONS,
+    );
+    others
+        .iter()
+        .find_map(|q| from_target(q).ok())
+        .map_or(first, Ok)
 }
 
 /// Configurations that put the tool at `target` clear of `near` obstacles, from up to `count`
@@ -310,7 +336,22 @@ pub fn configurations_at(
 ) -> Vec<Vec<f32>> {
     let empty = Held::default();
     let free_near = clear_of(rig, world_from_root, near, &empty, STRETCH_MARGIN_M);
-    let mut found: Vec<Vec<f32>> = Vec::new();
+    distinct_configurations(rig, world_from_root, target, &free_near, Vec::new(), count)
+}
+
+/// Configurations that put the tool at `target` accepted by `free`, from up to `count` seeded
+/// inverse kinematics runs from the stowed arm, each different from those before and from
+/// `known` (which are not returned).
+fn distinct_configurations(
+    rig: &ArmRig,
+    world_from_root: &Affine3A,
+    target: &Affine3A,
+    free: &dyn Fn(&[f32]) -> bool,
+    known: Vec<Vec<f32>>,
+    count: usize,
+) -> Vec<Vec<f32>> {
+    let skip = known.len();
+    let mut found = known;
     for seed in 0..count as u64 {
         let settings = IkSettings { seed, ..rig.ik };
         if let Some(q) = solve(
@@ -320,7 +361,7 @@ pub fn configurations_at(
             &rig.stow,
             &settings,
             &|q| {
-                free_near(q)
+                free(q)
                     && found
                         .iter()
                         .all(|f| crate::arm::rrt::distance(f, q) > STRETCH_MAX_JUMP)
@@ -329,7 +370,7 @@ pub fn configurations_at(
             found.push(q);
         }
     }
-    found
+    found.split_off(skip)
 }
 
 /// [`reach`] to a configuration already solved: `q_target` puts the tool at `target`.

@@ -7,7 +7,7 @@ use glam::{Affine3A, Vec3};
 use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
-use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps};
+use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps, most_level_first};
 use crate::arm::reach::{
     ArmPath, ArmRig, Held, LIFT_M, ReachError, reach, retreat, retreat_through,
 };
@@ -35,6 +35,9 @@ pub(super) const CLOSER_BASES_M: [f32; 2] = [0.7, 0.55];
 /// Room between the object and a container's front where the hand starts carrying it in,
 /// metres.
 const INSERT_CLEARANCE_M: f32 = 0.03;
+/// How far (metres) a base straight out from a container's spot may stand from the point
+/// straight out.
+const IN_FRONT_M: f32 = 0.2;
 /// Base poses closer than this (metres) to one already tried are not tried again.
 pub(super) const SAME_BASE_M: f32 = 0.05;
 /// Free spots closer than this (metres) to one already listed are not listed again.
@@ -185,24 +188,34 @@ fn grasps_of(
 /// The arm's pick of node `id` (link `link`, its obstacles `around`) from where the base
 /// stands: reach, close, lift and stow with it. The object then hangs from the gripper (the
 /// stowed hand) as the fingers hold it. The first grasp whose pick `then` accepts (the place
-/// that follows plans with it), else the first that works.
+/// that follows plans with it), else the first that works; with `level_first`, the grasps
+/// whose hand comes in most level are tried before the others.
+#[allow(clippy::too_many_arguments, reason = "one action's whole problem")]
 pub(super) fn pick_motion(
     view: &SceneView,
     rig: &ArmRig,
     state: &RobotInTree,
     (id, link): (&str, usize),
     around: &AroundObject,
+    level_first: bool,
     then: &dyn Fn(&[Change]) -> Result<(), LookAheadError>,
 ) -> Result<Vec<Change>, ActionError> {
     let root = state.base.world_from_base() * rig.base_from_root;
     let (transit, near) = (&around.with_object, &around.grasped);
-    let candidates = grasps_of(view, rig, state, id, link, &view.poses[link])?;
+    let mut candidates = grasps_of(view, rig, state, id, link, &view.poses[link])?;
+    let mut tried = MAX_GRASPS;
+    if level_first {
+        // The level ones first, and as many again: the others stay in the running.
+        candidates = most_level_first(candidates);
+        tried *= 2;
+    }
     let from = view.support_of(id).map_or(String::new(), String::from);
     first_grasp_that_works(
         id,
         &format!("pick {id}"),
         Vec::new(),
         candidates,
+        tried,
         then,
         |_, grasp| {
             let to = reach(
@@ -243,7 +256,7 @@ enum GraspFailure {
     Action(#[from] ActionError),
 }
 
-/// The arm's motion with the first of `candidates` (at most `MAX_GRASPS`) for which `plan`
+/// The arm's motion with the first of `candidates` (at most `tried` of them) for which `plan`
 /// (given the grasp and its index) finds a reach, a retreat and where the object ends up, and
 /// whose changes `then` accepts; else the first that `plan` finds; else `what` fails with
 /// `attempts` and each grasp's reason.
@@ -252,11 +265,12 @@ fn first_grasp_that_works(
     what: &str,
     mut attempts: Vec<String>,
     candidates: Vec<Grasp>,
+    tried: usize,
     then: &dyn Fn(&[Change]) -> Result<(), LookAheadError>,
     plan: impl Fn(usize, &Grasp) -> Result<(ArmPath, ArmPath, Change), GraspFailure>,
 ) -> Result<Vec<Change>, ActionError> {
     let mut first = None;
-    for (i, grasp) in candidates.into_iter().take(MAX_GRASPS).enumerate() {
+    for (i, grasp) in candidates.into_iter().take(tried).enumerate() {
         let label = grasp_label(&grasp);
         match plan(i, &grasp) {
             Ok((to, back, attach)) => {
@@ -275,7 +289,10 @@ fn first_grasp_that_works(
                     }
                 }
             }
-            Err(why) => attempts.push(format!("{label}: {why}")),
+            Err(why) => {
+                tracing::debug!("{label} of {id} does not plan: {why}");
+                attempts.push(format!("{label}: {why}"));
+            }
         }
     }
     first.ok_or_else(|| ActionError::ArmCannot {
@@ -320,6 +337,7 @@ pub(super) fn place_motion(
         &format!("place {id}"),
         Vec::new(),
         candidates,
+        MAX_GRASPS,
         &|_| Ok(()),
         |i, grasp| {
             let spot = spots[i];
@@ -431,6 +449,8 @@ fn grasp_label(grasp: &Grasp) -> String {
     let d = grasp.approach;
     let from = if d.z < -0.9 {
         "from above".to_string()
+    } else if d.z < -0.1 {
+        format!("along ({:+.1}, {:+.1}) pitched down", d.x, d.y)
     } else {
         format!("along ({:+.1}, {:+.1})", d.x, d.y)
     };
@@ -499,7 +519,7 @@ pub(super) fn place_on_some_spot(
                 ignore,
             )
         };
-        match from_some_base(view, robot, state, (changes, moved), target, &place) {
+        match from_some_base(view, robot, state, (changes, moved), (target, None), &place) {
             Ok(changes) => return Ok(changes),
             Err(e) => tries.failed(&format!("spot ({:.2}, {:.2})", target.x, target.y), e)?,
         }
@@ -544,24 +564,37 @@ pub(super) fn free_spots(
 
 /// The arm's `motion` from the base pose the approach chose (`first`: its drive and the robot
 /// after it) or, when the arm finds none there, from base poses closer to `target` (x, y) that
-/// the base drives to from `start`: the drive and the motion, or every attempt's reason.
+/// the base drives to from `start`, then (given the way a container's opening faces, `front`)
+/// from those straight out from `target` through the opening: the drive and the motion, or
+/// every attempt's reason.
 pub(super) fn from_some_base(
     view: &SceneView,
     robot: &RobotSpec,
     start: &RobotInTree,
     first: (Vec<Change>, RobotInTree),
-    target: glam::Vec2,
+    (target, front): (glam::Vec2, Option<glam::Vec2>),
     motion: &dyn Fn(&RobotInTree) -> Result<Vec<Change>, ActionError>,
 ) -> Result<Vec<Change>, ActionError> {
     let mut bases = vec![first];
-    for reach in CLOSER_BASES_M {
-        let goal = NavGoal {
-            target,
-            reach,
+    let near = CLOSER_BASES_M.map(|reach| NavGoal {
+        target,
+        reach,
+        facing: None,
+        keep_out: Vec::new(),
+    });
+    // The nearest free place to the target can be beside a cabinet, not in front of the door
+    // the arm must reach through.
+    let in_front = front.into_iter().flat_map(|out| {
+        CLOSER_BASES_M.map(|d| NavGoal {
+            target: target + out * d,
+            reach: IN_FRONT_M,
             facing: None,
             keep_out: Vec::new(),
-        };
-        if let Ok(Some((change, moved))) = drive(view, robot, start, &goal, APPROACH_M)
+        })
+    });
+    for goal in near.into_iter().chain(in_front) {
+        let driven = drive(view, robot, start, &goal, APPROACH_M);
+        if let Ok(Some((change, moved))) = driven
             && bases
                 .iter()
                 .all(|(_, b)| b.base.position.distance(moved.base.position) > SAME_BASE_M)

@@ -19,6 +19,11 @@ use crate::sim::scene_view::{SceneView, TOUCH_M, closed_value, open_value};
 const SWEEP_STEP: f32 = 0.05;
 /// A door opened as far as it goes must be at least this fraction open.
 const MIN_OPEN_FRACTION: f32 = 0.6;
+/// A door opened as far as it goes that stopped short of this fraction of the way is tried from
+/// places where the arm follows it all the way, and taken from there when it opens at least
+/// `FARTHER` (radians, or metres for a drawer) farther.
+const WIDE_OPEN_FRACTION: f32 = 0.9;
+const FARTHER: f32 = 0.1;
 /// The base stands within this distance (metres) of a place chosen to work a part from.
 const PLACE_TO_STAND_M: f32 = 0.08;
 
@@ -76,51 +81,73 @@ pub(super) fn move_joint(
             )],
         });
     }
-    let (mut tries, mut tried) = (ArmTries::default(), Vec::<Vec2>::new());
-    for place in places {
-        let goal = crate::sim::navigation::NavGoal {
-            target: place,
-            reach: PLACE_TO_STAND_M,
-            facing: None,
-            keep_out: Vec::new(),
-        };
-        // The stowed hand is not where the hand is while it works the part: the arm's own
-        // check keeps it clear of the part.
-        let stowed_hand: Vec<usize> = view.link(GRIPPER_LINK).into_iter().collect();
-        let stood = stand_for_part(&view, robot, state, object, &goal).and_then(|stood| {
-            let target = part_target(&SceneView::new(&stood.1), joint, open, &stowed_hand)?;
-            Ok((stood, target))
-        });
-        let ((mut changes, moved, after), (to, least)) = match stood {
-            Ok(found) => found,
-            Err(e) => {
-                tries.unreached(e);
+    // The first of `places` the base gets to and the arm works the part from (none of those in
+    // `tried`, where the base stood already): the changes and the part's value after them.
+    let from_places = |places: Vec<Vec2>, tried: &mut Vec<Vec2>| {
+        let mut tries = ArmTries::default();
+        for place in places {
+            let goal = crate::sim::navigation::NavGoal {
+                target: place,
+                reach: PLACE_TO_STAND_M,
+                facing: None,
+                keep_out: Vec::new(),
+            };
+            // The stowed hand is not where the hand is while it works the part: the arm's own
+            // check keeps it clear of the part.
+            let stowed_hand: Vec<usize> = view.link(GRIPPER_LINK).into_iter().collect();
+            let stood = stand_for_part(&view, robot, state, object, &goal).and_then(|stood| {
+                let target = part_target(&SceneView::new(&stood.1), joint, open, &stowed_hand)?;
+                Ok((stood, target))
+            });
+            let ((mut changes, moved, after), (to, least)) = match stood {
+                Ok(found) => found,
+                Err(e) => {
+                    tracing::debug!("{name} from ({:.2}, {:.2}): {e}", place.x, place.y);
+                    tries.unreached(e);
+                    continue;
+                }
+            };
+            let p = after.base.position;
+            if tried
+                .iter()
+                .any(|t| t.distance(p) <= arm_motion::SAME_BASE_M)
+            {
                 continue;
             }
-        };
-        let p = after.base.position;
-        if tried
-            .iter()
-            .any(|t| t.distance(p) <= arm_motion::SAME_BASE_M)
-        {
-            continue;
-        }
-        tried.push(p);
-        let view = SceneView::new(&moved);
-        match part_motion::work_part(&view, rig, &after, object, joint, to, least) {
-            Ok(work) => {
-                changes.push(work.motion);
-                changes.push(Change::SetJoint {
-                    link: name,
-                    from,
-                    to: work.reached,
-                });
-                return Ok(changes);
+            tried.push(p);
+            let view = SceneView::new(&moved);
+            match part_motion::work_part(&view, rig, &after, object, joint, to, least) {
+                Ok(work) => {
+                    changes.push(work.motion);
+                    changes.push(Change::SetJoint {
+                        link: name.clone(),
+                        from,
+                        to: work.reached,
+                    });
+                    return Ok((changes, work.reached));
+                }
+                Err(e) => tries.failed(&arm_motion::base_words(&after), e)?,
             }
-            Err(e) => tries.failed(&arm_motion::base_words(&after), e)?,
+        }
+        Err(tries.error(Some(format!("work {name}"))))
+    };
+    let mut tried = Vec::new();
+    let (changes, reached) = from_places(places, &mut tried)?;
+    // A door opened as far as it goes that stopped well short of it may go farther from a
+    // place where the arm follows its handle all the way: a cabinet's door stopped at 65 % stood
+    // in front of its own opening, between the base and the level behind it; at 73 % the hand
+    // set a cup there. Taken only when it opens the door noticeably farther.
+    if farthest != nominal && reached / farthest < WIDE_OPEN_FRACTION {
+        let wide =
+            part_motion::places_to_stand(&view, rig, robot, object, joint, (farthest, farthest))
+                .unwrap_or_default();
+        if let Ok((wider, wider_reached)) = from_places(wide, &mut tried)
+            && (wider_reached - reached) * farthest.signum() >= FARTHER
+        {
+            return Ok(wider);
         }
     }
-    Err(tries.error(Some(format!("work {name}"))))
+    Ok(changes)
 }
 
 /// Whether every open door and drawer of `container` still closes with the held `object` set at

@@ -25,6 +25,9 @@ use look_ahead::{MAX_LOOKS_AHEAD, pick_ahead, plans_after};
 pub use reach::nav_grid;
 use reach::{approach, approach_point, navigate, within_reach};
 
+/// Spots of a container less than this apart in height (metres) are on the same level.
+const SAME_LEVEL_M: f32 = 0.02;
+
 /// One robot action, as task scripts write it (`{"action": "open", "object": "fridge_1"}`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "action", rename_all = "snake_case", deny_unknown_fields)]
@@ -252,6 +255,9 @@ pub fn attempt_then(
                     let around = arm_motion::AroundObject::new(&view, link);
                     let target = view.poses[link].translation.truncate();
                     let ahead = pick_ahead(object, then);
+                    // Into a container the hand carries the object in level through its front:
+                    // held from the side, the forearm stays out of the level.
+                    let level_first = matches!(ahead.last(), Some(Action::PlaceIn { .. }));
                     let looked = std::cell::Cell::new(0);
                     // Whether the place that follows plans after this pick (from the base
                     // `at`), within a budget of looks.
@@ -267,11 +273,17 @@ pub fn attempt_then(
                         robot,
                         &state,
                         (changes, moved),
-                        target,
+                        (target, None),
                         &|at| {
-                            arm_motion::pick_motion(&view, rig, at, (object, link), &around, &|c| {
-                                place_follows(at, c)
-                            })
+                            arm_motion::pick_motion(
+                                &view,
+                                rig,
+                                at,
+                                (object, link),
+                                &around,
+                                level_first,
+                                &|c| place_follows(at, c),
+                            )
                         },
                     )
                 }
@@ -318,41 +330,63 @@ pub fn attempt_then(
             let gripper = view.link(GRIPPER_LINK).unwrap_or(0);
             // An arm reaches a spot near the front best; any spot must let the doors close.
             let near = arm.map(|_| moved.base.position);
-            let spot = view
-                .spots_in(link, container, &[gripper], near)
-                .find(|spot| closes_with(&view, link, container, *spot))
-                .ok_or_else(|| ActionError::DoesNotFit {
-                    object: object.clone(),
-                    container: container.clone(),
-                })?;
+            let held_by = [gripper];
+            let mut spots = view
+                .spots_in(link, container, &held_by, near)
+                .filter(|spot| closes_with(&view, link, container, *spot));
+            let spot = spots.next().ok_or_else(|| ActionError::DoesNotFit {
+                object: object.clone(),
+                container: container.clone(),
+            })?;
             let Some(rig) = arm else {
                 changes.extend(attach(&view, link, container, spot)?);
                 return Ok(changes);
             };
-            // Into the container through its front, not down through its top.
-            let inward = view
-                .node_link(container)
-                .and_then(|c| arm_motion::way_in(&view, c, link, &spot));
             let around = arm_motion::AroundObject::new(&view, link);
-            arm_motion::from_some_base(
-                &view,
-                robot,
-                &state,
-                (changes, moved),
-                spot.translation.truncate(),
-                &|at| {
-                    arm_motion::place_motion(
-                        &view,
-                        rig,
-                        at,
-                        (object, link),
-                        &around,
-                        (container, &spot),
-                        inward,
-                        &[gripper],
-                    )
-                },
-            )
+            let place_at = |spot: Affine3A| {
+                // Into the container through its front, not down through its top.
+                let inward = view
+                    .node_link(container)
+                    .and_then(|c| arm_motion::way_in(&view, c, link, &spot));
+                let front = inward.map(|(d, _)| -d.truncate().normalize_or_zero());
+                arm_motion::from_some_base(
+                    &view,
+                    robot,
+                    &state,
+                    (changes.clone(), moved.clone()),
+                    (spot.translation.truncate(), front),
+                    &|at| {
+                        arm_motion::place_motion(
+                            &view,
+                            rig,
+                            at,
+                            (object, link),
+                            &around,
+                            (container, &spot),
+                            inward,
+                            &[gripper],
+                        )
+                    },
+                )
+            };
+            let first = place_at(spot);
+            if first.is_ok() {
+                return first;
+            }
+            // Then the first spot of each other level: a Panda on its base does not reach
+            // down into a floor cabinet's bottom level, where the first spot is.
+            let mut levels = vec![spot.translation.z];
+            for other in spots {
+                let z = other.translation.z;
+                if levels.iter().any(|l| (l - z).abs() < SAME_LEVEL_M) {
+                    continue;
+                }
+                levels.push(z);
+                if let Ok(changes) = place_at(other) {
+                    return Ok(changes);
+                }
+            }
+            first
         }
         Action::Push {
             object,
