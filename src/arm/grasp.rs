@@ -32,6 +32,9 @@ const SIDE_PITCH: f32 = std::f32::consts::FRAC_PI_6;
 /// How far a leaning rim grasp's approach leans from the vertical, radians (30 degrees): at 45
 /// the hand's far end, tilted with it, met the table under a bowl.
 const RIM_LEAN: f32 = std::f32::consts::FRAC_PI_6;
+/// How far below the rim a leaning rim grasp's tool goes, metres (less than an upright one's
+/// `TOP_GRASP_DEPTH_M`: the finger outside, tilted, met the table under a bowl).
+const LEANING_RIM_DEPTH_M: f32 = 0.015;
 /// How far back along its approach the hand starts its straight last stretch, metres.
 pub const PREGRASP_M: f32 = 0.1;
 
@@ -146,7 +149,10 @@ pub fn grasps(
             (axis_y, 0.5 * size.y),
             (-axis_y, 0.5 * size.y),
         ] {
-            let at = top + outward * (half - RIM_INSET_M);
+            // Less deep: the finger outside, tilted, comes lower than the tool.
+            let at = top
+                + Vec3::Z * (depth - LEANING_RIM_DEPTH_M).max(0.0)
+                + outward * (half - RIM_INSET_M);
             let approach = -(Vec3::Z * RIM_LEAN.cos() + outward * RIM_LEAN.sin()).normalize();
             pitched_rims.push(Grasp {
                 kind: GraspKind::Rim,
@@ -293,6 +299,65 @@ mod tests {
         let taken = grasps(&Affine3A::IDENTITY, &bottle, hand(0.08), Vec2::X, false);
         assert_eq!(taken[0].kind, GraspKind::Top);
         assert!((taken[0].width - 0.03).abs() < 1e-5);
+    }
+
+    #[test]
+    fn pitched_and_leaning_grasps_come_first_into_a_container_and_keep_the_hand_outside() {
+        let cuboid = |lo: Vec3, hi: Vec3| crate::geometry::mesh::box_corners(lo, hi).to_vec();
+        let panda = Hand {
+            opening: 0.08,
+            palm_depth: 0.039,
+        };
+        // A 7 cm cup: top, rim, level side and side grasps pitched 30 degrees down.
+        let cup = grasps(
+            &Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.75)),
+            &cuboid(Vec3::new(-0.035, -0.035, 0.0), Vec3::new(0.035, 0.035, 0.11)),
+            panda,
+            Vec2::ZERO,
+            true,
+        );
+        let pitched: Vec<&Grasp> = cup
+            .iter()
+            .filter(|g| g.kind == GraspKind::Side && g.approach.z < -0.1)
+            .collect();
+        assert_eq!(pitched.len(), 4);
+        for g in &pitched {
+            assert!((g.approach.z + SIDE_PITCH.sin()).abs() < 1e-5, "{g:?}");
+            // The fingers still close level, across the cup.
+            assert!(g.world_from_tool.matrix3.y_axis.z.abs() < 1e-5, "{g:?}");
+        }
+        // Into a container the most level come first: level sides, then pitched sides, then
+        // leaning rims, then those from straight above.
+        let ordered = most_level_first(cup);
+        let order: Vec<i32> = ordered
+            .iter()
+            .map(|g| (g.approach.z * 10.0).round() as i32)
+            .collect();
+        assert!(order.windows(2).all(|w| w[0] >= w[1]), "{order:?}");
+        assert_eq!(ordered[0].kind, GraspKind::Side);
+        assert_eq!(ordered.last().map(|g| g.approach.z), Some(-1.0));
+        // A 14 cm bowl: rims only; the leaning ones come down towards its middle, so the hand
+        // behind the tool leans out over the side, outside the bowl.
+        let bowl = grasps(
+            &Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.75)),
+            &cuboid(Vec3::new(-0.07, -0.07, 0.0), Vec3::new(0.07, 0.07, 0.07)),
+            panda,
+            Vec2::ZERO,
+            true,
+        );
+        let leaning: Vec<&Grasp> = bowl
+            .iter()
+            .filter(|g| g.kind == GraspKind::Rim && g.approach.z > -0.99)
+            .collect();
+        assert_eq!(leaning.len(), 4);
+        for g in leaning {
+            let tool = Vec3::from(g.world_from_tool.translation);
+            let palm = tool - g.approach * 0.1;
+            let out = (palm - Vec3::new(1.0, 0.0, 0.75)).truncate().abs().max_element();
+            assert!(out > 0.07, "{g:?}: the hand 10 cm back is {out} m out");
+            // Shallower than an upright rim grasp: 1.5 cm under the rim.
+            assert!((tool.z - (0.75 + 0.07 - LEANING_RIM_DEPTH_M)).abs() < 1e-5, "{g:?}");
+        }
     }
 
     #[test]
