@@ -311,7 +311,10 @@ mod tests {
         // A 7 cm cup: top, rim, level side and side grasps pitched 30 degrees down.
         let cup = grasps(
             &Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.75)),
-            &cuboid(Vec3::new(-0.035, -0.035, 0.0), Vec3::new(0.035, 0.035, 0.11)),
+            &cuboid(
+                Vec3::new(-0.035, -0.035, 0.0),
+                Vec3::new(0.035, 0.035, 0.11),
+            ),
             panda,
             Vec2::ZERO,
             true,
@@ -353,10 +356,16 @@ mod tests {
         for g in leaning {
             let tool = Vec3::from(g.world_from_tool.translation);
             let palm = tool - g.approach * 0.1;
-            let out = (palm - Vec3::new(1.0, 0.0, 0.75)).truncate().abs().max_element();
+            let out = (palm - Vec3::new(1.0, 0.0, 0.75))
+                .truncate()
+                .abs()
+                .max_element();
             assert!(out > 0.07, "{g:?}: the hand 10 cm back is {out} m out");
             // Shallower than an upright rim grasp: 1.5 cm under the rim.
-            assert!((tool.z - (0.75 + 0.07 - LEANING_RIM_DEPTH_M)).abs() < 1e-5, "{g:?}");
+            assert!(
+                (tool.z - (0.75 + 0.07 - LEANING_RIM_DEPTH_M)).abs() < 1e-5,
+                "{g:?}"
+            );
         }
     }
 
