@@ -593,8 +593,7 @@ pub(super) fn from_some_base(
         })
     });
     for goal in near.into_iter().chain(in_front) {
-        let driven = drive(view, robot, start, &goal, APPROACH_M);
-        if let Ok(Some((change, moved))) = driven
+        if let Ok(Some((change, moved))) = drive(view, robot, start, &goal, APPROACH_M)
             && bases
                 .iter()
                 .all(|(_, b)| b.base.position.distance(moved.base.position) > SAME_BASE_M)

@@ -16,6 +16,7 @@ mod error;
 mod joints;
 mod look_ahead;
 mod part_motion;
+mod place_in;
 mod reach;
 
 pub use arm_motion::scene_obstacles;
@@ -24,9 +25,6 @@ use joints::{closes_with, move_joint};
 use look_ahead::{MAX_LOOKS_AHEAD, pick_ahead, plans_after};
 pub use reach::nav_grid;
 use reach::{approach, approach_point, navigate, within_reach};
-
-/// Spots of a container less than this apart in height (metres) are on the same level.
-const SAME_LEVEL_M: f32 = 0.02;
 
 /// One robot action, as task scripts write it (`{"action": "open", "object": "fridge_1"}`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -342,51 +340,17 @@ pub fn attempt_then(
                 changes.extend(attach(&view, link, container, spot)?);
                 return Ok(changes);
             };
-            let around = arm_motion::AroundObject::new(&view, link);
-            let place_at = |spot: Affine3A| {
-                // Into the container through its front, not down through its top.
-                let inward = view
-                    .node_link(container)
-                    .and_then(|c| arm_motion::way_in(&view, c, link, &spot));
-                let front = inward.map(|(d, _)| -d.truncate().normalize_or_zero());
-                arm_motion::from_some_base(
-                    &view,
-                    robot,
-                    &state,
-                    (changes.clone(), moved.clone()),
-                    (spot.translation.truncate(), front),
-                    &|at| {
-                        arm_motion::place_motion(
-                            &view,
-                            rig,
-                            at,
-                            (object, link),
-                            &around,
-                            (container, &spot),
-                            inward,
-                            &[gripper],
-                        )
-                    },
-                )
-            };
-            let first = place_at(spot);
-            if first.is_ok() {
-                return first;
-            }
-            // Then the first spot of each other level: a Panda on its base does not reach
-            // down into a floor cabinet's bottom level, where the first spot is.
-            let mut levels = vec![spot.translation.z];
-            for other in spots {
-                let z = other.translation.z;
-                if levels.iter().any(|l| (l - z).abs() < SAME_LEVEL_M) {
-                    continue;
-                }
-                levels.push(z);
-                if let Ok(changes) = place_at(other) {
-                    return Ok(changes);
-                }
-            }
-            first
+            place_in::by_arm(
+                &view,
+                robot,
+                rig,
+                &state,
+                (changes, moved),
+                (object, link),
+                container,
+                spot,
+                spots,
+            )
         }
         Action::Push {
             object,
