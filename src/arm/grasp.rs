@@ -126,7 +126,7 @@ pub fn grasps(
         }
     }
     if rim {
-        let (mut rims, mut pitched_rims) = (Vec::new(), Vec::new());
+        let (mut rims, mut leaning_rims) = (Vec::new(), Vec::new());
         for (outward, half) in [
             (axis_x, 0.5 * size.x),
             (-axis_x, 0.5 * size.x),
@@ -140,21 +140,12 @@ pub fn grasps(
                 approach: -Vec3::Z,
                 width: RIM_WIDTH_M,
             });
-        }
-        // The same with the hand leaning out over the side: a bowl carried into a microwave
-        // leaves the wrist low and outside the cavity, not over the bowl.
-        for (outward, half) in [
-            (axis_x, 0.5 * size.x),
-            (-axis_x, 0.5 * size.x),
-            (axis_y, 0.5 * size.y),
-            (-axis_y, 0.5 * size.y),
-        ] {
-            // Less deep: the finger outside, tilted, comes lower than the tool.
-            let at = top
-                + Vec3::Z * (depth - LEANING_RIM_DEPTH_M).max(0.0)
-                + outward * (half - RIM_INSET_M);
+            // The same with the hand leaning out over the side (a bowl carried into a
+            // microwave leaves the wrist low and outside the cavity, not over the bowl), less
+            // deep: the finger outside, tilted, comes lower than the tool.
+            let at = at + Vec3::Z * (depth - LEANING_RIM_DEPTH_M).max(0.0);
             let approach = -(Vec3::Z * RIM_LEAN.cos() + outward * RIM_LEAN.sin()).normalize();
-            pitched_rims.push(Grasp {
+            leaning_rims.push(Grasp {
                 kind: GraspKind::Rim,
                 world_from_tool: tool_pose(at, approach, outward),
                 approach,
@@ -164,9 +155,9 @@ pub fn grasps(
         // The rim nearest the robot first; leaning after upright.
         let d = |g: &Grasp| g.world_from_tool.translation.truncate().distance(robot);
         rims.sort_by(|a, b| d(a).total_cmp(&d(b)));
-        pitched_rims.sort_by(|a, b| d(a).total_cmp(&d(b)));
+        leaning_rims.sort_by(|a, b| d(a).total_cmp(&d(b)));
         out.extend(rims);
-        out.extend(pitched_rims);
+        out.extend(leaning_rims);
     }
     // Side grasps: in from each horizontal side, across the other horizontal side or the height.
     let mut sides = Vec::new();

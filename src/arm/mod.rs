@@ -11,6 +11,7 @@ pub mod collision;
 pub mod grasp;
 pub mod ik;
 pub mod reach;
+pub mod rig;
 pub mod rrt;
 
 use std::path::Path;

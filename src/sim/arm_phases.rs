@@ -10,7 +10,7 @@
 
 use glam::Affine3A;
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::arm::rrt::distance;
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Change, PartFollow};

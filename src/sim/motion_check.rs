@@ -10,7 +10,7 @@
 use glam::{Affine3A, Vec3};
 use serde::Serialize;
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::kinematics::joint_sweep::world_bounds;
 use crate::kinematics::motion_bounds::{body_bounds, link_bounds, overlaps, swept_bounds};
 use crate::kinematics::rest_test::{

@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use glam::Affine3A;
 
-use crate::arm::reach::{ArmRig, MAST_RADIUS_M};
+use crate::arm::rig::{ArmRig, MAST_RADIUS_M};
 use crate::base::JointKind;
 use crate::export::mjcf::{MjcfExtra, attr_escape, mjcf_document, numbers, pose_attrs};
 use crate::export::obj::obj_text;

@@ -4,7 +4,7 @@
 use glam::{Affine3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::geometry::TriMesh;
 
 /// The robot's base link name in the kinematic tree and the exports.

@@ -13,7 +13,7 @@ use std::fmt::Write;
 use glam::Affine3A;
 
 use crate::arm::LinkMotion;
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::base::JointKind;
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::Change;

@@ -24,7 +24,7 @@ use bevy::prelude::*;
 use serde::Serialize;
 
 use crate::arm::Arm;
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::error::{InputError, IsceneError};
 use crate::export::write_tree_exports;
 use crate::graph::ContactGraph;

@@ -6,7 +6,7 @@ use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use glam::Affine3A;
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::components::RobotArmLink;
 use crate::kinematics::joint_sweep::world_bounds;
 use crate::kinematics::motion_bounds::sampled;

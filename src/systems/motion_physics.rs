@@ -13,7 +13,7 @@ use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use glam::Affine3A;
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::kinematics::motion_bounds::EMPTY_BOX;
 use crate::kinematics::rest_test::REST_STEP_S;
 use crate::kinematics::tree::KinematicTree;

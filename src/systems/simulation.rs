@@ -12,7 +12,7 @@ use std::time::Instant;
 use bevy::prelude::*;
 use serde::Serialize;
 
-use crate::arm::reach::{ArmRig, MAST_RADIUS_M};
+use crate::arm::rig::{ArmRig, MAST_RADIUS_M};
 use crate::components::{Joint, LinkBody, Panoptic, RobotArmLink};
 use crate::kinematics::JointSpec;
 use crate::kinematics::link::LinkGeometry;
@@ -530,7 +530,7 @@ fn perform_requested_actions(world: &mut World) {
 
 /// The robot's arm, when it has one: picks and places are its planned motions.
 #[derive(Resource, Clone)]
-pub struct RobotArm(pub std::sync::Arc<crate::arm::reach::ArmRig>);
+pub struct RobotArm(pub std::sync::Arc<crate::arm::rig::ArmRig>);
 
 /// Adds the action messages, the trace and the system that performs actions.
 pub struct SimulationPlugin;

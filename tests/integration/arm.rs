@@ -251,7 +251,7 @@ fn panda_picks_and_places_in_the_kitchen() {
     let urdf = panda_urdf();
     let arm = Arm::read_urdf(&urdf, None).expect("the Panda reads");
     let base = iscene::sim::robot::RobotSpec::ARM_BASE;
-    let rig = base.mount(iscene::arm::reach::ArmRig::new(arm, base.height));
+    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
     let mut motions = 0;
     for step in trace["steps"].as_array().expect("steps") {
         let changes = step["changes"].as_array().expect("changes");
@@ -351,21 +351,33 @@ fn panda_task_in_the_kitchen(
     let seq = dir.join("seq");
     common::render_scene("kitchen", &seq, 2, true);
     let gt = seq.join("gt");
-    let task = dir.join("task.json");
-    std::fs::write(&task, serde_json::json!({ "steps": steps }).to_string()).expect("task");
+    let (task, out, trace) = panda_task(&gt, serde_json::json!({ "steps": steps }), dir);
+    (gt, task, out, trace)
+}
+
+/// The `task` (a task file's JSON) written into `dir` and simulated on the scene folder `scene`
+/// with the Panda (`iscene simulate --robot`), which must exit 0: the task file, the output
+/// folder and its trace.
+fn panda_task(
+    scene: &std::path::Path,
+    task: serde_json::Value,
+    dir: &std::path::Path,
+) -> (std::path::PathBuf, std::path::PathBuf, serde_json::Value) {
+    let file = dir.join("task.json");
+    std::fs::write(&file, task.to_string()).expect("task");
     let out = dir.join("sim");
-    let (code, stdout, stderr) = common::simulate(&gt, &task, &out, Some(&panda_urdf()));
+    let (code, stdout, stderr) = common::simulate(scene, &file, &out, Some(&panda_urdf()));
     assert_eq!(code, 0, "{stdout}{stderr}");
     let trace: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
             .expect("JSON");
-    (gt, task, out, trace)
+    (file, out, trace)
 }
 
 /// The task in `out` (a `simulate --robot` output) replayed in MuJoCo: every joint of the CSV
 /// is in the model and nothing of the robot or in its hand goes 5 mm into the scene at any
 /// sample; the replay's figures (tests/external/mujoco_replay.py) for the caller's checks.
-fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::reach::ArmRig) -> serde_json::Value {
+fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::rig::ArmRig) -> serde_json::Value {
     let python = common::validator(".venv-validators/bin/python");
     let script = common::root().join("tests/external/mujoco_replay.py");
     let tool = format!("robot_{}", rig.arm.links[rig.arm.tool].name);
@@ -470,7 +482,7 @@ fn panda_opens_and_closes_a_door_and_a_drawer_by_their_handles() {
     }
     let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
     let base = iscene::sim::robot::RobotSpec::ARM_BASE;
-    let rig = base.mount(iscene::arm::reach::ArmRig::new(arm, base.height));
+    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
     let replay = replay_in_mujoco(&out, &rig);
     assert_eq!(replay["steps"], serde_json::json!([0, 1, 2, 3]), "{replay}");
     assert!(
@@ -518,22 +530,14 @@ fn panda_on_its_lift_opens_and_closes_the_lowest_door_of_the_reconstruction() {
         .expect("a door with a handle");
     assert!(height < 0.5, "{object} {part} at {height} m");
     let tmp = tempfile::tempdir().expect("tempdir");
-    let task = tmp.path().join("task.json");
-    std::fs::write(
-        &task,
+    let (_, _, trace) = panda_task(
+        &rec,
         serde_json::json!({"steps": [
             {"action": "open", "object": object, "part": part},
             {"action": "close", "object": object, "part": part},
-        ]})
-        .to_string(),
-    )
-    .expect("task");
-    let out = tmp.path().join("sim");
-    let (code, stdout, stderr) = common::simulate(&rec, &task, &out, Some(&panda_urdf()));
-    assert_eq!(code, 0, "{stdout}{stderr}");
-    let trace: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
-            .expect("JSON");
+        ]}),
+        tmp.path(),
+    );
     for step in trace["steps"].as_array().expect("steps") {
         assert_eq!(step["success"], true, "{step}");
         assert_arm_ran_in_rapier(step, &["reach", "handle", "retreat"]);
@@ -564,19 +568,12 @@ fn panda_on_its_lift_opens_and_closes_the_lowest_door_of_the_reconstruction() {
 fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
     let (_, rec) = common::shared_noisy_map("kitchen");
     let tmp = tempfile::tempdir().expect("tempdir");
-    let task = tmp.path().join("task.json");
-    std::fs::write(
-        &task,
-        serde_json::json!({"goals": ["cup_1 in cabinet_2", "cabinet_2 closed"]}).to_string(),
-    )
-    .expect("task");
-    let out = tmp.path().join("sim");
-    let (code, stdout, stderr) = common::simulate(&rec, &task, &out, Some(&panda_urdf()));
-    assert_eq!(code, 0, "{stdout}{stderr}");
-    let trace: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
-            .expect("JSON");
-    assert_eq!(trace["success"], true, "{stdout}");
+    let (_, out, trace) = panda_task(
+        &rec,
+        serde_json::json!({"goals": ["cup_1 in cabinet_2", "cabinet_2 closed"]}),
+        tmp.path(),
+    );
+    assert_eq!(trace["success"], true, "{}", trace["steps"]);
     let mut kinds = Vec::new();
     for step in trace["steps"].as_array().expect("steps") {
         assert_eq!(step["success"], true, "{step}");
@@ -618,7 +615,7 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
     );
     let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
     let base = iscene::sim::robot::RobotSpec::ARM_BASE;
-    let rig = base.mount(iscene::arm::reach::ArmRig::new(arm, base.height));
+    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
     let replay = replay_in_mujoco(&out, &rig);
     let drift = replay["held_drift_m"].as_f64().expect("drift");
     assert!(

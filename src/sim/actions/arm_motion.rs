@@ -8,9 +8,8 @@ use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps, most_level_first};
-use crate::arm::reach::{
-    ArmPath, ArmRig, Held, LIFT_M, ReachError, reach, retreat, retreat_through,
-};
+use crate::arm::reach::{ArmPath, Held, LIFT_M, ReachError, reach, retreat, retreat_through};
+use crate::arm::rig::ArmRig;
 use crate::geometry::TriMesh;
 use crate::sim::actions::error::ArmTries;
 use crate::sim::actions::look_ahead::LookAheadError;

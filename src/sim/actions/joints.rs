@@ -4,7 +4,7 @@
 
 use glam::{Affine3A, Vec2};
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::kinematics::JointSpec;
 use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, SweepPose};
 use crate::kinematics::tree::KinematicTree;

@@ -1,7 +1,7 @@
 //! A pick looking ahead to its place: the task's next drives, doors and the place of the same
 //! object, planned on a copy of the tree with the pick made.
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::{Action, ActionError, Change, RobotInTree, attempt};
 use crate::sim::motion_path::apply_to_tree;

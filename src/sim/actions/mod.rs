@@ -6,7 +6,7 @@
 use glam::{Affine3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::sim::scene_view::{SceneView, TOUCH_M};

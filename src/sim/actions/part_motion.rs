@@ -9,9 +9,10 @@ use glam::{Affine3A, Mat3, Vec3};
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::PREGRASP_M;
 use crate::arm::reach::{
-    ArmPath, ArmRig, Held, ReachError, STRETCH_MARGIN_M, configurations_at, describe, follow,
+    ArmPath, Held, ReachError, STRETCH_MARGIN_M, configurations_at, describe, follow,
     reach_configuration, retreat_along,
 };
+use crate::arm::rig::ArmRig;
 use crate::geometry::TriMesh;
 use crate::geometry::surface_points::surface_points;
 use crate::kinematics::JointKind;

@@ -4,7 +4,7 @@
 
 use glam::Affine3A;
 
-use crate::arm::reach::ArmRig;
+use crate::arm::rig::ArmRig;
 use crate::sim::actions::{ActionError, Change, RobotInTree, arm_motion};
 use crate::sim::robot::RobotSpec;
 use crate::sim::scene_view::SceneView;
