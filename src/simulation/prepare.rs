@@ -48,7 +48,11 @@ pub(super) fn prepare(
 ) -> Result<(PreparedTask, App), IsceneError> {
     let graph = ContactGraph::load(&dir.join("contact_graph.json"))?;
     let task = Task::load(task_path)?;
-    let shapes = SceneShapes::read(dir, &graph)?;
+    let mut shapes = SceneShapes::read(dir, &graph)?;
+    // An added object may be a library model built to a size of the task's choosing.
+    shapes.models = shapes
+        .models
+        .with_sized_models(task.add.iter().map(|a| a.model.as_str()));
     let graph = add_unseen_objects(graph, &task.add, &shapes)
         .map_err(|p| InputError::invalid(task_path, p))?;
     check_steps_name_movable_nodes(&task, &graph).map_err(|p| InputError::invalid(task_path, p))?;

@@ -96,6 +96,10 @@ pub struct StepRecord {
     pub wall_ms: f64,
     /// Of `wall_ms`, the milliseconds of the physics check.
     pub physics_ms: f64,
+    /// The action moved its door or drawer part of the way (no one place of the base follows
+    /// its handle all the way); the next step goes on with the same action.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub part_way: bool,
 }
 
 impl StepRecord {
@@ -215,9 +219,25 @@ fn pose_arm_links(world: &mut World, q: &[f32]) {
     }
 }
 
+/// An action that leaves its part part of the way goes on at most this many steps more.
+const MAX_PART_WAY_STEPS: usize = 3;
+
 /// Performs `action` on the world: checks it, applies its changes, checks the physics; records
-/// and returns what happened.
+/// and returns what happened. A door or drawer moved part of the way is moved on in further
+/// steps of the same action (each recorded), and the last step is returned.
 pub fn perform(world: &mut World, action: &Action, then: &[Action]) -> StepRecord {
+    let mut record = perform_step(world, action, then);
+    for _ in 0..MAX_PART_WAY_STEPS {
+        if !record.part_way {
+            break;
+        }
+        record = perform_step(world, action, then);
+    }
+    record
+}
+
+/// One step of [`perform`].
+fn perform_step(world: &mut World, action: &Action, then: &[Action]) -> StepRecord {
     let started = Instant::now();
     let step = world
         .get_resource::<SimulationTrace>()
@@ -247,6 +267,7 @@ pub fn perform(world: &mut World, action: &Action, then: &[Action]) -> StepRecor
             physics: None,
             wall_ms: started.elapsed().as_secs_f64() * 1e3,
             physics_ms: 0.0,
+            part_way: false,
         },
         Ok(changes) => {
             for change in &changes {
@@ -263,6 +284,8 @@ pub fn perform(world: &mut World, action: &Action, then: &[Action]) -> StepRecor
                 .ok()
                 .map(step_physics);
             let physics_ms = physics_started.elapsed().as_secs_f64() * 1e3;
+            let part_way = read_kinematic_tree(world)
+                .is_ok_and(|tree| crate::sim::actions::left_part_way(&tree, action));
             StepRecord {
                 step,
                 action: action.clone(),
@@ -273,6 +296,7 @@ pub fn perform(world: &mut World, action: &Action, then: &[Action]) -> StepRecor
                 physics,
                 wall_ms: started.elapsed().as_secs_f64() * 1e3,
                 physics_ms,
+                part_way,
             }
         }
     };

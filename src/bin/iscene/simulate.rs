@@ -29,9 +29,10 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), IsceneError> {
         });
         match &s.failed_precondition {
             None => println!(
-                "{:>2} {:<36} ok{physics} ({:.0} ms: motion {:.0} ms, rest {:.0} ms)",
+                "{:>2} {:<36} {}{physics} ({:.0} ms: motion {:.0} ms, rest {:.0} ms)",
                 s.step,
                 s.action.label(),
+                if s.part_way { "part of the way" } else { "ok" },
                 s.wall_ms,
                 s.motion_ms(),
                 s.physics_ms

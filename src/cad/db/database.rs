@@ -193,12 +193,22 @@ impl CadDatabase {
     /// it lacks (`library::build_sized_model`): a graph whose models were written elsewhere, or
     /// not yet (a live session's preview), still gives its links their meshes.
     pub fn with_sized_models_of(&self, graph: &crate::graph::ContactGraph) -> Self {
-        let missing: Vec<DatabaseModel> = graph
-            .nodes
-            .iter()
-            .filter_map(|n| n.cad.as_ref())
-            .filter(|c| self.get(&c.model).is_none())
-            .filter_map(|c| build_sized_model(&c.model))
+        self.with_sized_models(
+            graph
+                .nodes
+                .iter()
+                .filter_map(|n| n.cad.as_ref())
+                .map(|c| c.model.as_str()),
+        )
+    }
+
+    /// This database with the library models built to size that `ids` name and it lacks (a
+    /// task may add `box_01.120x70x100`, the library's box built to 12 x 7 x 10 cm).
+    pub fn with_sized_models<'a>(&self, ids: impl IntoIterator<Item = &'a str>) -> Self {
+        let missing: Vec<DatabaseModel> = ids
+            .into_iter()
+            .filter(|id| self.get(id).is_none())
+            .filter_map(build_sized_model)
             .filter_map(|m| {
                 let id = m.id.clone();
                 DatabaseModel::new(m)

@@ -26,6 +26,36 @@ const WIDE_OPEN_FRACTION: f32 = 0.9;
 const FARTHER: f32 = 0.1;
 /// The base stands within this distance (metres) of a place chosen to work a part from.
 const PLACE_TO_STAND_M: f32 = 0.08;
+/// A part no one place follows all the way goes these fractions of the way from one place (the
+/// largest first), each at least `MIN_PART_WAY_FRACTION` of its range.
+const PART_WAY_FRACTIONS: [f32; 2] = [0.5, 0.25];
+const MIN_PART_WAY_FRACTION: f32 = 0.1;
+/// A part within this (radians or metres) of where an action moves it is there.
+const THERE: f32 = 0.02;
+
+/// Whether `action` (an open or a close), performed on the scene that is now `tree`, left its
+/// part short of where it goes: it moved part of the way from one place, and goes on from
+/// another.
+pub fn left_part_way(tree: &KinematicTree, action: &super::Action) -> bool {
+    use super::Action;
+    let (object, part) = match action {
+        Action::Open { object, part, .. } | Action::Close { object, part } => (object, part),
+        _ => return false,
+    };
+    let view = SceneView::new(tree);
+    let Ok(joint) = joint_of(&view, object, part.as_deref()) else {
+        return false;
+    };
+    let link = &tree.links[joint];
+    match action {
+        Action::Open { value: None, .. } => {
+            let open = open_value(tree, joint);
+            (link.value - MIN_OPEN_FRACTION * open) * open.signum() < -THERE
+        }
+        Action::Open { value: Some(v), .. } => (link.value - link.joint.clamp(*v)).abs() > THERE,
+        _ => (link.value - closed_value(tree, joint)).abs() > THERE,
+    }
+}
 
 /// Opens (`open` is `Some(value)`; `Some(None)` as far as it goes) or closes (`None`) a door or
 /// drawer of `object`. The base first steps to where it stands for the doors (in front, out of
@@ -72,18 +102,19 @@ pub(super) fn move_joint(
     };
     let places =
         part_motion::places_to_stand(&view, rig, robot, object, joint, (nominal, farthest))?;
-    if places.is_empty() {
-        return Err(ActionError::ArmCannot {
-            what: format!("work {name}"),
-            attempts: vec![format!(
-                "no place to stand in front of {object} from which the arm reaches the handle \
-                 along its path and the part misses the base"
-            )],
-        });
-    }
-    // The first of `places` the base gets to and the arm works the part from (none of those in
-    // `tried`, where the base stood already): the changes and the part's value after them.
-    let from_places = |places: Vec<Vec2>, tried: &mut Vec<Vec2>| {
+    // The first of `places` the base gets to and the arm works the part from towards `open`
+    // (none of those in `tried`, where the base stood already): the changes and the part's
+    // value after them.
+    let from_places = |places: Vec<Vec2>, open: Option<Option<f32>>, tried: &mut Vec<Vec2>| {
+        if places.is_empty() {
+            return Err(ActionError::ArmCannot {
+                what: format!("work {name}"),
+                attempts: vec![format!(
+                    "no place to stand in front of {object} from which the arm reaches the \
+                     handle along its path and the part misses the base"
+                )],
+            });
+        }
         let mut tries = ArmTries::default();
         for place in places {
             let goal = crate::sim::navigation::NavGoal {
@@ -132,7 +163,29 @@ pub(super) fn move_joint(
         Err(tries.error(Some(format!("work {name}"))))
     };
     let mut tried = Vec::new();
-    let (changes, reached) = from_places(places, &mut tried)?;
+    let (changes, reached) = match from_places(places, open, &mut tried) {
+        Ok(found) => found,
+        // No one place follows the handle all the way (a fridge's door in a corner: the places
+        // clear of its swing are out of the arm's reach of the handle while it is closed). The
+        // part goes part of the way from one place, the step ends there, and the action goes on
+        // from another (`left_part_way`).
+        Err(whole) => {
+            let range = (open_value(tree, joint) - closed_value(tree, joint)).abs();
+            return PART_WAY_FRACTIONS
+                .iter()
+                .map(|f| from + f * (nominal - from))
+                .filter(|to| (to - from).abs() >= MIN_PART_WAY_FRACTION * range)
+                .find_map(|to| {
+                    let places =
+                        part_motion::places_to_stand(&view, rig, robot, object, joint, (to, to))
+                            .ok()?;
+                    tracing::debug!("{name}: part of the way, to {to:.2}");
+                    from_places(places, Some(Some(to)), &mut Vec::new()).ok()
+                })
+                .map(|(changes, _)| changes)
+                .ok_or(whole);
+        }
+    };
     // A door opened as far as it goes that stopped well short of it may go farther from a
     // place where the arm follows its handle all the way: a cabinet's door stopped at 65 % stood
     // in front of its own opening, between the base and the level behind it; at 73 % the hand
@@ -141,7 +194,7 @@ pub(super) fn move_joint(
         let wide =
             part_motion::places_to_stand(&view, rig, robot, object, joint, (farthest, farthest))
                 .unwrap_or_default();
-        if let Ok((wider, wider_reached)) = from_places(wide, &mut tried)
+        if let Ok((wider, wider_reached)) = from_places(wide, open, &mut tried)
             && (wider_reached - reached) * farthest.signum() >= FARTHER
         {
             return Ok(wider);

@@ -21,6 +21,7 @@ mod reach;
 
 pub use arm_motion::scene_obstacles;
 pub use error::ActionError;
+pub use joints::left_part_way;
 use joints::{closes_with, move_joint};
 use look_ahead::{MAX_LOOKS_AHEAD, pick_ahead, plans_after};
 pub use reach::nav_grid;
