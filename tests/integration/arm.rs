@@ -558,23 +558,12 @@ fn panda_on_its_lift_opens_and_closes_the_lowest_door_of_the_reconstruction() {
     }
 }
 
-/// On the kitchen's reconstruction, the Panda takes `cup_1` from the table into `cabinet_2`
-/// and shuts the cabinet, planned from goals (a task issue 37 asks for): the pick looks ahead
-/// to the place and takes the cup from the side (from above, the forearm met the cabinet over
-/// its low level), every arm motion runs in rapier before it is made, the cup ends inside the
-/// cabinet in the output graph, and MuJoCo's replay keeps the robot and the cup within 5 mm of
-/// the scene and the cup where the fingers took it.
-#[test]
-fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
-    let (_, rec) = common::shared_noisy_map("kitchen");
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let (_, out, trace) = panda_task(
-        &rec,
-        serde_json::json!({"goals": ["cup_1 in cabinet_2", "cabinet_2 closed"]}),
-        tmp.path(),
-    );
-    assert_eq!(trace["success"], true, "{}", trace["steps"]);
+/// Every step of a successful task's `trace` succeeded, and each but a drive was an arm motion
+/// that ran in rapier before it was made (`assert_arm_ran_in_rapier`): those steps' kinds
+/// (`open`, `pick`, ...) and what their hands took, in order.
+fn arm_steps_ran_in_rapier(trace: &serde_json::Value) -> (Vec<String>, Vec<String>) {
     let mut kinds = Vec::new();
+    let mut grasps = Vec::new();
     for step in trace["steps"].as_array().expect("steps") {
         assert_eq!(step["success"], true, "{step}");
         let kind = step["action"]["action"]
@@ -595,13 +584,122 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
             _ => &["reach", "retreat"],
         };
         assert_arm_ran_in_rapier(step, phases);
-        if kind == "pick" {
-            let what = motion["what"].as_str().expect("what");
-            assert!(what.starts_with("side grasp"), "{what}");
-        }
+        grasps.push(motion["what"].as_str().expect("what").to_string());
         kinds.push(kind);
     }
+    (kinds, grasps)
+}
+
+/// On the kitchen's reconstruction, the Panda takes a box (added by the task: no camera saw
+/// inside the fridge) out of the fridge into the microwave and shuts both, planned from goals
+/// (the demonstration issue 37 asks for). The fridge stands in the room's corner with its
+/// handle 13 cm from the wall: no one place of the base clear of the door's swing has the
+/// handle within the arm's reach along its whole arc, so the door opens in two steps from two
+/// places (the first part of the way), and shuts the same way. Every arm motion runs in rapier
+/// before it is made; the box ends in the microwave in the output graph; MuJoCo's replay keeps
+/// the robot within 5 mm of the scene, the box where the fingers took it and the hand on the
+/// handles.
+#[test]
+fn panda_takes_the_box_from_the_fridge_into_the_microwave_of_the_reconstruction() {
+    let (_, rec) = common::shared_noisy_map("kitchen");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let task: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            common::root().join("scenes/tasks/kitchen_fridge_to_microwave_panda.json"),
+        )
+        .expect("task"),
+    )
+    .expect("JSON");
+    let (_, out, trace) = panda_task(&rec, task, tmp.path());
+    assert_eq!(trace["success"], true, "{}", trace["steps"]);
+    let (kinds, _) = arm_steps_ran_in_rapier(&trace);
+    assert_eq!(
+        kinds
+            .iter()
+            .filter(|k| *k == "pick" || *k == "place_in")
+            .count(),
+        2,
+        "{kinds:?}"
+    );
+    // The fridge's door: part of the way from one place, the rest from another, each way.
+    let fridge: Vec<(&str, bool, f64)> = trace["steps"]
+        .as_array()
+        .expect("steps")
+        .iter()
+        .filter(|s| s["action"]["object"] == "fridge_1")
+        .map(|s| {
+            let door = s["changes"]
+                .as_array()
+                .expect("changes")
+                .iter()
+                .find(|c| c["change"] == "set_joint")
+                .expect("the door moved");
+            (
+                s["action"]["action"].as_str().expect("action"),
+                s.get("part_way").is_some_and(|p| p == true),
+                door["to"].as_f64().expect("value"),
+            )
+        })
+        .collect();
+    assert_eq!(
+        fridge.iter().map(|(a, p, _)| (*a, *p)).collect::<Vec<_>>(),
+        [
+            ("open", true),
+            ("open", false),
+            ("close", true),
+            ("close", false)
+        ],
+        "{fridge:?}"
+    );
+    // Opened at least as far as a door opened as far as it goes (0.6 of its 1.8 rad), shut.
+    assert!(fridge[1].2 >= 0.6 * 1.8, "{fridge:?}");
+    assert!(fridge[3].2.abs() < 0.02, "{fridge:?}");
+    let graph: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("contact_graph.json")).expect("graph"),
+    )
+    .expect("JSON");
+    assert!(
+        graph["edges"].as_array().expect("edges").iter().any(|e| {
+            e["type"] == "support" && e["parent"] == "microwave_1" && e["child"] == "box_1"
+        }),
+        "{}",
+        graph["edges"]
+    );
+    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
+    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
+    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
+    let replay = replay_in_mujoco(&out, &rig);
+    let held = replay["held_drift_m"].as_f64().expect("held drift");
+    assert!(
+        held < 1e-3,
+        "the box slipped {held} m in the hand: {replay}"
+    );
+    let part = replay["part_drift_m"].as_f64().expect("part drift");
+    assert!(
+        part < 0.002,
+        "the hand slipped {part} m on a handle: {replay}"
+    );
+}
+
+/// On the kitchen's reconstruction, the Panda takes `cup_1` from the table into `cabinet_2`
+/// and shuts the cabinet, planned from goals (a task issue 37 asks for): the pick looks ahead
+/// to the place and takes the cup from the side (from above, the forearm met the cabinet over
+/// its low level), every arm motion runs in rapier before it is made, the cup ends inside the
+/// cabinet in the output graph, and MuJoCo's replay keeps the robot and the cup within 5 mm of
+/// the scene and the cup where the fingers took it.
+#[test]
+fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
+    let (_, rec) = common::shared_noisy_map("kitchen");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (_, out, trace) = panda_task(
+        &rec,
+        serde_json::json!({"goals": ["cup_1 in cabinet_2", "cabinet_2 closed"]}),
+        tmp.path(),
+    );
+    assert_eq!(trace["success"], true, "{}", trace["steps"]);
+    let (kinds, grasps) = arm_steps_ran_in_rapier(&trace);
     assert_eq!(kinds, ["open", "pick", "place_in", "close"]);
+    assert!(grasps[1].starts_with("side grasp"), "{}", grasps[1]);
     let graph: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("contact_graph.json")).expect("graph"),
     )
