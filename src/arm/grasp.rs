@@ -8,6 +8,8 @@
 //! deep into the object that the palm behind the fingers would meet it.
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
+use parry3d::query::{Ray, RayCast};
+use parry3d::shape::ConvexPolyhedron;
 
 use crate::geometry::mesh::points_bounds;
 
@@ -62,6 +64,28 @@ impl Hand {
     fn reach_in(&self) -> f32 {
         (self.palm_depth - PALM_CLEARANCE_M).max(0.0)
     }
+}
+
+/// The gap the fingers close to on `pieces` (convex, in the tool's frame; the fingers close
+/// along the tool's y through its point): each finger stops `FINGER_CLEARANCE_M` short of the
+/// farther of the surfaces it meets, so the closed hand stands round what it holds without
+/// going into it (the held object rides in the hand as attached, not by friction). The whole
+/// opening when something fills the space between the open fingers; `None` when nothing lies
+/// between them.
+pub fn finger_gap(pieces: &[ConvexPolyhedron], opening: f32) -> Option<f32> {
+    let half = 0.5 * opening;
+    let mut reach: Option<f32> = None;
+    for piece in pieces {
+        for towards in [Vec3::Y, Vec3::NEG_Y] {
+            // From the open finger on one side towards the other (a start inside is a hit at 0).
+            let ray = Ray::new(-towards * half, towards);
+            if let Some(t) = piece.cast_local_ray(&ray, opening, true) {
+                let from_middle = half - t;
+                reach = Some(reach.map_or(from_middle, |r| r.max(from_middle)));
+            }
+        }
+    }
+    reach.map(|r| (2.0 * (r.abs() + FINGER_CLEARANCE_M)).min(opening))
 }
 
 /// One way to hold an object.
@@ -238,6 +262,27 @@ mod tests {
             opening,
             palm_depth: 0.2,
         }
+    }
+
+    /// The fingers close to 2 mm off each side of what lies between them, to the farther side
+    /// of an object off the middle, stay open on one that fills the opening, and have nothing to
+    /// close on beside an object out of their line.
+    #[test]
+    fn fingers_close_round_what_lies_between_them() {
+        let block = |lo: Vec3, hi: Vec3| {
+            ConvexPolyhedron::from_convex_hull(&crate::geometry::mesh::box_corners(lo, hi))
+                .expect("a box")
+        };
+        let centred = block(Vec3::new(-0.01, -0.03, -0.05), Vec3::new(0.01, 0.03, 0.01));
+        let gap = finger_gap(&[centred], 0.08).expect("between the fingers");
+        assert!((gap - 0.064).abs() < 1e-5, "{gap}");
+        let off_middle = block(Vec3::new(-0.01, -0.01, -0.05), Vec3::new(0.01, 0.025, 0.01));
+        let gap = finger_gap(&[off_middle], 0.08).expect("between the fingers");
+        assert!((gap - 0.054).abs() < 1e-5, "{gap}");
+        let wide = block(Vec3::new(-0.01, -0.06, -0.05), Vec3::new(0.01, 0.06, 0.01));
+        assert_eq!(finger_gap(&[wide], 0.08), Some(0.08));
+        let beside = block(Vec3::new(0.05, -0.01, -0.05), Vec3::new(0.07, 0.01, 0.01));
+        assert_eq!(finger_gap(&[beside], 0.08), None);
     }
 
     #[test]

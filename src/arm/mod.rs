@@ -42,6 +42,9 @@ pub struct ArmLink {
     pub joint: Option<BodyJoint>,
     /// Convex collision pieces in the link's frame.
     pub pieces: Vec<TriMesh>,
+    /// What it looks like, in its frame: the file's visual meshes, or its collision pieces
+    /// where it has none. Only the viewer draws it (shared: an arm is cloned per rig).
+    pub look: std::sync::Arc<TriMesh>,
 }
 
 /// What moves a link: a joint of the chain (an index into the configuration), a finger joint
@@ -107,12 +110,23 @@ impl Arm {
         let links: Vec<ArmLink> = tree
             .bodies
             .into_iter()
-            .map(|b| ArmLink {
-                name: b.name,
-                parent: b.parent,
-                parent_from_link: b.parent_from_body,
-                joint: b.joint,
-                pieces: b.pieces,
+            .map(|b| {
+                let mut look = TriMesh::default();
+                for mesh in if b.visual_meshes.is_empty() {
+                    &b.pieces
+                } else {
+                    &b.visual_meshes
+                } {
+                    look.append(mesh);
+                }
+                ArmLink {
+                    name: b.name,
+                    parent: b.parent,
+                    parent_from_link: b.parent_from_body,
+                    joint: b.joint,
+                    pieces: b.pieces,
+                    look: std::sync::Arc::new(look),
+                }
             })
             .collect();
         let mut path = vec![tool];
@@ -165,6 +179,7 @@ impl Arm {
                 limits: range,
             }),
             pieces: Vec::new(),
+            look: Default::default(),
         };
         let links: Vec<ArmLink> = std::iter::once(lift)
             .chain(self.links.into_iter().map(|link| ArmLink {

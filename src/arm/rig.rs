@@ -27,6 +27,16 @@ pub struct ArmRig {
 }
 
 impl ArmRig {
+    /// The fingers' opening (0 closed .. 1 open, as `Arm::link_poses` takes it) for a gap of
+    /// `gap_m` between them.
+    pub fn finger_opening(&self, gap_m: f32) -> f32 {
+        if self.max_opening > 0.0 {
+            (gap_m / self.max_opening).clamp(0.0, 1.0)
+        } else {
+            1.0
+        }
+    }
+
     /// The arm on top of a base column `mount_height` high, stowed folded over its root
     /// ([`compact_stow`]).
     pub fn new(arm: Arm, mount_height: f32) -> Self {

@@ -54,6 +54,12 @@ impl LinkGeometry {
         Self::of_pieces(visual, color, class, hulls, collision)
     }
 
+    /// What `look` shows of a body whose convex `pieces` are known (an arm's link: its visual
+    /// meshes and collision pieces from its URDF), for a link of `class`.
+    pub fn of_look(look: TriMesh, pieces: Vec<TriMesh>, color: [f32; 3], class: &str) -> Self {
+        Self::of_pieces(look, color, class, pieces.clone(), pieces)
+    }
+
     /// `visual`, also its surface, colliding as `collision` in the planners and exports and as
     /// `hulls` in rapier, with the mass and friction of `class`.
     fn of_pieces(

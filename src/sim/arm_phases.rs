@@ -216,19 +216,37 @@ pub struct ArmInstant {
     pub part: Option<f32>,
     /// Whether the reach is over (a pick's object is in the hand, a place's is set down).
     pub reached: bool,
+    /// The fingers' opening (0 closed .. 1 open).
+    pub opening: f32,
 }
 
 /// The whole of `change` (an arm motion) from the stowed arm at instants `step_s` apart: the
-/// reach, the hand on the part's handle (from the part's value `part_from`), the retreat.
-pub fn arm_timeline(rig: &ArmRig, change: &Change, part_from: f32, step_s: f32) -> Vec<ArmInstant> {
+/// reach, the hand on the part's handle (from the part's value `part_from`), the retreat. The
+/// fingers close on what the hand holds: from the start of the reach when it comes `holding`
+/// something (a place) to its end, from the end of the reach on for a pick, on the handle
+/// while the part follows.
+pub fn arm_timeline(
+    rig: &ArmRig,
+    change: &Change,
+    part_from: f32,
+    holding: bool,
+    step_s: f32,
+) -> Vec<ArmInstant> {
     let Change::ArmMotion {
         reach,
         retreat,
         part,
+        grip_m,
         ..
     } = change
     else {
         return Vec::new();
+    };
+    let closed = grip_m.map_or(1.0, |g| rig.finger_opening(g));
+    let (on_reach, on_retreat) = match (holding, part.is_some()) {
+        (true, _) => (closed, 1.0),
+        (false, true) => (1.0, 1.0),
+        (false, false) => (1.0, closed),
     };
     let followed = part.as_ref().filter(|p| !p.along.is_empty());
     let mut part_value = followed.map(|_| part_from);
@@ -238,6 +256,7 @@ pub fn arm_timeline(rig: &ArmRig, change: &Change, part_from: f32, step_s: f32) 
             q,
             part: part_value,
             reached: false,
+            opening: on_reach,
         })
         .collect();
     let mut last = reach.last().unwrap_or(&rig.stow).clone();
@@ -247,6 +266,7 @@ pub fn arm_timeline(rig: &ArmRig, change: &Change, part_from: f32, step_s: f32) 
             q,
             part: Some(v),
             reached: true,
+            opening: closed,
         }));
         if let Some(q) = p.along.last() {
             last.clone_from(q);
@@ -261,6 +281,7 @@ pub fn arm_timeline(rig: &ArmRig, change: &Change, part_from: f32, step_s: f32) 
                 q,
                 part: part_value,
                 reached: true,
+                opening: on_retreat,
             }),
     );
     instants
@@ -358,6 +379,7 @@ mod tests {
             reach: vec![vec![0.5, 0.0], vec![1.0, 0.0]],
             retreat: vec![vec![0.5, 0.0], vec![0.0, 0.0]],
             part: None,
+            grip_m: None,
         }
     }
 
@@ -443,6 +465,7 @@ mod tests {
                 values: vec![0.5, 1.0],
                 along: vec![vec![1.0, 0.5], vec![1.0, 1.0]],
             }),
+            grip_m: None,
         };
         let phases = arm_phases(&scene, &rig, &open, None, 0.1);
         assert_eq!(

@@ -23,6 +23,8 @@ use crate::sim::scene_view::yaw_of;
 
 /// Seconds between the instants of a drive or a door's motion.
 const SAMPLE_S: f32 = 0.1;
+/// The fingers close or open in this many instants, `SAMPLE_S` apart.
+const FINGER_SAMPLES: usize = 5;
 /// The arm's fastest joint, radians (or metres) a second: the time between two configurations
 /// of a motion.
 pub const ARM_SPEED: f32 = 1.0;
@@ -36,7 +38,7 @@ pub enum Column {
     BaseYaw,
     /// Joint `i` of the arm's chain.
     Arm(usize),
-    /// A finger's joint (arm link index), open.
+    /// A finger's joint (arm link index).
     Finger(usize),
     /// Component `component` of the free joint of tree link `link`: x, y, z, then the
     /// orientation's w, x, y, z (MuJoCo's order).
@@ -115,8 +117,9 @@ pub fn arm_joint_name(rig: &ArmRig, l: usize) -> String {
 }
 
 /// The trajectory of `steps` (each performed step's index and changes, in order) from the scene
-/// `before` them, the robot carrying the arm of `rig` (stowed between its motions, the fingers
-/// open throughout). `None` when the tree has no robot.
+/// `before` them, the robot carrying the arm of `rig` (stowed between its motions; the fingers
+/// close on what the hand takes once it holds it and open before it lets go, and close on a
+/// handle while the part follows). `None` when the tree has no robot.
 pub fn trajectory(
     before: &KinematicTree,
     rig: &ArmRig,
@@ -138,6 +141,7 @@ pub fn trajectory(
         values: before.links.iter().map(|l| l.value).collect(),
         poses,
         q: rig.stow.clone(),
+        opening: 1.0,
         robot,
         gripper,
         time: 0.0,
@@ -176,8 +180,9 @@ struct Walk<'a> {
     /// Each link's joint value now.
     values: Vec<f32>,
     base: BasePose,
-    /// The arm's configuration.
+    /// The arm's configuration, and its fingers' opening (0 closed .. 1 open).
     q: Vec<f32>,
+    opening: f32,
     robot: usize,
     gripper: usize,
     time: f32,
@@ -224,19 +229,33 @@ impl Walk<'_> {
                 reach,
                 retreat,
                 part,
+                grip_m,
                 ..
             } => {
+                let closed = grip_m.map_or(1.0, |g| self.rig.finger_opening(g));
+                let takes =
+                    matches!(handover, Some(Change::Attach { to, .. }) if to == GRIPPER_LINK);
                 self.follow(step, reach);
                 if let Some(attach) = handover {
+                    // A place's fingers open on the object still held, a pick's close on it
+                    // once it is.
+                    if !takes {
+                        self.fingers_to(step, 1.0);
+                    }
                     self.attach(attach);
+                    if takes {
+                        self.fingers_to(step, closed);
+                    }
                 }
                 if let Some(part) = part
                     && let Some(l) = self.link_named(&part.link)
                 {
+                    self.fingers_to(step, closed);
                     for (q, &v) in part.along.iter().zip(&part.values) {
                         self.set_joint(l, v);
                         self.follow(step, std::slice::from_ref(q));
                     }
+                    self.fingers_to(step, 1.0);
                 }
                 self.follow(step, retreat);
             }
@@ -261,6 +280,20 @@ impl Walk<'_> {
             let hand = self.rig.arm.tool_pose(&root, q);
             self.move_subtree(self.gripper, hand);
             self.time += dt;
+            self.record(step);
+        }
+    }
+
+    /// The fingers close or open to `opening` over `FINGER_SAMPLES` instants (none when they
+    /// are there).
+    fn fingers_to(&mut self, step: usize, opening: f32) {
+        let from = self.opening;
+        if (opening - from).abs() <= f32::EPSILON {
+            return;
+        }
+        for k in 1..=FINGER_SAMPLES {
+            self.opening = from + (opening - from) * k as f32 / FINGER_SAMPLES as f32;
+            self.time += SAMPLE_S;
             self.record(step);
         }
     }
@@ -327,10 +360,9 @@ impl Walk<'_> {
             Column::BaseY => self.base.position.y,
             Column::BaseYaw => self.base.yaw,
             Column::Arm(i) => self.q[i],
-            Column::Finger(l) => self.rig.arm.links[l]
-                .joint
-                .as_ref()
-                .map_or(0.0, |j| j.limits.1),
+            Column::Finger(l) => self.rig.arm.links[l].joint.as_ref().map_or(0.0, |j| {
+                j.limits.0 + self.opening * (j.limits.1 - j.limits.0)
+            }),
             Column::Free { link, component } => {
                 let (_, rotation, translation) = self.poses[link].to_scale_rotation_translation();
                 let rotation = rotation.normalize();
@@ -425,6 +457,7 @@ mod tests {
                 what: "test".into(),
                 reach: vec![halfway.clone(), grasp.clone()],
                 retreat: vec![halfway.clone(), rig.stow.clone()],
+                grip_m: None,
             },
             Change::Attach {
                 link: "cup_1".into(),

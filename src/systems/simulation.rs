@@ -173,8 +173,8 @@ pub fn spawn_robot(
                 transform_of(pose),
                 ChildOf(base),
             ));
-            // Its collision pieces are its look (the viewer draws link bodies); a lift's
-            // mast, which touches nothing, is seen too.
+            // The viewer draws link bodies: its visual meshes (the rapier checks collide the
+            // rig's pieces); a lift's mast, which touches nothing, is seen too.
             let mast = rig
                 .mast()
                 .filter(|(mast, _)| *mast == l)
@@ -186,13 +186,15 @@ pub fn spawn_robot(
                         16,
                     )
                 });
-            if !link.pieces.is_empty() || mast.is_some() {
-                let mut mesh = mast.unwrap_or_default();
-                for piece in &link.pieces {
-                    mesh.append(piece);
+            if !link.look.positions.is_empty() || mast.is_some() {
+                let mut pieces = link.pieces.clone();
+                let mut look = (*link.look).clone();
+                if let Some(mast) = mast {
+                    look.append(&mast);
+                    pieces.push(mast);
                 }
-                entity.insert(LinkBody(std::sync::Arc::new(LinkGeometry::new(
-                    mesh, ARM_COLOR, ROBOT_LINK,
+                entity.insert(LinkBody(std::sync::Arc::new(LinkGeometry::of_look(
+                    look, pieces, ARM_COLOR, ROBOT_LINK,
                 ))));
             }
         }

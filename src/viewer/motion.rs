@@ -255,7 +255,10 @@ fn arm_legs(
             _ => None,
         })
         .unwrap_or(0.0);
-    let instants = arm_timeline(&rig, change, part_from, ARM_FRAME_S);
+    // A place's hand comes holding what it sets down.
+    let holding =
+        matches!(changes.get(k + 1), Some(Change::Attach { to, .. }) if to != GRIPPER_LINK);
+    let instants = arm_timeline(&rig, change, part_from, holding, ARM_FRAME_S);
     if instants.len() < 2 {
         return (Vec::new(), 0.0);
     }
@@ -268,7 +271,7 @@ fn arm_legs(
     };
     let link_poses: Vec<Vec<Affine3A>> = instants
         .iter()
-        .map(|i| rig.arm.link_poses(&rig.base_from_root, &i.q, 1.0))
+        .map(|i| rig.arm.link_poses(&rig.base_from_root, &i.q, i.opening))
         .collect();
     let tool: Vec<Affine3A> = instants
         .iter()

@@ -558,6 +558,23 @@ fn panda_on_its_lift_opens_and_closes_the_lowest_door_of_the_reconstruction() {
     }
 }
 
+/// The Panda's first finger joint at each line of `trajectory.csv`, with what the hand holds.
+fn finger_values(csv: &std::path::Path) -> Vec<(String, f64)> {
+    let text = std::fs::read_to_string(csv).expect("trajectory");
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let finger = header
+        .iter()
+        .position(|n| *n == "panda_finger_joint1")
+        .expect("a finger column");
+    lines
+        .map(|line| {
+            let cells: Vec<&str> = line.split(',').collect();
+            (cells[2].to_string(), cells[finger].parse().expect("value"))
+        })
+        .collect()
+}
+
 /// Every step of a successful task's `trace` succeeded, and each but a drive was an arm motion
 /// that ran in rapier before it was made (`assert_arm_ran_in_rapier`): those steps' kinds
 /// (`open`, `pick`, ...) and what their hands took, in order.
@@ -700,6 +717,35 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
     let (kinds, grasps) = arm_steps_ran_in_rapier(&trace);
     assert_eq!(kinds, ["open", "pick", "place_in", "close"]);
     assert!(grasps[1].starts_with("side grasp"), "{}", grasps[1]);
+    // The fingers close round the cup once it is held (2 mm off each side), and open again.
+    let pick = trace["steps"]
+        .as_array()
+        .expect("steps")
+        .iter()
+        .find(|s| s["action"]["action"] == "pick")
+        .and_then(|s| {
+            s["changes"]
+                .as_array()?
+                .iter()
+                .find(|c| c["change"] == "arm_motion")
+        })
+        .expect("a pick's arm motion");
+    let grip = pick["grip_m"]
+        .as_f64()
+        .expect("the fingers' gap on the cup");
+    assert!(grip > 0.03 && grip < 0.07, "{pick}");
+    let fingers = finger_values(&out.join("trajectory.csv"));
+    let held: Vec<f64> = fingers
+        .iter()
+        .filter(|(held, _)| held == "cup_1")
+        .map(|(_, v)| *v)
+        .collect();
+    let closed = held
+        .iter()
+        .filter(|v| (*v - 0.5 * grip).abs() < 1e-4)
+        .count();
+    assert!(closed * 10 >= held.len() * 9, "{closed} of {}", held.len());
+    assert!((fingers.last().expect("samples").1 - 0.04).abs() < 1e-5);
     let graph: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("contact_graph.json")).expect("graph"),
     )

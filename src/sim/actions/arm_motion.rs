@@ -7,7 +7,7 @@ use glam::{Affine3A, Vec3};
 use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
-use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, grasps, most_level_first};
+use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, finger_gap, grasps, most_level_first};
 use crate::arm::reach::{ArmPath, Held, LIFT_M, ReachError, reach, retreat, retreat_through};
 use crate::arm::rig::ArmRig;
 use crate::geometry::TriMesh;
@@ -120,7 +120,7 @@ pub(super) fn subtree(view: &SceneView, link: usize) -> Vec<usize> {
 }
 
 /// The object's convex pieces in the tool's frame when the tool is at `world_from_tool`.
-fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &Affine3A) -> Held {
+pub(super) fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &Affine3A) -> Held {
     let tool_from_world = world_from_tool.inverse();
     let pieces = collision_pieces(view, links)
         .filter_map(|(_, piece, pose)| {
@@ -240,9 +240,23 @@ pub(super) fn pick_motion(
                 to: GRIPPER_LINK.into(),
                 parent_from_link: world_from_tool.inverse() * view.poses[link],
             };
-            Ok((to, back, in_hand))
+            Ok(GraspPlan {
+                reach: to,
+                retreat: back,
+                attach: in_hand,
+                grip_m: finger_gap(&held.pieces, rig.max_opening),
+            })
         },
     )
+}
+
+/// One grasp's motion: the reach, the retreat, the object's attachment between them (to the
+/// hand, or from it to where it is set down) and the fingers' gap on it.
+struct GraspPlan {
+    reach: ArmPath,
+    retreat: ArmPath,
+    attach: Change,
+    grip_m: Option<f32>,
 }
 
 /// Why one grasp's motion does not plan: the arm's reach or retreat, or where the object would
@@ -266,20 +280,21 @@ fn first_grasp_that_works(
     candidates: Vec<Grasp>,
     tried: usize,
     then: &dyn Fn(&[Change]) -> Result<(), LookAheadError>,
-    plan: impl Fn(usize, &Grasp) -> Result<(ArmPath, ArmPath, Change), GraspFailure>,
+    plan: impl Fn(usize, &Grasp) -> Result<GraspPlan, GraspFailure>,
 ) -> Result<Vec<Change>, ActionError> {
     let mut first = None;
     for (i, grasp) in candidates.into_iter().take(tried).enumerate() {
         let label = grasp_label(&grasp);
         match plan(i, &grasp) {
-            Ok((to, back, attach)) => {
+            Ok(planned) => {
                 let motion = Change::ArmMotion {
                     what: format!("{label} of {id}"),
-                    reach: to.configurations,
-                    retreat: back.configurations,
+                    reach: planned.reach.configurations,
+                    retreat: planned.retreat.configurations,
                     part: None,
+                    grip_m: planned.grip_m,
                 };
-                let changes = vec![motion, attach];
+                let changes = vec![motion, planned.attach];
                 match then(&changes) {
                     Ok(()) => return Ok(changes),
                     Err(why) => {
@@ -326,6 +341,7 @@ pub(super) fn place_motion(
     // How the fingers hold it, and the object in the hand as the tool's pieces.
     let link_from_tool = view.poses[link].inverse() * view.poses[gripper];
     let held = held_pieces(view, &around.links, &view.poses[gripper]);
+    let grip_m = finger_gap(&held.pieces, rig.max_opening);
     let spots = turned_spots(view, id, link, world_from_link, ignore);
     let candidates = spots
         .iter()
@@ -395,7 +411,12 @@ pub(super) fn place_motion(
             let attach = super::attach(view, link, host, spot)?
                 .pop()
                 .expect("one attachment");
-            Ok((to, back, attach))
+            Ok(GraspPlan {
+                reach: to,
+                retreat: back,
+                attach,
+                grip_m,
+            })
         },
     )
 }

@@ -163,6 +163,12 @@ pub enum Change {
         /// Between the reach and the retreat, the hand on a door's or drawer's handle.
         #[serde(skip_serializing_if = "Option::is_none")]
         part: Option<PartFollow>,
+        /// The fingers' gap, metres, while they hold what the hand takes, carries or works
+        /// (`arm::grasp::finger_gap`): closed on a pick's object from the end of the reach, on
+        /// a place's until its end, on a handle while the part follows. Open otherwise, and
+        /// throughout when `None` (nothing between them).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        grip_m: Option<f32>,
     },
 }
 

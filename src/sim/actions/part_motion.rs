@@ -7,7 +7,7 @@
 use glam::{Affine3A, Mat3, Vec3};
 
 use crate::arm::collision::Obstacles;
-use crate::arm::grasp::PREGRASP_M;
+use crate::arm::grasp::{PREGRASP_M, finger_gap};
 use crate::arm::reach::{
     ArmPath, Held, ReachError, STRETCH_MARGIN_M, configurations_at, describe, follow,
     reach_configuration, retreat_along,
@@ -270,7 +270,10 @@ pub(super) fn work_part(
             match let_go(rig, &root, last, &still, &part, &with_part(value)) {
                 Ok(back) => {
                     let along = along[..along.len().min(k.saturating_add(1))].to_vec();
-                    chosen = Some((there, along, back, value));
+                    // The fingers close round the handle (its pieces as the hand takes it).
+                    let on_handle = super::arm_motion::held_pieces(view, &part_links, grip);
+                    let grip_m = finger_gap(&on_handle.pieces, rig.max_opening);
+                    chosen = Some((there, along, back, value, grip_m));
                     break;
                 }
                 Err(why) => why_not.push(format!("letting go at {value:.2}: {why}")),
@@ -280,7 +283,7 @@ pub(super) fn work_part(
             break;
         }
     }
-    let Some((there, along, back, reached)) = chosen else {
+    let Some((there, along, back, reached, grip_m)) = chosen else {
         return Err(ActionError::ArmCannot {
             what: format!("work {name}"),
             attempts: why_not,
@@ -300,6 +303,7 @@ pub(super) fn work_part(
                 values: values[..along.len()].to_vec(),
                 along,
             }),
+            grip_m,
         },
         reached,
     })
