@@ -131,6 +131,10 @@ pub struct PanopticReport {
     pub voxel_size_m: f32,
     pub blocks: usize,
     pub map_memory_mb: f64,
+    /// The frames' label images kept for the checks after mapping: megabytes, and how many
+    /// frames' (all of them within the mapper's budget, an even spread past it).
+    pub frame_labels_mb: f64,
+    pub frame_labels_kept: usize,
     pub label_merges: usize,
     pub instance_merges: usize,
     pub instance_splits: usize,
@@ -500,6 +504,8 @@ fn collect_report(
             voxel_size_m: options.voxel,
             blocks: map.0.tsdf.blocks.len(),
             map_memory_mb: map.0.tsdf.memory_bytes() as f64 / 1e6,
+            frame_labels_mb: map.0.frame_labels_kept().0 as f64 / 1e6,
+            frame_labels_kept: map.0.frame_labels_kept().1,
             label_merges: map.0.label_merges,
             instance_merges: map.0.instance_merges,
             instance_splits: map.0.instance_splits,

@@ -56,9 +56,80 @@ impl FrameLabels {
         self.run_label[runs.start + k - 1]
     }
 
+    /// A frame whose labels are not kept: every pixel reads 0 (none).
+    pub fn dropped() -> Self {
+        Self::default()
+    }
+
+    /// Whether the labels were dropped (`dropped`).
+    pub fn is_dropped(&self) -> bool {
+        self.width == 0
+    }
+
     /// Bytes the runs take.
     pub fn heap_bytes(&self) -> usize {
         self.row_runs.capacity() * 4 + self.run_start.capacity() * 2 + self.run_label.capacity() * 4
+    }
+}
+
+/// The frames' label images within a budget of bytes: every frame's while they fit; past it,
+/// every other kept frame's is dropped and the stride of the frames kept doubles, so the kept
+/// ones stay evenly spread along the sequence (frames 0, 2, 4, ..., then 0, 4, 8, ...) and
+/// memory stays bounded on a sequence of any length. Which frames are kept depends on the
+/// sequence alone (deterministic).
+#[derive(Clone, Debug)]
+pub struct FrameLabelStore {
+    frames: Vec<FrameLabels>,
+    budget: usize,
+    /// Frames whose index is a multiple of this are kept.
+    stride: usize,
+    bytes: usize,
+}
+
+impl FrameLabelStore {
+    pub fn new(budget_bytes: usize) -> Self {
+        Self {
+            frames: Vec::new(),
+            budget: budget_bytes,
+            stride: 1,
+            bytes: 0,
+        }
+    }
+
+    /// Every frame's labels so far, in order (a dropped frame's read 0 everywhere).
+    pub fn frames(&self) -> &[FrameLabels] {
+        &self.frames
+    }
+
+    /// Frames whose labels are kept.
+    pub fn kept(&self) -> usize {
+        self.frames.iter().filter(|f| !f.is_dropped()).count()
+    }
+
+    /// Bytes the kept labels take.
+    pub fn bytes(&self) -> usize {
+        self.bytes
+    }
+
+    /// The next frame's labels (`encode`d only when kept).
+    pub fn push(&mut self, encode: impl FnOnce() -> FrameLabels) {
+        let index = self.frames.len();
+        let labels = if index.is_multiple_of(self.stride) {
+            encode()
+        } else {
+            FrameLabels::dropped()
+        };
+        self.bytes += labels.heap_bytes();
+        self.frames.push(labels);
+        while self.bytes > self.budget && self.kept() > 1 {
+            self.stride *= 2;
+            for (i, f) in self.frames.iter_mut().enumerate() {
+                if !i.is_multiple_of(self.stride) && !f.is_dropped() {
+                    self.bytes -= f.heap_bytes();
+                    *f = FrameLabels::dropped();
+                }
+            }
+        }
     }
 }
 
@@ -94,6 +165,36 @@ mod tests {
             prop_assert_eq!(encoded.at(width, 0), 0);
             prop_assert_eq!(encoded.at(0, height), 0);
         }
+    }
+
+    /// Within the budget every frame's labels are kept; past it the kept ones thin out evenly
+    /// (every second, then every fourth frame), the bytes stay within the budget, and a dropped
+    /// frame reads 0.
+    #[test]
+    fn the_store_thins_evenly_past_its_budget() {
+        let frame = |k: u32| FrameLabels::encode(&[k + 1, k + 2, k + 2, 7], 2, 2);
+        let one = frame(0).heap_bytes();
+        let mut store = FrameLabelStore::new(4 * one);
+        for k in 0..4 {
+            store.push(|| frame(k));
+        }
+        assert_eq!(store.kept(), 4);
+        store.push(|| frame(4));
+        assert_eq!(store.bytes(), 3 * one);
+        let kept: Vec<usize> = (0..5)
+            .filter(|&i| !store.frames()[i].is_dropped())
+            .collect();
+        assert_eq!(kept, [0, 2, 4]);
+        for k in 5..17 {
+            store.push(|| frame(k));
+            assert!(store.bytes() <= 4 * one, "{} bytes", store.bytes());
+        }
+        let kept: Vec<usize> = (0..17)
+            .filter(|&i| !store.frames()[i].is_dropped())
+            .collect();
+        assert_eq!(kept, [0, 8, 16]);
+        assert_eq!(store.frames()[16].at(0, 0), 17);
+        assert_eq!(store.frames()[3].at(0, 0), 0);
     }
 
     #[test]

@@ -10,7 +10,7 @@ pub mod mesh;
 pub mod seen_color;
 pub mod tsdf;
 
-pub use frame_labels::FrameLabels;
+pub use frame_labels::{FrameLabelStore, FrameLabels};
 pub use mesh::{LabelledMesh, extract_mesh};
 pub use tsdf::{BLOCK_SIDE, SegmentLabel, TsdfFrame, TsdfMap, Voxel};
 

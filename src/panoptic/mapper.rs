@@ -8,7 +8,7 @@ use glam::Affine3A;
 use rayon::prelude::*;
 
 use crate::geometry::Pinhole;
-use crate::map::{FrameLabels, SegmentLabel, TsdfFrame, TsdfMap};
+use crate::map::{FrameLabelStore, FrameLabels, SegmentLabel, TsdfFrame, TsdfMap};
 use crate::panoptic::fusion::{FusedFrame, FusionParams, cut_to_exact_masks, fuse_masks};
 use crate::panoptic::instances::{ClassId, InstanceCounts, InstanceFusion, MaskObservation};
 use crate::segmentation::PanopticFrame;
@@ -50,7 +50,15 @@ pub struct MapperParams {
     /// geometric segments, which continue the labels the map already has, and the masks the
     /// segmentation service gives without its networks (`segment_without_networks`).
     pub segment_every: usize,
+    /// The frames' label images kept for the checks after mapping (carving, sightings) take at
+    /// most this many bytes (`FrameLabelStore`: past it, the kept frames thin out evenly).
+    pub frame_labels_budget_bytes: usize,
 }
+
+/// The frames' label images take about 0.1 MB a frame on 7-Scenes with geometric segments
+/// (73 MB over 1000 frames): 256 MB keeps every frame's for some 2,500 frames, and bounds a
+/// longer sequence's.
+pub const FRAME_LABELS_BUDGET_BYTES: usize = 256 << 20;
 
 impl MapperParams {
     pub fn new(voxel_size: f32, fusion: InstanceFusion) -> Self {
@@ -72,6 +80,7 @@ impl MapperParams {
             regularise_every: 25,
             cut_out_label_gain: 2,
             segment_every: 1,
+            frame_labels_budget_bytes: FRAME_LABELS_BUDGET_BYTES,
         }
     }
 }
@@ -144,8 +153,9 @@ pub struct PanopticMapper {
     next_label: SegmentLabel,
     /// Every label's label now (merges relabel the map's voxels; frames keep the old labels).
     label_now: Vec<SegmentLabel>,
-    /// Each integrated frame's label image, in order: what the frame said each pixel was.
-    frame_labels: Vec<FrameLabels>,
+    /// Each integrated frame's label image, in order: what the frame said each pixel was
+    /// (within a budget: some dropped on a long sequence).
+    frame_labels: FrameLabelStore,
     /// How often a segment overlapped both labels of a pair (smaller label first).
     pair_counts: BTreeMap<(SegmentLabel, SegmentLabel), u32>,
     frames: usize,
@@ -156,13 +166,14 @@ pub struct PanopticMapper {
 
 impl PanopticMapper {
     pub fn new(params: MapperParams) -> Self {
+        let budget = params.frame_labels_budget_bytes;
         Self {
             tsdf: TsdfMap::new(params.voxel_size),
             instances: InstanceCounts::new(params.fusion),
             params,
             next_label: 1,
             label_now: Vec::new(),
-            frame_labels: Vec::new(),
+            frame_labels: FrameLabelStore::new(budget),
             pair_counts: BTreeMap::new(),
             frames: 0,
             label_merges: 0,
@@ -175,9 +186,14 @@ impl PanopticMapper {
         self.frames
     }
 
-    /// The label images of the frames integrated, in order.
+    /// The label images of the frames integrated, in order (a dropped one reads 0 everywhere).
     pub fn frame_labels(&self) -> &[FrameLabels] {
-        &self.frame_labels
+        self.frame_labels.frames()
+    }
+
+    /// Bytes the kept label images take, and how many frames' are kept.
+    pub fn frame_labels_kept(&self) -> (usize, usize) {
+        (self.frame_labels.bytes(), self.frame_labels.kept())
     }
 
     /// The map's label now for label `l` of a frame (labels merged since carry the one they
@@ -238,11 +254,8 @@ impl PanopticMapper {
                 })
                 .collect()
         });
-        self.frame_labels.push(FrameLabels::encode(
-            &label_image,
-            frame.camera.width,
-            frame.camera.height,
-        ));
+        self.frame_labels
+            .push(|| FrameLabels::encode(&label_image, frame.camera.width, frame.camera.height));
         self.tsdf.integrate(&TsdfFrame {
             depth: frame.depth,
             color: frame.color,

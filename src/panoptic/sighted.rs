@@ -127,8 +127,12 @@ pub fn sighted_outlines(
     let per_frame: Vec<Vec<(u32, Vec<Vec3>)>> = (0..sequence.frames.len())
         .into_par_iter()
         .map(|i| {
-            let depth = sequence.load_depth(i)?;
             let labels = &mapper.frame_labels()[i];
+            // A frame whose labels were dropped (a long sequence's) shows no entity.
+            if labels.is_dropped() {
+                return Ok(Vec::new());
+            }
+            let depth = sequence.load_depth(i)?;
             let world_from_camera = sequence.frames[i].world_from_camera;
             let entity_at = |u: i64, v: i64| {
                 if u < 0 || v < 0 || u >= w || v >= h || depth[(v * w + u) as usize] <= 0.0 {
