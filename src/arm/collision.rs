@@ -38,6 +38,13 @@ pub struct Obstacle {
     hi: Vec3,
 }
 
+impl Obstacle {
+    /// Its highest point, metres up.
+    pub fn top(&self) -> f32 {
+        self.hi.z
+    }
+}
+
 /// The obstacles of a scene.
 #[derive(Clone, Default)]
 pub struct Obstacles {
@@ -215,30 +222,52 @@ impl ArmCollider {
 
     /// [`Self::touching`] with an object in the hand: its convex pieces `held`, in the frame of
     /// link `tool`, checked against the obstacles too.
+    /// `beside`: names of obstacles the held object may touch (it stood against them where the
+    /// hand took it), the arm's links may not.
+    #[allow(clippy::too_many_arguments, reason = "the arm, its load and the scene")]
     pub fn touching_holding(
         &self,
         poses: &[Affine3A],
         tool: usize,
         held: &[ConvexPolyhedron],
+        beside: &[String],
         obstacles: &Obstacles,
         margin: f32,
     ) -> Option<(usize, Touching)> {
         if let Some(touch) = self.touching(poses, obstacles, margin) {
             return Some(touch);
         }
-        let pose = rigid_pose(&poses[tool]);
+        self.held_touching(&poses[tool], held, obstacles, margin)
+            .into_iter()
+            .find(|&o| !beside.contains(&obstacles.items[o].name))
+            .map(|o| (tool, Touching::Held(o)))
+    }
+
+    /// The obstacles `held` (pieces in the tool's frame, the tool at `world_from_tool`) comes
+    /// within `margin` of, in order.
+    pub fn held_touching(
+        &self,
+        world_from_tool: &Affine3A,
+        held: &[ConvexPolyhedron],
+        obstacles: &Obstacles,
+        margin: f32,
+    ) -> Vec<usize> {
+        let pose = rigid_pose(world_from_tool);
+        let mut found: Vec<usize> = Vec::new();
         for hull in held {
             let (lo, hi) = hull_bounds(hull);
-            let (wlo, whi) = world_bounds(&poses[tool], lo, hi);
+            let (wlo, whi) = world_bounds(world_from_tool, lo, hi);
             for (o, obstacle) in obstacles.items.iter().enumerate() {
-                if overlaps((wlo, whi), (obstacle.lo, obstacle.hi), margin)
+                if !found.contains(&o)
+                    && overlaps((wlo, whi), (obstacle.lo, obstacle.hi), margin)
                     && within(&pose, hull, &obstacle.pose, &obstacle.hull, margin)
                 {
-                    return Some((tool, Touching::Held(o)));
+                    found.push(o);
                 }
             }
         }
-        None
+        found.sort_unstable();
+        found
     }
 
     fn links_within(&self, a: usize, pa: &Affine3A, b: usize, pb: &Affine3A, margin: f32) -> bool {

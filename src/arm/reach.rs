@@ -33,10 +33,12 @@ const OTHER_TARGET_CONFIGURATIONS: usize = 4;
 /// How high a retreat lifts the hand before it plans back, metres.
 pub const LIFT_M: f32 = 0.1;
 
-/// An object in the hand: its convex pieces in the tool's frame.
+/// An object in the hand: its convex pieces in the tool's frame, and the obstacles it may touch
+/// (by name): those it stood against where the hand took it, while it is lifted off them.
 #[derive(Clone, Default)]
 pub struct Held {
     pub pieces: Vec<ConvexPolyhedron>,
+    pub beside: Vec<String>,
 }
 
 /// A planned motion: the configurations (densified for execution) and the final one.
@@ -69,15 +71,25 @@ pub enum ReachError {
     NoPathToApproach(PlanError),
     #[error("no way back")]
     NoWayBack,
+    /// `why`: what blocks it where it stops (": panda_hand hits cup_2"), when known.
     #[error(
-        "the hand's first way back is blocked or out of reach after {after_cm:.0} of {of_cm:.0} cm"
+        "the hand's first way back is blocked or out of reach after {after_cm:.0} of \
+         {of_cm:.0} cm{why}"
     )]
-    FirstWayBackBlocked { after_cm: f32, of_cm: f32 },
+    FirstWayBackBlocked {
+        after_cm: f32,
+        of_cm: f32,
+        why: String,
+    },
     #[error(
         "the straight way back (up, or out of a container) is blocked or out of reach \
-         after {after_cm:.0} of {of_cm:.0} cm"
+         after {after_cm:.0} of {of_cm:.0} cm{why}"
     )]
-    WayBackBlocked { after_cm: f32, of_cm: f32 },
+    WayBackBlocked {
+        after_cm: f32,
+        of_cm: f32,
+        why: String,
+    },
     #[error("after the lift {0}")]
     AfterLiftTouches(String),
     #[error("the stowed arm would touch something: {0}")]
@@ -107,7 +119,14 @@ pub fn touching(
 ) -> Option<String> {
     let poses = rig.arm.link_poses(world_from_root, q, 1.0);
     rig.collider
-        .touching_holding(&poses, rig.arm.tool, &held.pieces, obstacles, margin)
+        .touching_holding(
+            &poses,
+            rig.arm.tool,
+            &held.pieces,
+            &held.beside,
+            obstacles,
+            margin,
+        )
         .map(|t| describe(rig, obstacles, &t))
 }
 
@@ -235,7 +254,12 @@ pub fn reach_configuration(
         })?;
     line.reverse();
     let start = line[0].clone();
-    let free_transit = clear_of(rig, world_from_root, transit, held, TRANSIT_MARGIN_M);
+    // What the held object stood against it may touch on the straight stretch only.
+    let lifted = Held {
+        pieces: held.pieces.clone(),
+        beside: Vec::new(),
+    };
+    let free_transit = clear_of(rig, world_from_root, transit, &lifted, TRANSIT_MARGIN_M);
     if let Some(why) = touching(
         rig,
         world_from_root,
@@ -422,6 +446,15 @@ pub fn retreat_through(
 ) -> Result<ArmPath, ReachError> {
     let free_near = clear_of(rig, world_from_root, near, held, STRETCH_MARGIN_M);
     let (last, rest) = aways.split_last().ok_or(ReachError::NoWayBack)?;
+    // What blocks the tool `at` a fraction of `away` from configuration `q`, in words.
+    let why = |q: &[f32], away: Vec3, at: f32| {
+        let tool = rig.arm.tool_pose(world_from_root, q);
+        let stopped = Affine3A::from_translation(away * at) * tool;
+        format!(
+            ": {}",
+            why_no_ik(rig, world_from_root, &stopped, q, near, held)
+        )
+    };
     let mut start = from.to_vec();
     let mut lines = Vec::new();
     for away in rest {
@@ -430,6 +463,7 @@ pub fn retreat_through(
             |at| ReachError::FirstWayBackBlocked {
                 after_cm: 100.0 * away.length() * at,
                 of_cm: 100.0 * away.length(),
+                why: why(&start, *away, at),
             },
         )?;
         start = line.last().expect("not empty").clone();
@@ -443,7 +477,17 @@ pub fn retreat_through(
         &free_near,
         transit,
         held,
-    )?;
+    )
+    .map_err(|e| match e {
+        ReachError::WayBackBlocked {
+            after_cm, of_cm, ..
+        } => ReachError::WayBackBlocked {
+            after_cm,
+            of_cm,
+            why: why(&start, *last, after_cm / of_cm.max(1e-6)),
+        },
+        other => other,
+    })?;
     if !lines.is_empty() {
         lines.extend(path.configurations.into_iter().skip(1));
         path.configurations = lines;
@@ -467,10 +511,16 @@ pub fn retreat_along(
         ReachError::WayBackBlocked {
             after_cm: 100.0 * away.length() * at,
             of_cm: 100.0 * away.length(),
+            why: String::new(),
         }
     })?;
     let top = line.last().expect("not empty").clone();
-    let free_transit = clear_of(rig, world_from_root, transit, held, TRANSIT_MARGIN_M);
+    // What the held object stood against it may touch on the straight stretch only.
+    let lifted = Held {
+        pieces: held.pieces.clone(),
+        beside: Vec::new(),
+    };
+    let free_transit = clear_of(rig, world_from_root, transit, &lifted, TRANSIT_MARGIN_M);
     let path = plan(
         &top,
         &rig.stow,
@@ -480,8 +530,15 @@ pub fn retreat_along(
     )
     .map_err(|e| match e {
         PlanError::StartInCollision => ReachError::AfterLiftTouches(
-            touching(rig, world_from_root, transit, held, &top, TRANSIT_MARGIN_M)
-                .unwrap_or_default(),
+            touching(
+                rig,
+                world_from_root,
+                transit,
+                &lifted,
+                &top,
+                TRANSIT_MARGIN_M,
+            )
+            .unwrap_or_default(),
         ),
         PlanError::GoalInCollision => ReachError::StowedTouches(
             touching(
@@ -521,6 +578,38 @@ mod tests {
     use super::*;
     use crate::arm::ik::{IkSettings, solve};
     use crate::arm::tests::two_link_arm;
+    use crate::geometry::TriMesh;
+
+    /// A held cube 1 mm into a neighbour touches it, unless the neighbour is one it stood
+    /// against (`Held::beside`); another obstacle it touches still counts.
+    #[test]
+    fn the_held_object_may_touch_what_it_stood_against() {
+        let rig = ArmRig::new(two_link_arm(), 0.5);
+        let root = rig.base_from_root;
+        let q = vec![0.0, 0.0];
+        let tool = rig.arm.tool_pose(&root, &q);
+        let cube = |half: f32| TriMesh::cuboid(Vec3::splat(-half), Vec3::splat(half));
+        let hull =
+            |mesh: &TriMesh| ConvexPolyhedron::from_convex_hull(&mesh.positions).expect("a hull");
+        let mut held = Held {
+            pieces: vec![hull(&cube(0.03))],
+            beside: Vec::new(),
+        };
+        let mut scene = Obstacles::default();
+        // 1 mm into the held cube along the tool's y, in the world.
+        let beside = tool * Affine3A::from_translation(Vec3::new(0.0, 0.059, 0.0));
+        scene.add("cup_6", &cube(0.03), &beside);
+        let touch = |held: &Held, scene: &Obstacles| touching(&rig, &root, scene, held, &q, 0.004);
+        assert_eq!(
+            touch(&held, &scene).as_deref(),
+            Some("the held object hits cup_6")
+        );
+        held.beside = vec!["cup_6".into()];
+        assert_eq!(touch(&held, &scene), None);
+        let other = tool * Affine3A::from_translation(Vec3::new(0.0, -0.059, 0.0));
+        scene.add("bowl_1", &cube(0.03), &other);
+        assert!(touch(&held, &scene).is_some_and(|t| t.contains("bowl_1")));
+    }
 
     #[test]
     fn an_arm_on_a_lift_reaches_above_its_plane_and_travels_as_before() {

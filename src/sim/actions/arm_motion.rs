@@ -8,7 +8,10 @@ use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, finger_gap, grasps, most_level_first};
-use crate::arm::reach::{ArmPath, Held, LIFT_M, ReachError, reach, retreat, retreat_through};
+use crate::arm::reach::{
+    ArmPath, Held, LIFT_M, ReachError, STRETCH_MARGIN_M, TRANSIT_MARGIN_M, reach, retreat,
+    retreat_through,
+};
 use crate::arm::rig::ArmRig;
 use crate::geometry::TriMesh;
 use crate::sim::actions::error::ArmTries;
@@ -119,6 +122,46 @@ pub(super) fn subtree(view: &SceneView, link: usize) -> Vec<usize> {
         .collect()
 }
 
+/// `held` (in the hand at `world_from_tool`, where it was taken) with the obstacles of `scene`
+/// beside it, which it may touch while it is lifted off them, and how far it is lifted:
+/// `LIFT_M`, or over their tops by the clearance kept on the way after the lift and 1 cm. The
+/// map's models of neighbours can overlap by a centimetre (a bottle and the cup beside it),
+/// which a lift straight up does not change. What it stands on (`support`: its links' names)
+/// is left by the lift anyway.
+fn standing_against(
+    rig: &ArmRig,
+    mut held: Held,
+    world_from_tool: &Affine3A,
+    scene: &Obstacles,
+    support: &[String],
+) -> (Held, f32) {
+    let beside: Vec<usize> = rig
+        .collider
+        .held_touching(world_from_tool, &held.pieces, scene, STRETCH_MARGIN_M)
+        .into_iter()
+        .filter(|&o| !support.contains(&scene.items[o].name))
+        .collect();
+    let bottom = held
+        .pieces
+        .iter()
+        .flat_map(|p| p.points().iter())
+        .map(|p| world_from_tool.transform_point3(Vec3::new(p.x, p.y, p.z)).z)
+        .fold(f32::INFINITY, f32::min);
+    let lift = beside
+        .iter()
+        .map(|&o| scene.items[o].top() - bottom + TRANSIT_MARGIN_M + LIFT_CLEAR_M)
+        .fold(LIFT_M, f32::max);
+    held.beside = beside
+        .iter()
+        .map(|&o| scene.items[o].name.clone())
+        .collect();
+    held.beside.dedup();
+    (held, lift)
+}
+
+/// A lift off what the held object stands against clears its top by this much, metres.
+const LIFT_CLEAR_M: f32 = 0.01;
+
 /// The object's convex pieces in the tool's frame when the tool is at `world_from_tool`.
 pub(super) fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &Affine3A) -> Held {
     let tool_from_world = world_from_tool.inverse();
@@ -133,7 +176,10 @@ pub(super) fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &A
             ConvexPolyhedron::from_convex_hull(&points)
         })
         .collect();
-    Held { pieces }
+    Held {
+        pieces,
+        beside: Vec::new(),
+    }
 }
 
 /// The grasps of node `id`'s link `link` at the world pose `world_from_link`, from the
@@ -209,6 +255,13 @@ pub(super) fn pick_motion(
         tried *= 2;
     }
     let from = view.support_of(id).map_or(String::new(), String::from);
+    let support_links: Vec<String> = view
+        .tree
+        .links
+        .iter()
+        .filter(|l| l.node.as_deref() == Some(from.as_str()))
+        .map(|l| l.name.clone())
+        .collect();
     first_grasp_that_works(
         id,
         &format!("pick {id}"),
@@ -230,9 +283,15 @@ pub(super) fn pick_motion(
             )?;
             // Where the fingers closed: the tool as the arm put it, not as the grasp asked.
             let world_from_tool = rig.arm.tool_pose(&root, to.last());
-            let held = held_pieces(view, &around.links, &world_from_tool);
-            let up = Vec3::Z * LIFT_M;
             let scene = &around.without_object;
+            let (held, lift) = standing_against(
+                rig,
+                held_pieces(view, &around.links, &world_from_tool),
+                &world_from_tool,
+                scene,
+                &support_links,
+            );
+            let up = Vec3::Z * lift;
             let back = retreat(rig, &root, to.last(), up, scene, scene, &held)?;
             let in_hand = Change::Attach {
                 link: id.to_string(),
