@@ -34,6 +34,24 @@ pub struct StepTiming {
     pub median_update_ms: f64,
     /// Objects the physics check simulated.
     pub checked: usize,
+    /// Steps the action took (more than one for a door moved part of the way from each of
+    /// several places); the times are the action's, its steps together.
+    pub steps: usize,
+}
+
+/// The records of `steps` grouped by the action they performed: a door moved part of the way
+/// takes steps of the same action until the last, which is not part-way.
+fn per_action(steps: &[StepRecord]) -> Vec<Vec<&StepRecord>> {
+    let mut actions: Vec<Vec<&StepRecord>> = Vec::new();
+    let mut open = false;
+    for step in steps {
+        if !open {
+            actions.push(Vec::new());
+        }
+        actions.last_mut().expect("pushed").push(step);
+        open = step.part_way;
+    }
+    actions
 }
 
 fn median(mut values: Vec<f64>) -> f64 {
@@ -75,24 +93,30 @@ pub fn bench_simulation(
         }
         per_run.push((steps, update_ms));
     }
+    let grouped: Vec<Vec<Vec<&StepRecord>>> = per_run.iter().map(|(s, _)| per_action(s)).collect();
+    // Each run's figure for action `i`: `of` summed over its steps.
+    let each_run = |i: usize, of: &dyn Fn(&StepRecord) -> f64| -> Vec<f64> {
+        grouped
+            .iter()
+            .map(|run| run[i].iter().map(|s| of(s)).sum())
+            .collect()
+    };
     let steps: Vec<StepTiming> = prepared
         .actions
         .iter()
         .enumerate()
         .map(|(i, action)| StepTiming {
             action: action.label(),
-            median_ms: median(per_run.iter().map(|(s, _)| s[i].wall_ms).collect()),
-            max_ms: per_run
-                .iter()
-                .map(|(s, _)| s[i].wall_ms)
-                .fold(0.0, f64::max),
-            median_physics_ms: median(per_run.iter().map(|(s, _)| s[i].physics_ms).collect()),
-            median_motion_ms: median(per_run.iter().map(|(s, _)| s[i].motion_ms()).collect()),
+            median_ms: median(each_run(i, &|s| s.wall_ms)),
+            max_ms: each_run(i, &|s| s.wall_ms).into_iter().fold(0.0, f64::max),
+            median_physics_ms: median(each_run(i, &|s| s.physics_ms)),
+            median_motion_ms: median(each_run(i, &|s| s.motion_ms())),
             median_update_ms: median(per_run.iter().map(|(_, u)| u[i]).collect()),
-            checked: per_run[0].0[i]
-                .physics
-                .as_ref()
+            checked: grouped[0][i]
+                .last()
+                .and_then(|s| s.physics.as_ref())
                 .map_or(0, |p| p.checked.len()),
+            steps: grouped[0][i].len(),
         })
         .collect();
     Ok(SimulationBenchReport {
