@@ -231,11 +231,35 @@ pub fn perform(world: &mut World, action: &Action, then: &[Action]) -> StepRecor
     let mut record = perform_step(world, action, then);
     for _ in 0..MAX_PART_WAY_STEPS {
         if !record.part_way {
-            break;
+            return record;
         }
         record = perform_step(world, action, then);
     }
-    record
+    if !record.part_way {
+        return record;
+    }
+    // Still short after its steps: the action fails there (the steps it made stay made).
+    let short = StepRecord {
+        step: record.step + 1,
+        action: action.clone(),
+        success: false,
+        failed_precondition: Some(format!(
+            "{} took {} steps, each part of the way, and is still short of where it goes",
+            action.in_words(),
+            MAX_PART_WAY_STEPS + 1
+        )),
+        changes: Vec::new(),
+        motion: Vec::new(),
+        physics: None,
+        wall_ms: 0.0,
+        physics_ms: 0.0,
+        part_way: false,
+    };
+    world
+        .get_resource_or_insert_with(SimulationTrace::default)
+        .0
+        .push(short.clone());
+    short
 }
 
 /// One step of [`perform`].
