@@ -155,6 +155,7 @@ fn standing_against(
         .iter()
         .map(|&o| scene.items[o].name.clone())
         .collect();
+    held.beside.sort();
     held.beside.dedup();
     (held, lift)
 }
