@@ -205,12 +205,14 @@ pub fn spawn_robot(
 /// The arm's links' colour: the Panda's white.
 const ARM_COLOR: [f32; 3] = [0.85, 0.85, 0.82];
 
-/// Puts the arm's link entities where configuration `q` holds them (fingers open).
-fn pose_arm_links(world: &mut World, q: &[f32]) {
+/// Puts the arm's link entities where configuration `q` holds them, the fingers a gap of
+/// `grip_m` apart (open when `None`).
+fn pose_arm_links(world: &mut World, q: &[f32], grip_m: Option<f32>) {
     let Some(rig) = world.get_resource::<RobotArm>().map(|a| a.0.clone()) else {
         return;
     };
-    let poses = rig.arm.link_poses(&rig.base_from_root, q, 1.0);
+    let opening = grip_m.map_or(1.0, |g| rig.finger_opening(g));
+    let poses = rig.arm.link_poses(&rig.base_from_root, q, opening);
     for (link, mut transform) in world
         .query::<(&RobotArmLink, &mut Transform)>()
         .iter_mut(world)
@@ -298,6 +300,23 @@ fn perform_step(world: &mut World, action: &Action, then: &[Action]) -> StepReco
         Ok(changes) => {
             for change in &changes {
                 apply_change(world, change);
+            }
+            // A pick's fingers stay closed on what it took while the hand carries it.
+            for pair in changes.windows(2) {
+                if let [
+                    Change::ArmMotion {
+                        reach,
+                        retreat,
+                        grip_m,
+                        ..
+                    },
+                    Change::Attach { to, .. },
+                ] = pair
+                    && to == GRIPPER_LINK
+                    && let Some(q) = retreat.last().or(reach.last())
+                {
+                    pose_arm_links(world, q, *grip_m);
+                }
             }
             if let Action::Navigate { to } = action {
                 for mut robot in world.query::<&mut Robot>().iter_mut(world) {
@@ -545,10 +564,11 @@ pub fn apply_change(world: &mut World, change: &Change) {
                 },
             ));
         }
-        // The arm ends where its last configuration holds it (stowed, after a whole action).
+        // The arm ends where its last configuration holds it (stowed, after a whole action),
+        // its fingers open; closed on what a pick took (`perform_step`).
         Change::ArmMotion { reach, retreat, .. } => {
             if let Some(q) = retreat.last().or(reach.last()) {
-                pose_arm_links(world, q);
+                pose_arm_links(world, q, None);
             }
         }
     }
