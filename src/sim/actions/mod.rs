@@ -119,8 +119,17 @@ impl Action {
     pub fn label(&self) -> String {
         match self {
             Action::Navigate { to } => format!("navigate {to}"),
-            Action::Open { object, .. } => format!("open {object}"),
-            Action::Close { object, .. } => format!("close {object}"),
+            Action::Open { object, part, .. } | Action::Close { object, part } => {
+                let verb = if matches!(self, Action::Open { .. }) {
+                    "open"
+                } else {
+                    "close"
+                };
+                match part {
+                    Some(part) => format!("{verb} {object} {part}"),
+                    None => format!("{verb} {object}"),
+                }
+            }
             Action::Pick { object } => format!("pick {object}"),
             Action::PlaceOn { object, surface } => format!("place {object} on {surface}"),
             Action::PlaceIn { object, container } => format!("place {object} in {container}"),
