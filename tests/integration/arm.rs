@@ -248,10 +248,7 @@ fn panda_picks_and_places_in_the_kitchen() {
             {"action": "place_on", "object": "bottle_1", "surface": "table_1"},
         ]),
     );
-    let urdf = panda_urdf();
-    let arm = Arm::read_urdf(&urdf, None).expect("the Panda reads");
-    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
-    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
+    let rig = panda_rig();
     let mut motions = 0;
     for step in trace["steps"].as_array().expect("steps") {
         let changes = step["changes"].as_array().expect("changes");
@@ -480,9 +477,7 @@ fn panda_opens_and_closes_a_door_and_a_drawer_by_their_handles() {
             assert!(last.abs() < 1e-4, "{link} closed to {last}");
         }
     }
-    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
-    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
-    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
+    let rig = panda_rig();
     let replay = replay_in_mujoco(&out, &rig);
     assert_eq!(replay["steps"], serde_json::json!([0, 1, 2, 3]), "{replay}");
     assert!(
@@ -556,6 +551,30 @@ fn panda_on_its_lift_opens_and_closes_the_lowest_door_of_the_reconstruction() {
             .fold(f64::MAX, f64::min);
         assert!(lowest < -0.1, "the lift goes down for the handle: {lowest}");
     }
+}
+
+/// The Panda on the simulation's arm base, as `simulate --robot` mounts it.
+fn panda_rig() -> iscene::arm::rig::ArmRig {
+    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
+    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
+    base.mount(iscene::arm::rig::ArmRig::new(arm, base.height))
+}
+
+/// The output graph of `out` (a `simulate` output) has `parent` supporting `child`.
+fn assert_supports(out: &std::path::Path, parent: &str, child: &str) {
+    let graph: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("contact_graph.json")).expect("graph"),
+    )
+    .expect("JSON");
+    assert!(
+        graph["edges"]
+            .as_array()
+            .expect("edges")
+            .iter()
+            .any(|e| { e["type"] == "support" && e["parent"] == parent && e["child"] == child }),
+        "{}",
+        graph["edges"]
+    );
 }
 
 /// The Panda's first finger joint at each line of `trajectory.csv`, with what the hand holds.
@@ -671,20 +690,8 @@ fn panda_takes_the_box_from_the_fridge_into_the_microwave_of_the_reconstruction(
     // Opened at least as far as a door opened as far as it goes (0.6 of its 1.8 rad), shut.
     assert!(fridge[1].2 >= 0.6 * 1.8, "{fridge:?}");
     assert!(fridge[3].2.abs() < 0.02, "{fridge:?}");
-    let graph: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("contact_graph.json")).expect("graph"),
-    )
-    .expect("JSON");
-    assert!(
-        graph["edges"].as_array().expect("edges").iter().any(|e| {
-            e["type"] == "support" && e["parent"] == "microwave_1" && e["child"] == "box_1"
-        }),
-        "{}",
-        graph["edges"]
-    );
-    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
-    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
-    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
+    assert_supports(&out, "microwave_1", "box_1");
+    let rig = panda_rig();
     let replay = replay_in_mujoco(&out, &rig);
     let held = replay["held_drift_m"].as_f64().expect("held drift");
     assert!(
@@ -746,20 +753,8 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
         .count();
     assert!(closed * 10 >= held.len() * 9, "{closed} of {}", held.len());
     assert!((fingers.last().expect("samples").1 - 0.04).abs() < 1e-5);
-    let graph: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("contact_graph.json")).expect("graph"),
-    )
-    .expect("JSON");
-    assert!(
-        graph["edges"].as_array().expect("edges").iter().any(|e| {
-            e["type"] == "support" && e["parent"] == "cabinet_2" && e["child"] == "cup_1"
-        }),
-        "{}",
-        graph["edges"]
-    );
-    let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
-    let base = iscene::sim::robot::RobotSpec::ARM_BASE;
-    let rig = base.mount(iscene::arm::rig::ArmRig::new(arm, base.height));
+    assert_supports(&out, "cabinet_2", "cup_1");
+    let rig = panda_rig();
     let replay = replay_in_mujoco(&out, &rig);
     let drift = replay["held_drift_m"].as_f64().expect("drift");
     assert!(
