@@ -27,6 +27,20 @@ pub struct ArmRig {
 }
 
 impl ArmRig {
+    /// The fingers' opening on an arm motion's reach, on a part's handle and on its retreat,
+    /// the fingers a gap of `grip_m` apart on what they hold: a hand that comes `holding`
+    /// something (a place) lets go at the end of the reach; a pick's fingers close on the
+    /// object there; a hand on a `handle` holds it while the part follows. Open when `grip_m`
+    /// is `None` (nothing between them).
+    pub fn finger_openings(&self, grip_m: Option<f32>, holding: bool, handle: bool) -> [f32; 3] {
+        let closed = grip_m.map_or(1.0, |g| self.finger_opening(g));
+        match (holding, handle) {
+            (true, _) => [closed, 1.0, 1.0],
+            (false, true) => [1.0, closed, 1.0],
+            (false, false) => [1.0, 1.0, closed],
+        }
+    }
+
     /// The fingers' opening (0 closed .. 1 open, as `Arm::link_poses` takes it) for a gap of
     /// `gap_m` between them.
     pub fn finger_opening(&self, gap_m: f32) -> f32 {

@@ -242,12 +242,7 @@ pub fn arm_timeline(
     else {
         return Vec::new();
     };
-    let closed = grip_m.map_or(1.0, |g| rig.finger_opening(g));
-    let (on_reach, on_retreat) = match (holding, part.is_some()) {
-        (true, _) => (closed, 1.0),
-        (false, true) => (1.0, 1.0),
-        (false, false) => (1.0, closed),
-    };
+    let [on_reach, on_handle, on_retreat] = rig.finger_openings(*grip_m, holding, part.is_some());
     let followed = part.as_ref().filter(|p| !p.along.is_empty());
     let mut part_value = followed.map(|_| part_from);
     let mut instants: Vec<ArmInstant> = timed(&rig.stow, reach, None, step_s)
@@ -266,7 +261,7 @@ pub fn arm_timeline(
             q,
             part: Some(v),
             reached: true,
-            opening: closed,
+            opening: on_handle,
         }));
         if let Some(q) = p.along.last() {
             last.clone_from(q);

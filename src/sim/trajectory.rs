@@ -232,30 +232,32 @@ impl Walk<'_> {
                 grip_m,
                 ..
             } => {
-                let closed = grip_m.map_or(1.0, |g| self.rig.finger_opening(g));
                 let takes =
                     matches!(handover, Some(Change::Attach { to, .. }) if to == GRIPPER_LINK);
+                let holding = handover.is_some() && !takes;
+                let [_, on_handle, on_retreat] =
+                    self.rig.finger_openings(*grip_m, holding, part.is_some());
                 self.follow(step, reach);
                 if let Some(attach) = handover {
                     // A place's fingers open on the object still held, a pick's close on it
                     // once it is.
-                    if !takes {
-                        self.fingers_to(step, 1.0);
+                    if holding {
+                        self.fingers_to(step, on_retreat);
                     }
                     self.attach(attach);
                     if takes {
-                        self.fingers_to(step, closed);
+                        self.fingers_to(step, on_retreat);
                     }
                 }
                 if let Some(part) = part
                     && let Some(l) = self.link_named(&part.link)
                 {
-                    self.fingers_to(step, closed);
+                    self.fingers_to(step, on_handle);
                     for (q, &v) in part.along.iter().zip(&part.values) {
                         self.set_joint(l, v);
                         self.follow(step, std::slice::from_ref(q));
                     }
-                    self.fingers_to(step, 1.0);
+                    self.fingers_to(step, on_retreat);
                 }
                 self.follow(step, retreat);
             }

@@ -329,8 +329,10 @@ fn perform_step(world: &mut World, action: &Action, then: &[Action]) -> StepReco
                 .ok()
                 .map(step_physics);
             let physics_ms = physics_started.elapsed().as_secs_f64() * 1e3;
-            let part_way = read_kinematic_tree(world)
-                .is_ok_and(|tree| crate::sim::actions::left_part_way(&tree, action));
+            // Only a door or drawer can be left part of the way: no other step reads the tree.
+            let part_way = matches!(action, Action::Open { .. } | Action::Close { .. })
+                && read_kinematic_tree(world)
+                    .is_ok_and(|tree| crate::sim::actions::left_part_way(&tree, action));
             StepRecord {
                 step,
                 action: action.clone(),

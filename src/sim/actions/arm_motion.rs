@@ -4,184 +4,31 @@
 //! for each.
 
 use glam::{Affine3A, Vec3};
-use parry3d::shape::ConvexPolyhedron;
 
 use crate::arm::collision::Obstacles;
 use crate::arm::grasp::{Grasp, GraspKind, Hand, PREGRASP_M, finger_gap, grasps, most_level_first};
-use crate::arm::reach::{
-    ArmPath, Held, LIFT_M, ReachError, STRETCH_MARGIN_M, TRANSIT_MARGIN_M, reach, retreat,
-    retreat_through,
-};
+use crate::arm::reach::{ArmPath, Held, LIFT_M, ReachError, reach, retreat, retreat_through};
 use crate::arm::rig::ArmRig;
-use crate::geometry::TriMesh;
-use crate::sim::actions::error::ArmTries;
+use crate::sim::actions::arm_scene::{
+    AroundObject, add_links, collision_pieces, held_pieces, standing_against, subtree,
+};
 use crate::sim::actions::look_ahead::LookAheadError;
-use crate::sim::actions::reach::{APPROACH_M, approach_point, drive};
 use crate::sim::actions::{ActionError, Change, RobotInTree};
-use crate::sim::navigation::NavGoal;
-use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK, RobotSpec};
+use crate::sim::robot::GRIPPER_LINK;
 use crate::sim::scene_view::{SceneView, TOUCH_M};
 
 /// Classes held by their rim when too wide for the fingers.
 const VESSELS: [&str; 3] = ["cup", "bowl", "mug"];
-/// At most this many grasps are tried per action (the best first).
 /// A grasp whose approach is within 45 degrees of straight down comes from above; leaving an
 /// object it set down in a container, its hand first rises this far (metres) over the object's
 /// top.
 const FROM_ABOVE_COS: f32 = 0.7;
 const RISE_CLEAR_M: f32 = 0.01;
+/// At most this many grasps are tried per action (the best first).
 const MAX_GRASPS: usize = 6;
-/// Distances (metres, base centre to the target) of the base poses tried after the one the
-/// base's own approach chose, nearest last: the arm reaches farther down and in from closer.
-pub(super) const CLOSER_BASES_M: [f32; 2] = [0.7, 0.55];
 /// Room between the object and a container's front where the hand starts carrying it in,
 /// metres.
 const INSERT_CLEARANCE_M: f32 = 0.03;
-/// How far (metres) a base straight out from a container's spot may stand from the point
-/// straight out.
-const IN_FRONT_M: f32 = 0.2;
-/// Base poses closer than this (metres) to one already tried are not tried again.
-pub(super) const SAME_BASE_M: f32 = 0.05;
-/// Free spots closer than this (metres) to one already listed are not listed again.
-const SAME_SPOT_M: f32 = 0.05;
-
-/// Every link's collision pieces at its pose, except the robot's own and `skip`.
-pub fn scene_obstacles(view: &SceneView, skip: &[usize]) -> Obstacles {
-    let own = [view.link(ROBOT_LINK), view.link(GRIPPER_LINK)];
-    let links: Vec<usize> = (0..view.tree.links.len())
-        .filter(|l| !skip.contains(l) && !own.contains(&Some(*l)))
-        .collect();
-    let mut obstacles = Obstacles::default();
-    add_links(&mut obstacles, view, &links, &Affine3A::IDENTITY);
-    obstacles
-}
-
-/// The collision pieces of `links`, each with its link's name and world pose.
-fn collision_pieces<'a>(
-    view: &'a SceneView,
-    links: &'a [usize],
-) -> impl Iterator<Item = (&'a str, &'a TriMesh, Affine3A)> + 'a {
-    links.iter().flat_map(move |&l| {
-        let link = &view.tree.links[l];
-        link.geometry
-            .iter()
-            .flat_map(|g| g.collision.iter())
-            .map(move |piece| (link.name.as_str(), piece, view.poses[l]))
-    })
-}
-
-/// Adds the collision pieces of `links`, each at its pose moved by `moved` (world).
-pub(super) fn add_links(
-    obstacles: &mut Obstacles,
-    view: &SceneView,
-    links: &[usize],
-    moved: &Affine3A,
-) {
-    for (name, piece, pose) in collision_pieces(view, links) {
-        obstacles.add(name, piece, &(*moved * pose));
-    }
-}
-
-/// The scene's obstacles around an object the arm takes or sets down, built once per action
-/// (every base pose and spot tried shares them).
-pub(super) struct AroundObject {
-    /// The object's link and what it carries.
-    links: Vec<usize>,
-    /// Everything but the robot.
-    with_object: Obstacles,
-    /// Everything but the robot and the object.
-    without_object: Obstacles,
-    /// Everything but the robot, the object as what the fingers grasp: the palm and the rest
-    /// of the arm keep clear of it on a pick's last stretch.
-    grasped: Obstacles,
-}
-
-impl AroundObject {
-    pub(super) fn new(view: &SceneView, link: usize) -> Self {
-        let links = subtree(view, link);
-        let without_object = scene_obstacles(view, &links);
-        let mut object = Obstacles::default();
-        add_links(&mut object, view, &links, &Affine3A::IDENTITY);
-        let mut with_object = without_object.clone();
-        with_object.items.extend(object.items.iter().cloned());
-        let mut grasped = without_object.clone();
-        grasped.items.extend(object.grasped().items);
-        Self {
-            links,
-            with_object,
-            without_object,
-            grasped,
-        }
-    }
-}
-
-/// The links of `link`'s subtree (an object and what it carries).
-pub(super) fn subtree(view: &SceneView, link: usize) -> Vec<usize> {
-    (0..view.tree.links.len())
-        .filter(|&l| view.descends_from(l, link))
-        .collect()
-}
-
-/// `held` (in the hand at `world_from_tool`, where it was taken) with the obstacles of `scene`
-/// beside it, which it may touch while it is lifted off them, and how far it is lifted:
-/// `LIFT_M`, or over their tops by the clearance kept on the way after the lift and 1 cm. The
-/// map's models of neighbours can overlap by a centimetre (a bottle and the cup beside it),
-/// which a lift straight up does not change. What it stands on (`support`: its links' names)
-/// is left by the lift anyway.
-fn standing_against(
-    rig: &ArmRig,
-    mut held: Held,
-    world_from_tool: &Affine3A,
-    scene: &Obstacles,
-    support: &[String],
-) -> (Held, f32) {
-    let beside: Vec<usize> = rig
-        .collider
-        .held_touching(world_from_tool, &held.pieces, scene, STRETCH_MARGIN_M)
-        .into_iter()
-        .filter(|&o| !support.contains(&scene.items[o].name))
-        .collect();
-    let bottom = held
-        .pieces
-        .iter()
-        .flat_map(|p| p.points().iter())
-        .map(|p| world_from_tool.transform_point3(Vec3::new(p.x, p.y, p.z)).z)
-        .fold(f32::INFINITY, f32::min);
-    let lift = beside
-        .iter()
-        .map(|&o| scene.items[o].top() - bottom + TRANSIT_MARGIN_M + LIFT_CLEAR_M)
-        .fold(LIFT_M, f32::max);
-    held.beside = beside
-        .iter()
-        .map(|&o| scene.items[o].name.clone())
-        .collect();
-    held.beside.sort();
-    held.beside.dedup();
-    (held, lift)
-}
-
-/// A lift off what the held object stands against clears its top by this much, metres.
-const LIFT_CLEAR_M: f32 = 0.01;
-
-/// The object's convex pieces in the tool's frame when the tool is at `world_from_tool`.
-pub(super) fn held_pieces(view: &SceneView, links: &[usize], world_from_tool: &Affine3A) -> Held {
-    let tool_from_world = world_from_tool.inverse();
-    let pieces = collision_pieces(view, links)
-        .filter_map(|(_, piece, pose)| {
-            let tool_from_piece = tool_from_world * pose;
-            let points: Vec<Vec3> = piece
-                .positions
-                .iter()
-                .map(|p| tool_from_piece.transform_point3(*p))
-                .collect();
-            ConvexPolyhedron::from_convex_hull(&points)
-        })
-        .collect();
-    Held {
-        pieces,
-        beside: Vec::new(),
-    }
-}
 
 /// The grasps of node `id`'s link `link` at the world pose `world_from_link`, from the
 /// collision pieces of the node's links (its own and its parts', such as a bottle's cap).
@@ -559,143 +406,4 @@ pub(super) fn way_in(
     let depth = pose.inverse().transform_point3(spot.translation.into()).y - clo.y;
     let half = 0.5 * (ohi - olo).truncate().max_element();
     Some((inward, depth.max(0.0) + half + INSERT_CLEARANCE_M))
-}
-
-/// The arm's placing of the held `object` (node id and link) on `surface`: from the free spot
-/// `first` (with the base's drive to it), or when the arm finds no motion there, from the other
-/// free spots ([`free_spots`], `ignore` left out of their checks). The drive, the arm's motion
-/// and the object's attachment to the surface.
-#[allow(clippy::too_many_arguments, reason = "one action's whole problem")]
-pub(super) fn place_on_some_spot(
-    view: &SceneView,
-    robot: &RobotSpec,
-    rig: &ArmRig,
-    state: &RobotInTree,
-    (object, link): (&str, usize),
-    surface: &str,
-    first: Affine3A,
-    ignore: &[usize],
-) -> Result<Vec<Change>, ActionError> {
-    let around = AroundObject::new(view, link);
-    let mut tries = ArmTries::default();
-    for spot in free_spots(view, link, surface, first, ignore) {
-        let target = spot.translation.truncate();
-        let (changes, moved) = match approach_point(view, robot, state, target, surface) {
-            Ok(found) => found,
-            Err(e) => {
-                tries.unreached(e);
-                continue;
-            }
-        };
-        let place = |at: &RobotInTree| {
-            place_motion(
-                view,
-                rig,
-                at,
-                (object, link),
-                &around,
-                (surface, &spot),
-                None,
-                ignore,
-            )
-        };
-        match from_some_base(view, robot, state, (changes, moved), (target, None), &place) {
-            Ok(changes) => return Ok(changes),
-            Err(e) => tries.failed(&format!("spot ({:.2}, {:.2})", target.x, target.y), e)?,
-        }
-    }
-    // When the base reached no spot, that is the reason, not the arm.
-    Err(tries.error(Some(format!("place {object} on {surface}"))))
-}
-
-/// Free spots for `link` on `surface`: `first`, then the ones nearest the surface's middle and
-/// the middles of its four quarters, each once.
-pub(super) fn free_spots(
-    view: &SceneView,
-    link: usize,
-    surface: &str,
-    first: Affine3A,
-    ignore: &[usize],
-) -> Vec<Affine3A> {
-    let mut spots = vec![first];
-    let Some((lo, hi)) = view.node_bounds(surface) else {
-        return spots;
-    };
-    let (lo, hi) = (lo.truncate(), hi.truncate());
-    let centre = 0.5 * (lo + hi);
-    let corners = [
-        lo,
-        glam::Vec2::new(lo.x, hi.y),
-        glam::Vec2::new(hi.x, lo.y),
-        hi,
-    ];
-    let nears = std::iter::once(centre).chain(corners.map(|c| 0.5 * (centre + c)));
-    for near in nears {
-        if let Some(spot) = view.spot_on(link, surface, near, ignore)
-            && spots
-                .iter()
-                .all(|s| s.translation.distance(spot.translation) > SAME_SPOT_M)
-        {
-            spots.push(spot);
-        }
-    }
-    spots
-}
-
-/// The arm's `motion` from the base pose the approach chose (`first`: its drive and the robot
-/// after it) or, when the arm finds none there, from base poses closer to `target` (x, y) that
-/// the base drives to from `start`, then (given the way a container's opening faces, `front`)
-/// from those straight out from `target` through the opening: the drive and the motion, or
-/// every attempt's reason.
-pub(super) fn from_some_base(
-    view: &SceneView,
-    robot: &RobotSpec,
-    start: &RobotInTree,
-    first: (Vec<Change>, RobotInTree),
-    (target, front): (glam::Vec2, Option<glam::Vec2>),
-    motion: &dyn Fn(&RobotInTree) -> Result<Vec<Change>, ActionError>,
-) -> Result<Vec<Change>, ActionError> {
-    let mut bases = vec![first];
-    let near = CLOSER_BASES_M.map(|reach| NavGoal {
-        target,
-        reach,
-        facing: None,
-        keep_out: Vec::new(),
-    });
-    // The nearest free place to the target can be beside a cabinet, not in front of the door
-    // the arm must reach through.
-    let in_front = front.into_iter().flat_map(|out| {
-        CLOSER_BASES_M.map(|d| NavGoal {
-            target: target + out * d,
-            reach: IN_FRONT_M,
-            facing: None,
-            keep_out: Vec::new(),
-        })
-    });
-    for goal in near.into_iter().chain(in_front) {
-        if let Ok(Some((change, moved))) = drive(view, robot, start, &goal, APPROACH_M)
-            && bases
-                .iter()
-                .all(|(_, b)| b.base.position.distance(moved.base.position) > SAME_BASE_M)
-        {
-            bases.push((vec![change], moved));
-        }
-    }
-    let mut tries = ArmTries::default();
-    for (mut changes, moved) in bases {
-        match motion(&moved) {
-            Ok(motion) => {
-                changes.extend(motion);
-                return Ok(changes);
-            }
-            Err(e) => tries.failed(&base_words(&moved), e)?,
-        }
-    }
-    Err(tries.error(None))
-}
-
-/// Where the base of `robot` stands, in words for a failure's reason.
-pub(super) fn base_words(robot: &RobotInTree) -> String {
-    let p = robot.base.position;
-    format!("base at ({:.2}, {:.2})", p.x, p.y)
 }

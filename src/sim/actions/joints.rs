@@ -10,7 +10,7 @@ use crate::kinematics::joint_sweep::{LinkSolids, SWEEP_TOLERANCE_M, SweepPose};
 use crate::kinematics::tree::KinematicTree;
 use crate::sim::actions::error::ArmTries;
 use crate::sim::actions::reach::{APPROACH_M, drive, nav_goal};
-use crate::sim::actions::{ActionError, Change, RobotInTree, arm_motion, part_motion};
+use crate::sim::actions::{ActionError, Change, RobotInTree, arm_bases, part_motion};
 use crate::sim::robot::{GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::sim::scene_view::{SceneView, TOUCH_M, closed_value, open_value};
 
@@ -141,7 +141,7 @@ pub(super) fn move_joint(
             let p = after.base.position;
             if tried
                 .iter()
-                .any(|t| t.distance(p) <= arm_motion::SAME_BASE_M)
+                .any(|t| t.distance(p) <= arm_bases::SAME_BASE_M)
             {
                 continue;
             }
@@ -157,7 +157,7 @@ pub(super) fn move_joint(
                     });
                     return Ok((changes, work.reached));
                 }
-                Err(e) => tries.failed(&arm_motion::base_words(&after), e)?,
+                Err(e) => tries.failed(&arm_bases::base_words(&after), e)?,
             }
         }
         Err(tries.error(Some(format!("work {name}"))))

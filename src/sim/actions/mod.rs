@@ -11,7 +11,9 @@ use crate::kinematics::tree::KinematicTree;
 use crate::sim::robot::{BasePose, GRIPPER_LINK, ROBOT_LINK, RobotSpec};
 use crate::sim::scene_view::{SceneView, TOUCH_M};
 
+mod arm_bases;
 mod arm_motion;
+mod arm_scene;
 mod error;
 mod joints;
 mod look_ahead;
@@ -19,7 +21,7 @@ mod part_motion;
 mod place_in;
 mod reach;
 
-pub use arm_motion::scene_obstacles;
+pub use arm_scene::scene_obstacles;
 pub use error::ActionError;
 pub use joints::left_part_way;
 use joints::{closes_with, move_joint};
@@ -266,7 +268,7 @@ pub fn attempt_then(
             let picked = pick(&view, robot, &moved, object)?;
             match (arm, view.node_link(object)) {
                 (Some(rig), Some(link)) => {
-                    let around = arm_motion::AroundObject::new(&view, link);
+                    let around = arm_scene::AroundObject::new(&view, link);
                     let target = view.poses[link].translation.truncate();
                     let ahead = pick_ahead(object, then);
                     // Into a container the hand carries the object in level through its front:
@@ -282,7 +284,7 @@ pub fn attempt_then(
                         looked.set(looked.get() + 1);
                         plans_after(tree, robot, rig, (&state, at), picked, ahead)
                     };
-                    arm_motion::from_some_base(
+                    arm_bases::from_some_base(
                         &view,
                         robot,
                         &state,
@@ -321,7 +323,7 @@ pub fn attempt_then(
                 changes.extend(attach(&view, link, surface, spot)?);
                 return Ok(changes);
             };
-            arm_motion::place_on_some_spot(
+            arm_bases::place_on_some_spot(
                 &view,
                 robot,
                 rig,

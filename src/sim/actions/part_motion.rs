@@ -18,7 +18,7 @@ use crate::geometry::surface_points::surface_points;
 use crate::kinematics::JointKind;
 use crate::perception::fronts::model_handles;
 use crate::perception::handles::{Handle, HandleKind};
-use crate::sim::actions::arm_motion::{add_links, scene_obstacles, subtree};
+use crate::sim::actions::arm_scene::{add_links, held_pieces, scene_obstacles, subtree};
 use crate::sim::actions::{ActionError, Change, PartFollow, RobotInTree};
 use crate::sim::robot::RobotSpec;
 use crate::sim::scene_view::{SceneView, closed_value};
@@ -271,7 +271,7 @@ pub(super) fn work_part(
                 Ok(back) => {
                     let along = along[..along.len().min(k.saturating_add(1))].to_vec();
                     // The fingers close round the handle (its pieces as the hand takes it).
-                    let on_handle = super::arm_motion::held_pieces(view, &part_links, grip);
+                    let on_handle = held_pieces(view, &part_links, grip);
                     let grip_m = finger_gap(&on_handle.pieces, rig.max_opening);
                     chosen = Some((there, along, back, value, grip_m));
                     break;

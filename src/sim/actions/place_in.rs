@@ -5,7 +5,7 @@
 use glam::Affine3A;
 
 use crate::arm::rig::ArmRig;
-use crate::sim::actions::{ActionError, Change, RobotInTree, arm_motion};
+use crate::sim::actions::{ActionError, Change, RobotInTree, arm_bases, arm_motion, arm_scene};
 use crate::sim::robot::RobotSpec;
 use crate::sim::scene_view::SceneView;
 
@@ -28,14 +28,14 @@ pub(super) fn by_arm(
     others: impl Iterator<Item = Affine3A>,
 ) -> Result<Vec<Change>, ActionError> {
     let gripper = view.link(crate::sim::robot::GRIPPER_LINK).unwrap_or(0);
-    let around = arm_motion::AroundObject::new(view, link);
+    let around = arm_scene::AroundObject::new(view, link);
     let place_at = |spot: Affine3A| {
         // Into the container through its front, not down through its top.
         let inward = view
             .node_link(container)
             .and_then(|c| arm_motion::way_in(view, c, link, &spot));
         let front = inward.map(|(d, _)| -d.truncate().normalize_or_zero());
-        arm_motion::from_some_base(
+        arm_bases::from_some_base(
             view,
             robot,
             state,
