@@ -762,3 +762,35 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
         "the cup slipped {drift} m in the hand: {replay}"
     );
 }
+
+/// On the kitchen's reconstruction, the Panda puts the bowl from the table into the microwave
+/// and shuts it, planned from goals (a task issue 37 asks for). The bowl is too wide for the
+/// fingers: the hand takes its rim leaning out over the side, so that the wrist stays outside
+/// the microwave's cavity, and leaves it through the front after a rise of a few millimetres
+/// (the whole 2 cm rise over the rim put the hand against the cavity's ceiling). Every arm
+/// motion runs in rapier before it is made, the bowl ends in the microwave in the output graph,
+/// and MuJoCo's replay keeps the robot within 5 mm of the scene and the bowl in the fingers.
+#[test]
+fn panda_puts_the_bowl_from_the_table_into_the_microwave_of_the_reconstruction() {
+    let (_, rec) = common::shared_noisy_map("kitchen");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (_, out, trace) = panda_task(
+        &rec,
+        serde_json::json!({"goals": ["bowl_1 in microwave_1", "microwave_1 closed"]}),
+        tmp.path(),
+    );
+    assert_eq!(trace["success"], true, "{}", trace["steps"]);
+    let (kinds, grasps) = arm_steps_ran_in_rapier(&trace);
+    assert_eq!(kinds.first().map(String::as_str), Some("open"), "{kinds:?}");
+    assert_eq!(&kinds[1..3], ["pick", "place_in"], "{kinds:?}");
+    assert!(kinds[3..].iter().all(|k| k == "close"), "{kinds:?}");
+    assert!(grasps[1].starts_with("rim grasp"), "{}", grasps[1]);
+    assert_supports(&out, "microwave_1", "bowl_1");
+    let rig = panda_rig();
+    let replay = replay_in_mujoco(&out, &rig);
+    let drift = replay["held_drift_m"].as_f64().expect("drift");
+    assert!(
+        drift < 1e-3,
+        "the bowl slipped {drift} m in the hand: {replay}"
+    );
+}

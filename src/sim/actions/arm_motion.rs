@@ -24,6 +24,9 @@ const VESSELS: [&str; 3] = ["cup", "bowl", "mug"];
 /// top.
 const FROM_ABOVE_COS: f32 = 0.7;
 const RISE_CLEAR_M: f32 = 0.01;
+/// Fractions of that rise tried first, the open fingers kept clear of the object: less of a
+/// rise keeps the hand lower under a container's ceiling.
+const LESSER_RISES: [f32; 3] = [0.0, 0.25, 0.5];
 /// At most this many grasps are tried per action (the best first).
 const MAX_GRASPS: usize = 6;
 /// Room between the object and a container's front where the hand starts carrying it in,
@@ -301,20 +304,53 @@ pub(super) fn place_motion(
             };
             // Out of a container the fingers leave the object as they may touch it, no more.
             let mut near = scene.clone();
+            let mut set_down = Obstacles::default();
             if inward.is_some() {
-                let mut set_down = Obstacles::default();
                 add_links(&mut set_down, view, &around.links, &moved);
-                near.items.extend(set_down.grasped().items);
+                near.items.extend(set_down.clone().grasped().items);
             }
-            let back = retreat_through(
-                rig,
-                &root,
-                to.last(),
-                &aways,
-                &placed,
-                &near,
-                &Held::default(),
-            )?;
+            // Out with less of a rise (none first) where the open fingers clear the object
+            // all the way, no finger touching it (a leaning rim grasp's inner finger rides
+            // near a bowl's rim): rising the whole way first, the hand over a bowl in a
+            // microwave met its ceiling.
+            let straight_out = match (inward, aways.as_slice()) {
+                (Some((d, length)), [rise, _]) => {
+                    let mut clear = scene.clone();
+                    clear.items.extend(set_down.items);
+                    LESSER_RISES.iter().find_map(|fraction| {
+                        let ways = [*rise * *fraction, -d * length];
+                        let ways = if *fraction > 0.0 {
+                            &ways[..]
+                        } else {
+                            &ways[1..]
+                        };
+                        retreat_through(
+                            rig,
+                            &root,
+                            to.last(),
+                            ways,
+                            &placed,
+                            &clear,
+                            &Held::default(),
+                        )
+                        .inspect_err(|e| tracing::debug!("out after {fraction} of the rise: {e}"))
+                        .ok()
+                    })
+                }
+                _ => None,
+            };
+            let back = match straight_out {
+                Some(back) => back,
+                None => retreat_through(
+                    rig,
+                    &root,
+                    to.last(),
+                    &aways,
+                    &placed,
+                    &near,
+                    &Held::default(),
+                )?,
+            };
             let attach = super::attach(view, link, host, spot)?
                 .pop()
                 .expect("one attachment");
