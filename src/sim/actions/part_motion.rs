@@ -328,6 +328,13 @@ fn let_go(
         .with_z(0.0)
         .normalize_or_zero();
     let hand = rig.arm.hand_links();
+    let not_hand: Vec<usize> = (0..rig.arm.links.len())
+        .filter(|l| !hand.contains(l))
+        .collect();
+    // The hand may stay against the part it let go of, but not go into it: a finger no
+    // deeper than it may press on what it grasps, the palm not at all (straight up, the finger
+    // under a drawer's bar handle went 67 mm into it in rapier).
+    let held_part = part.clone().grasped();
     let free_line = |q: &[f32]| {
         let poses = rig.arm.link_poses(root, q, 1.0);
         rig.arm.within_limits(q)
@@ -338,6 +345,10 @@ fn let_go(
             && rig
                 .collider
                 .touching_obstacles(&poses, part, STRETCH_MARGIN_M, &hand)
+                .is_none()
+            && rig
+                .collider
+                .touching_obstacles(&poses, &held_part, 0.0, &not_hand)
                 .is_none()
     };
     let mut why = Vec::new();
