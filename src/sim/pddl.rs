@@ -16,8 +16,8 @@ pub fn domain(hand_works_parts: bool) -> String {
   (:requirements :strips)
   (:predicates
     (robot-at ?p) (holding ?o) (hand-empty) (on ?o ?s) (inside ?o ?c)
-    (is-open ?c) (is-closed ?c) (clear ?o)
-    (place ?p) (surface ?s) (container ?c) (movable ?o) (picked-from ?o ?s ?p))
+    (is-open ?c) (is-closed ?c) (part-open ?d) (part-closed ?d) (clear ?o)
+    (place ?p) (surface ?s) (container ?c) (part ?d ?c) (movable ?o) (picked-from ?o ?s ?p))
   (:action navigate
     :parameters (?from ?to)
     :precondition (and (robot-at ?from) (place ?to))
@@ -30,6 +30,14 @@ pub fn domain(hand_works_parts: bool) -> String {
     :parameters (?c)
     :precondition (and (container ?c) (robot-at ?c) (is-open ?c){hand})
     :effect (and (is-closed ?c) (not (is-open ?c))))
+  (:action open-part
+    :parameters (?d ?c)
+    :precondition (and (part ?d ?c) (robot-at ?c) (part-closed ?d){hand})
+    :effect (and (part-open ?d) (not (part-closed ?d))))
+  (:action close-part
+    :parameters (?d ?c)
+    :precondition (and (part ?d ?c) (robot-at ?c) (part-open ?d){hand})
+    :effect (and (part-closed ?d) (not (part-open ?d))))
   (:action pick-on
     :parameters (?o ?s ?p)
     :precondition (and (picked-from ?o ?s ?p) (robot-at ?p) (on ?o ?s) (hand-empty) (clear ?o))
@@ -61,7 +69,19 @@ pub fn problem(name: &str, scene: &SymbolicScene, goal: &[Fact]) -> String {
         objects.insert(o);
         objects.insert(s);
     }
+    objects.extend(scene.parts.keys().map(String::as_str));
     let mut init: Vec<String> = scene.facts.iter().map(Fact::pddl).collect();
+    // The doors and drawers the goal names, as the planner grounds them (`planner::ground`).
+    init.extend(
+        scene
+            .parts
+            .iter()
+            .filter(|(link, _)| {
+                goal.iter()
+                    .any(|f| matches!(f, Fact::PartOpen(l) | Fact::PartClosed(l) if l == *link))
+            })
+            .map(|(link, (c, _))| format!("(part {link} {c})")),
+    );
     init.extend(scene.places.iter().map(|p| format!("(place {p})")));
     init.extend(scene.surfaces.iter().map(|s| format!("(surface {s})")));
     init.extend(scene.containers.iter().map(|c| format!("(container {c})")));
@@ -96,16 +116,21 @@ mod tests {
 
     #[test]
     fn open_and_close_need_the_hand_empty_only_when_the_hand_works_them() {
-        for name in ["open", "close"] {
+        for name in ["open", "close", "open-part", "close-part"] {
             assert!(!operator(&domain(false), name).contains("(hand-empty)"));
             assert!(operator(&domain(true), name).contains("(hand-empty))\n    :effect"));
         }
         // Nothing else changes.
         assert_eq!(
-            domain(true).replace(
-                " (hand-empty))\n    :effect (and (is-",
-                ")\n    :effect (and (is-"
-            ),
+            domain(true)
+                .replace(
+                    " (hand-empty))\n    :effect (and (is-",
+                    ")\n    :effect (and (is-"
+                )
+                .replace(
+                    " (hand-empty))\n    :effect (and (part-",
+                    ")\n    :effect (and (part-"
+                ),
             domain(false)
         );
     }

@@ -36,6 +36,8 @@ pub struct Plan {
     pub steps: Vec<(String, Action)>,
     /// States the search expanded.
     pub expanded: usize,
+    /// The facts that hold once the plan has run (where later goals are planned from).
+    pub end: Vec<Fact>,
 }
 
 struct FactTable {
@@ -120,6 +122,37 @@ pub fn ground(scene: &SymbolicScene, goal: &[Fact]) -> GroundProblem {
             Action::Close {
                 object: c.clone(),
                 part: None,
+            },
+            hand(vec![at(c), open.clone()]),
+            vec![closed],
+            vec![open],
+        );
+    }
+    // A container's other doors and drawers, those the goal names only: nothing else needs
+    // them open or closed, and each one ungoaled would double the states the search may visit.
+    for (link, (c, name)) in &scene.parts {
+        let (open, closed) = (Fact::PartOpen(link.clone()), Fact::PartClosed(link.clone()));
+        if !goal.contains(&open) && !goal.contains(&closed) {
+            continue;
+        }
+        op(
+            &mut t,
+            format!("(open-part {link} {c})"),
+            Action::Open {
+                object: c.clone(),
+                part: Some(name.clone()),
+                value: None,
+            },
+            hand(vec![at(c), closed.clone()]),
+            vec![open.clone()],
+            vec![closed.clone()],
+        );
+        op(
+            &mut t,
+            format!("(close-part {link} {c})"),
+            Action::Close {
+                object: c.clone(),
+                part: Some(name.clone()),
             },
             hand(vec![at(c), open.clone()]),
             vec![closed],
@@ -271,7 +304,15 @@ pub fn plan(problem: &GroundProblem, max_expanded: usize) -> Option<Plan> {
                 at = parent;
             }
             steps.reverse();
-            return Some(Plan { steps, expanded });
+            let end = (0..problem.facts.len())
+                .filter(|&f| has(&state, f))
+                .map(|f| problem.facts[f].clone())
+                .collect();
+            return Some(Plan {
+                steps,
+                expanded,
+                end,
+            });
         }
         expanded += 1;
         if expanded > max_expanded {
@@ -344,6 +385,59 @@ mod tests {
             Fact::IsClosed("microwave_1".into()),
             Fact::IsClosed("fridge_1".into()),
         ]
+    }
+
+    /// The kitchen with a freezer drawer under the fridge's door, shut.
+    fn kitchen_with_a_freezer() -> SymbolicScene {
+        let mut scene = kitchen();
+        scene.main_parts.insert("fridge_1".into(), "door".into());
+        scene.parts.insert(
+            "fridge_1_freezer".into(),
+            ("fridge_1".into(), "freezer".into()),
+        );
+        scene
+            .facts
+            .insert(Fact::PartClosed("fridge_1_freezer".into()));
+        scene
+    }
+
+    #[test]
+    fn a_part_the_goal_names_opens_by_its_own_operator_and_the_plan_ends_where_it_says() {
+        let scene = kitchen_with_a_freezer();
+        let open = Fact::PartOpen("fridge_1_freezer".into());
+        let p = plan(&ground(&scene, std::slice::from_ref(&open)), 1000).expect("plan");
+        let names: Vec<&str> = p.steps.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "(navigate start fridge_1)",
+                "(open-part fridge_1_freezer fridge_1)"
+            ]
+        );
+        assert_eq!(
+            p.steps[1].1,
+            Action::Open {
+                object: "fridge_1".into(),
+                part: Some("freezer".into()),
+                value: None,
+            }
+        );
+        // The end state: the drawer open, the fridge's door as it was, the robot at the fridge.
+        assert!(p.end.contains(&open));
+        assert!(!p.end.contains(&Fact::PartClosed("fridge_1_freezer".into())));
+        assert!(p.end.contains(&Fact::IsClosed("fridge_1".into())));
+        assert!(p.end.contains(&Fact::RobotAt("fridge_1".into())));
+        // Shut again from there: one step.
+        let from = SymbolicScene {
+            facts: p.end.iter().cloned().collect(),
+            ..scene.clone()
+        };
+        let shut = Fact::PartClosed("fridge_1_freezer".into());
+        let again = plan(&ground(&from, &[shut]), 1000).expect("plan");
+        assert_eq!(again.steps.len(), 1, "{:?}", again.steps);
+        // A goal that does not name the drawer grounds no operator for it.
+        let ops = ground(&scene, &box_in_the_closed_microwave()).operators;
+        assert!(!ops.iter().any(|o| o.name.contains("-part")));
     }
 
     #[test]

@@ -122,8 +122,12 @@ impl<'a> SceneView<'a> {
 
     /// Whether container `id`'s main part is open (beyond half its range).
     pub fn is_open(&self, id: &str) -> bool {
-        self.main_part(id)
-            .is_some_and(|j| open_fraction(self.tree, j) > OPEN_FRACTION)
+        self.main_part(id).is_some_and(|j| self.is_part_open(j))
+    }
+
+    /// Whether moving part `link` is open (beyond half its range).
+    pub fn is_part_open(&self, link: usize) -> bool {
+        open_fraction(self.tree, link) > OPEN_FRACTION
     }
 
     /// Whether `id`'s class is a container (articulated: it has doors or drawers).

@@ -1,6 +1,7 @@
 //! The symbolic state the task planner works on, read off the scene: where the robot is, what
-//! it holds, what stands on or inside what, which containers are open; and goals parsed from
-//! text such as `cup_1 in microwave_1` or `microwave_1 closed`.
+//! it holds, what stands on or inside what, which containers and which of their other doors and
+//! drawers are open; and goals parsed from text such as `cup_1 in microwave_1`, `microwave_1
+//! closed` or `fridge_1 freezer open`.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -24,6 +25,10 @@ pub enum Fact {
     Inside(String, String),
     IsOpen(String),
     IsClosed(String),
+    /// A door or drawer of a container other than its main one (by its link's name,
+    /// `fridge_1_freezer`) is open.
+    PartOpen(String),
+    PartClosed(String),
     /// Nothing stands on `0`.
     Clear(String),
 }
@@ -39,6 +44,8 @@ impl Fact {
             Fact::Inside(o, c) => format!("(inside {o} {c})"),
             Fact::IsOpen(c) => format!("(is-open {c})"),
             Fact::IsClosed(c) => format!("(is-closed {c})"),
+            Fact::PartOpen(p) => format!("(part-open {p})"),
+            Fact::PartClosed(p) => format!("(part-closed {p})"),
             Fact::Clear(o) => format!("(clear {o})"),
         }
     }
@@ -54,6 +61,12 @@ pub struct SymbolicScene {
     pub surfaces: Vec<String>,
     /// Nodes with doors or drawers.
     pub containers: Vec<String>,
+    /// Each container's main part (the door or drawer its own `open` and `close` work), by
+    /// part name (`door`): a goal naming it is the container's.
+    pub main_parts: BTreeMap<String, String>,
+    /// The containers' other doors and drawers: link name (`fridge_1_freezer`) to the
+    /// container and the part's name (`freezer`).
+    pub parts: BTreeMap<String, (String, String)>,
     /// Places the robot navigates to (every node it works at).
     pub places: Vec<String>,
     /// `(object, support)` to the place the robot picks it there from.
@@ -151,6 +164,23 @@ pub fn symbolic_scene(view: &SceneView, robot_at: &str, holding: Option<&str>) -
         } else {
             Fact::IsClosed(c.clone())
         });
+        let prefix = format!("{c}_");
+        for (k, joint) in view.moving_parts(c).into_iter().enumerate() {
+            let link = &view.tree.links[joint].name;
+            let Some(name) = link.strip_prefix(&prefix) else {
+                continue;
+            };
+            if k == 0 {
+                s.main_parts.insert(c.clone(), name.to_string());
+                continue;
+            }
+            s.parts.insert(link.clone(), (c.clone(), name.to_string()));
+            s.facts.insert(if view.is_part_open(joint) {
+                Fact::PartOpen(link.clone())
+            } else {
+                Fact::PartClosed(link.clone())
+            });
+        }
     }
     s
 }
@@ -164,11 +194,23 @@ pub enum GoalError {
         id: String,
         role: &'static str,
     },
-    #[error("goal {0:?} is not one of: A on B, A in B, A open, A closed, holding A, robot at P")]
+    #[error("goal {goal:?}: {container} has no door or drawer {part:?} (it has: {known})")]
+    UnknownPart {
+        goal: String,
+        container: String,
+        part: String,
+        known: String,
+    },
+    #[error(
+        "goal {0:?} is not one of: A on B, A in B, A open, A closed, A PART open, A PART closed, \
+         holding A, robot at P"
+    )]
     NotAGoal(String),
 }
 
-/// Parses one goal: `A on B`, `A in B`, `A open`, `A closed`, `holding A`, `robot at P`.
+/// Parses one goal: `A on B`, `A in B`, `A open`, `A closed`, `A PART open`, `A PART closed`
+/// (a door or drawer of container A by its name: `fridge_1 freezer open`), `holding A`, `robot
+/// at P`.
 pub fn parse_goal(text: &str, scene: &SymbolicScene) -> Result<Fact, GoalError> {
     let words: Vec<&str> = text.split_whitespace().collect();
     let known = |id: &str, among: &[String], role: &'static str| {
@@ -193,8 +235,91 @@ pub fn parse_goal(text: &str, scene: &SymbolicScene) -> Result<Fact, GoalError> 
         )),
         [c, "open"] => Ok(Fact::IsOpen(known(c, &scene.containers, "container")?)),
         [c, "closed"] => Ok(Fact::IsClosed(known(c, &scene.containers, "container")?)),
+        [c, part, state @ ("open" | "closed")] => {
+            let c = known(c, &scene.containers, "container")?;
+            let open = *state == "open";
+            if scene.main_parts.get(&c).is_some_and(|m| m == part) {
+                return Ok(if open {
+                    Fact::IsOpen(c)
+                } else {
+                    Fact::IsClosed(c)
+                });
+            }
+            let link = format!("{c}_{part}");
+            if !scene.parts.contains_key(&link) {
+                let known: Vec<&str> = scene
+                    .main_parts
+                    .get(&c)
+                    .into_iter()
+                    .chain(
+                        scene
+                            .parts
+                            .values()
+                            .filter(|(o, _)| *o == c)
+                            .map(|(_, p)| p),
+                    )
+                    .map(String::as_str)
+                    .collect();
+                return Err(GoalError::UnknownPart {
+                    goal: text.to_string(),
+                    container: c,
+                    part: part.to_string(),
+                    known: known.join(", "),
+                });
+            }
+            Ok(if open {
+                Fact::PartOpen(link)
+            } else {
+                Fact::PartClosed(link)
+            })
+        }
         ["holding", o] => Ok(Fact::Holding(known(o, &scene.movables, "movable object")?)),
         ["robot", "at", p] => Ok(Fact::RobotAt(known(p, &scene.places, "place")?)),
         _ => Err(GoalError::NotAGoal(text.to_string())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_goal_names_a_door_or_drawer_by_its_container_and_name() {
+        let mut scene = SymbolicScene {
+            containers: vec!["fridge_1".into()],
+            ..Default::default()
+        };
+        scene.main_parts.insert("fridge_1".into(), "door".into());
+        scene.parts.insert(
+            "fridge_1_freezer".into(),
+            ("fridge_1".into(), "freezer".into()),
+        );
+        assert_eq!(
+            parse_goal("fridge_1 freezer open", &scene),
+            Ok(Fact::PartOpen("fridge_1_freezer".into()))
+        );
+        assert_eq!(
+            parse_goal("fridge_1  freezer closed", &scene),
+            Ok(Fact::PartClosed("fridge_1_freezer".into()))
+        );
+        // The main part is the container's own open and close.
+        assert_eq!(
+            parse_goal("fridge_1 door open", &scene),
+            Ok(Fact::IsOpen("fridge_1".into()))
+        );
+        let wrong = parse_goal("fridge_1 shelf open", &scene).expect_err("no shelf");
+        assert_eq!(
+            wrong.to_string(),
+            "goal \"fridge_1 shelf open\": fridge_1 has no door or drawer \"shelf\" (it has: door, \
+             freezer)"
+        );
+        assert!(matches!(
+            parse_goal("oven_1 door open", &scene),
+            Err(GoalError::Unknown { .. })
+        ));
+        assert!(matches!(
+            parse_goal("fridge_1 freezer ajar", &scene),
+            Err(GoalError::NotAGoal(_))
+        ));
     }
 }

@@ -20,7 +20,8 @@ pub struct Start {
 }
 
 /// A task: `steps` to run as written, or `goals` (`cup_1 in microwave_1`, `microwave_1
-/// closed`, ...) to plan for and then run.
+/// closed`, `fridge_1 freezer open`, ...) to plan for and then run, and `then` further goals
+/// in turn.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Task {
@@ -34,6 +35,11 @@ pub struct Task {
     pub steps: Vec<Action>,
     #[serde(default)]
     pub goals: Vec<String>,
+    /// Further goals reached in turn once `goals` hold, each set planned from where the one
+    /// before leaves the scene: `"then": [["fridge_1 freezer closed"]]` after `"goals":
+    /// ["fridge_1 freezer open"]` opens the drawer and shuts it again.
+    #[serde(default)]
+    pub then: Vec<Vec<String>>,
     /// Objects the camera could not see (a box inside a closed fridge), put into the scene before
     /// the task starts.
     #[serde(default)]
@@ -78,6 +84,18 @@ impl Task {
             return Err(InputError::invalid(
                 path,
                 "a task has either \"steps\" or \"goals\", not both and not neither",
+            ));
+        }
+        if !task.then.is_empty() && task.goals.is_empty() {
+            return Err(InputError::invalid(
+                path,
+                "\"then\" follows \"goals\": a task with \"then\" needs \"goals\"",
+            ));
+        }
+        if let Some(i) = task.then.iter().position(Vec::is_empty) {
+            return Err(InputError::invalid(
+                path,
+                format!("then[{i}]: an empty set of goals"),
             ));
         }
         task.check_limits()
@@ -152,10 +170,11 @@ impl Task {
                 format!("{} steps, more than {MAX_STEPS}", self.steps.len()),
             ));
         }
-        if self.goals.len() > MAX_GOALS {
+        let goals = self.goals.len() + self.then.iter().map(Vec::len).sum::<usize>();
+        if goals > MAX_GOALS {
             return Err(InvalidValue::at(
                 "goals",
-                format!("{} goals, more than {MAX_GOALS}", self.goals.len()),
+                format!("{goals} goals (with \"then\"), more than {MAX_GOALS}"),
             ));
         }
         if self.add.len() > MAX_ADDED {

@@ -67,6 +67,9 @@ pub struct SimulateOptions {
 pub struct SimulationSummary {
     pub task: String,
     pub goals: Vec<String>,
+    /// The task's further goals, reached in turn after `goals`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub then: Vec<Vec<String>>,
     /// The planner's plan (PDDL operator names), when the task has goals.
     pub plan: Option<Vec<String>>,
     /// States the planner expanded to find the plan (it gives up past 250,000).
@@ -133,8 +136,13 @@ fn default_start(tree: &KinematicTree) -> Option<BasePose> {
 /// Asks for each action in turn through the ECS, one update each, until one fails; returns
 /// each update's wall-clock milliseconds.
 pub(super) fn run_actions(app: &mut App, actions: &[Action]) -> Vec<f64> {
-    let mut update_ms = Vec::with_capacity(actions.len());
-    for (k, action) in actions.iter().enumerate() {
+    run_actions_in(app, actions, 0..actions.len())
+}
+
+/// [`run_actions`] for the actions of `range` only, each looking ahead to all that follow it.
+fn run_actions_in(app: &mut App, actions: &[Action], range: std::ops::Range<usize>) -> Vec<f64> {
+    let mut update_ms = Vec::with_capacity(range.len());
+    for (k, action) in actions.iter().enumerate().take(range.end).skip(range.start) {
         app.world_mut()
             .resource_mut::<Messages<ActionRequest>>()
             .write(ActionRequest(action.clone(), actions[k + 1..].to_vec()));
@@ -154,6 +162,32 @@ pub(super) fn run_actions(app: &mut App, actions: &[Action]) -> Vec<f64> {
     update_ms
 }
 
+/// Runs the prepared task's actions, each set of goals' in turn until one fails or its goals
+/// do not hold after its actions (the next set was planned from where they hold); whether
+/// every set's goals held after its actions (true for a task of steps).
+fn run_stages(app: &mut App, prepared: &PreparedTask) -> Result<bool, IsceneError> {
+    if prepared.stages.is_empty() {
+        run_actions(app, &prepared.actions);
+        return Ok(true);
+    }
+    let mut start = 0;
+    for stage in &prepared.stages {
+        run_actions_in(app, &prepared.actions, start..stage.until);
+        let trace = &app.world().resource::<SimulationTrace>().0;
+        if trace.last().is_some_and(|s| !s.success) {
+            return Ok(false);
+        }
+        let now = read_kinematic_tree(app.world_mut())?;
+        let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
+        let facts = symbolic_scene(&SceneView::new(&now), &place, holding.as_deref()).facts;
+        if !stage.goals.iter().all(|g| facts.contains(g)) {
+            return Ok(false);
+        }
+        start = stage.until;
+    }
+    Ok(true)
+}
+
 /// Runs `options.task` on the scene in `options.dir` and writes `options.out`.
 pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneError> {
     // A robot file that is no arm is refused before anything is written.
@@ -168,17 +202,15 @@ pub fn simulate(options: &SimulateOptions) -> Result<SimulationSummary, IsceneEr
     let (prepared, mut app) = prepare(&options.dir, &options.task, arm.as_ref())?;
     let before = read_kinematic_tree(app.world_mut())?;
     let physics_before = step_physics(rest_physics(app.world_mut())?);
-    run_actions(&mut app, &prepared.actions);
+    let goals_hold = run_stages(&mut app, &prepared)?;
     let steps = app.world().resource::<SimulationTrace>().0.clone();
     let after = read_kinematic_tree(app.world_mut())?;
-    let (place, holding) = robot_state(app.world_mut()).unwrap_or_default();
-    let end = symbolic_scene(&SceneView::new(&after), &place, holding.as_deref());
-    let goals_hold = prepared.goals.iter().all(|g| end.facts.contains(g));
     // A door moved part of the way takes steps of its action beyond the plan's one.
     let all_ran = prepared.actions.len() == steps.iter().filter(|s| !s.part_way).count();
     let summary = SimulationSummary {
         task: options.task.display().to_string(),
         goals: prepared.task.goals.clone(),
+        then: prepared.task.then.clone(),
         plan: prepared.plan.clone(),
         planner_expanded: prepared.planner_expanded,
         physics_before,
@@ -225,10 +257,23 @@ fn write_outputs(
         &dir.join("domain.pddl"),
         &pddl::domain(prepared.scene.hand_works_parts),
     )?;
-    write_text(
-        &dir.join("problem.pddl"),
-        &pddl::problem("task", &prepared.scene, &prepared.goals),
-    )?;
+    // The goals' problem, and each of `then`'s from where the plan before leaves the scene.
+    for (k, stage) in prepared.stages.iter().enumerate() {
+        let name = match k {
+            0 => "problem.pddl".to_string(),
+            k => format!("problem_then_{}.pddl", k - 1),
+        };
+        write_text(
+            &dir.join(name),
+            &pddl::problem("task", &stage.from, &stage.goals),
+        )?;
+    }
+    if prepared.stages.is_empty() {
+        write_text(
+            &dir.join("problem.pddl"),
+            &pddl::problem("task", &prepared.scene, &[]),
+        )?;
+    }
     write_text(
         &dir.join("contact_graph.json"),
         &graph_after(&prepared.graph, before, after).to_json(),

@@ -25,19 +25,28 @@ use crate::systems::simulation::robot_state;
 /// demonstration goals need 15 to 702 (an 8-step plan).
 const MAX_EXPANDED: usize = 250_000;
 
-/// A task ready to run: the scene's graph, its symbolic start state, the goals and the actions
-/// (the task's own steps, or the planner's plan for its goals).
+/// A task ready to run: the scene's graph, its symbolic start state, its sets of goals and the
+/// actions (the task's own steps, or the planner's plans for its goals in turn).
 pub(super) struct PreparedTask {
     pub(super) graph: ContactGraph,
     pub(super) task: Task,
     pub(super) scene: SymbolicScene,
-    pub(super) goals: Vec<Fact>,
+    /// `goals`, then each of `then`; none for a task of steps.
+    pub(super) stages: Vec<GoalStage>,
     pub(super) plan: Option<Vec<String>>,
     /// States the planner expanded to find `plan`.
     pub(super) planner_expanded: Option<usize>,
     pub(super) actions: Vec<Action>,
     /// What the scene's links are built of.
     pub(super) shapes: SceneShapes,
+}
+
+/// One set of a task's goals: the symbolic state it is planned from (where the set before
+/// leaves the scene), the goals, and where its actions end among the task's.
+pub(super) struct GoalStage {
+    pub(super) from: SymbolicScene,
+    pub(super) goals: Vec<Fact>,
+    pub(super) until: usize,
 }
 
 /// The task on the scene in `dir`, and the world built to read its start state (ready to run).
@@ -63,38 +72,82 @@ pub(super) fn prepare(
         hand_works_parts: arm.is_some(),
         ..symbolic_scene(&SceneView::new(&before), &place, holding.as_deref())
     };
-    let goals: Vec<Fact> = task
-        .goals
-        .iter()
-        .map(|g| parse_goal(g, &scene).map_err(|p| InputError::invalid(task_path, p)))
-        .collect::<Result<_, _>>()?;
-    let (plan, actions) = if goals.is_empty() {
-        (None, task.steps.clone())
+    let (stages, plan, actions) = if task.goals.is_empty() {
+        (Vec::new(), None, task.steps.clone())
     } else {
-        let found = plan(&ground(&scene, &goals), MAX_EXPANDED).ok_or_else(|| {
-            InputError::invalid(
-                task_path,
-                format!(
-                    "no plan reaches the goals {:?} (searched up to {MAX_EXPANDED} states)",
-                    task.goals
-                ),
-            )
-        })?;
-        let expanded = found.expanded;
-        let (names, actions) = found.steps.into_iter().unzip();
-        (Some((names, expanded)), actions)
+        let (stages, names, actions, expanded) = plan_in_turn(&task, &scene, task_path)?;
+        (stages, Some((names, expanded)), actions)
     };
     let prepared = PreparedTask {
         graph,
         task,
         scene,
-        goals,
+        stages,
         planner_expanded: plan.as_ref().map(|(_, e)| *e),
         plan: plan.map(|(names, _)| names),
         actions,
         shapes,
     };
     Ok((prepared, app))
+}
+
+/// The task's sets of goals (`goals`, then each of `then`) planned in turn from `scene`, each
+/// from where the plan before leaves it: the stages, the plans' operators and actions one
+/// after the other, and the states the planner expanded in all.
+#[allow(clippy::type_complexity, reason = "the four parts of one result")]
+fn plan_in_turn(
+    task: &Task,
+    scene: &SymbolicScene,
+    task_path: &Path,
+) -> Result<(Vec<GoalStage>, Vec<String>, Vec<Action>, usize), InputError> {
+    let sets = std::iter::once(("goals".to_string(), &task.goals)).chain(
+        task.then
+            .iter()
+            .enumerate()
+            .map(|(i, set)| (format!("then[{i}]"), set)),
+    );
+    let (mut stages, mut names, mut actions, mut expanded) =
+        (Vec::new(), Vec::new(), Vec::new(), 0);
+    let mut from = scene.clone();
+    for (key, set) in sets {
+        let goals: Vec<Fact> = set
+            .iter()
+            .map(|g| {
+                parse_goal(g, &from)
+                    .map_err(|p| InputError::invalid(task_path, format!("{key}: {p}")))
+            })
+            .collect::<Result<_, _>>()?;
+        let found = plan(&ground(&from, &goals), MAX_EXPANDED).ok_or_else(|| {
+            InputError::invalid(
+                task_path,
+                format!(
+                    "{key}: no plan reaches the goals {set:?} (searched up to {MAX_EXPANDED} \
+                     states{})",
+                    if key == "goals" {
+                        ""
+                    } else {
+                        " from where the goals before leave the scene"
+                    }
+                ),
+            )
+        })?;
+        expanded += found.expanded;
+        let next = SymbolicScene {
+            facts: found.end.iter().cloned().collect(),
+            ..from.clone()
+        };
+        for (name, action) in found.steps {
+            names.push(name);
+            actions.push(action);
+        }
+        stages.push(GoalStage {
+            from,
+            goals,
+            until: actions.len(),
+        });
+        from = next;
+    }
+    Ok((stages, names, actions, expanded))
 }
 
 /// A step that names a node the scene lacks, or would pick up or push the room's layout, is a

@@ -218,6 +218,19 @@ fn a_malformed_task_is_bad_input() {
         ),
         (r#"{"goals": ["unicorn_1 in fridge_1"]}"#, "unicorn_1"),
         (r#"{"goals": []}"#, "either"),
+        (
+            r#"{"goals": ["fridge_1 shelf open"]}"#,
+            "no door or drawer \"shelf\"",
+        ),
+        (
+            r#"{"steps": [{"action": "navigate", "to": "fridge_1"}], "then": [["fridge_1 open"]]}"#,
+            "needs \"goals\"",
+        ),
+        (r#"{"goals": ["fridge_1 open"], "then": [[]]}"#, "then[0]"),
+        (
+            r#"{"goals": ["fridge_1 open"], "then": [["fridge_1 freezer ajar"]]}"#,
+            "then[0]",
+        ),
     ] {
         std::fs::write(&task, text).expect("task");
         let out = dir.path().join("sim");
