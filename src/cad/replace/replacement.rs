@@ -43,6 +43,11 @@ const TOP_FROM_CHILDREN_M: f32 = 0.1;
 /// side that was seen): enough to choose between shapes that fit alike, not against the shape.
 const FACES_ROOM_CONFIDENCE: f32 = 0.5;
 
+/// Classes that stand at a table facing it (ProcTHOR's rule for chairs, which real dining and
+/// office rooms keep), and how near (metres, box to box) a table must be for it to count.
+const FACES_ITS_TABLE: [&str; 1] = ["chair"];
+const AT_TABLE_M: f32 = 0.5;
+
 /// The objects of `graph` that replacement works on (not layout, enough points), in node order.
 /// `points` gives each node id its observed surface points (aligned world).
 pub fn observed_objects<'a>(
@@ -68,6 +73,12 @@ pub fn observed_objects<'a>(
                 .collect();
             (!centres.is_empty()).then(|| centres.iter().sum::<Vec3>() / centres.len() as f32)
         });
+    let tables: Vec<GravityBox> = graph
+        .nodes
+        .iter()
+        .filter(|n| n.class == "table")
+        .map(|n| GravityBox::from(&n.bbox))
+        .collect();
     let table = ClassTable::builtin();
     graph
         .nodes
@@ -128,6 +139,14 @@ pub fn observed_objects<'a>(
                 let (facing, front) =
                     front_among_faces(&long, |d| perceive_front(&bbox, d, p, flaps));
                 (Some(facing), front)
+            } else if let Some(facing) = FACES_ITS_TABLE
+                .contains(&n.class.as_str())
+                .then(|| facing_its_table(&bbox, &tables))
+                .flatten()
+            {
+                // A chair at a table faces it, whatever wall is behind it (at a desk against
+                // a wall the room is behind the chair).
+                (Some(facing), None)
             } else {
                 let facing = behind.first().copied().or_else(faces_room);
                 let front = facing
@@ -150,6 +169,46 @@ pub fn observed_objects<'a>(
             })
         })
         .collect()
+}
+
+/// Facing the nearest of `tables` within [`AT_TABLE_M`] of `bbox`: towards the point of the
+/// table's footprint nearest the box's centre. `None` when no table is that near, or the
+/// centre stands over a table (nothing tells which way then).
+fn facing_its_table(bbox: &GravityBox, tables: &[GravityBox]) -> Option<Facing> {
+    let centre = bbox.center.truncate();
+    let corners = bbox.footprint();
+    let (gap, nearest) = tables
+        .iter()
+        .map(|t| {
+            let local = t.world_from_box().inverse();
+            let half = 0.5 * t.size.truncate();
+            let clamp = |p: glam::Vec2| {
+                let l = local.transform_point3(p.extend(t.center.z)).truncate();
+                l.clamp(-half, half)
+            };
+            let to_world = |l: glam::Vec2| {
+                t.world_from_box()
+                    .transform_point3(l.extend(0.0))
+                    .truncate()
+            };
+            // Box to box: the nearest of the chair's corners and centre to the table.
+            let gap = corners
+                .iter()
+                .chain(std::iter::once(&centre))
+                .map(|c| to_world(clamp(*c)).distance(*c))
+                .fold(f32::MAX, f32::min);
+            (gap, to_world(clamp(centre)))
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))?;
+    if gap > AT_TABLE_M {
+        return None;
+    }
+    let direction = (nearest - centre).try_normalize()?.extend(0.0);
+    Some(Facing {
+        direction,
+        confidence: 1.0,
+        against_wall: false,
+    })
 }
 
 /// Facing away from each wall within `BACK_TO_WALL_M` of the box (its inward normal made
@@ -508,6 +567,44 @@ pub fn check_and_place(
 mod tests {
     use super::*;
     use glam::Affine3A;
+
+    #[test]
+    fn a_chair_at_a_table_faces_it_and_one_far_from_any_table_does_not_care() {
+        // A 1.4 x 0.8 table turned 30 degrees, and chairs seen as their backs (8 cm deep).
+        let table = GravityBox {
+            center: Vec3::new(0.0, 0.0, 0.37),
+            yaw: std::f32::consts::FRAC_PI_6,
+            size: Vec3::new(1.4, 0.8, 0.75),
+        };
+        let chair = |x: f32, y: f32| GravityBox {
+            center: Vec3::new(x, y, 0.45),
+            yaw: std::f32::consts::FRAC_PI_6,
+            size: Vec3::new(0.45, 0.08, 0.9),
+        };
+        // On the table's long side, 30 cm out: faces across the table's width.
+        let side = table
+            .world_from_box()
+            .transform_point3(Vec3::new(0.2, 0.75, 0.0));
+        let facing = facing_its_table(&chair(side.x, side.y), std::slice::from_ref(&table))
+            .expect("at the table");
+        let inward = table.world_from_box().transform_vector3(-Vec3::Y);
+        assert!(facing.direction.dot(inward) > 0.999, "{facing:?}");
+        assert_eq!(facing.confidence, 1.0);
+        // At its end: faces along its length.
+        let end = table
+            .world_from_box()
+            .transform_point3(Vec3::new(-1.0, 0.1, 0.0));
+        let facing = facing_its_table(&chair(end.x, end.y), std::slice::from_ref(&table))
+            .expect("at the table");
+        let along = table.world_from_box().transform_vector3(Vec3::X);
+        assert!(facing.direction.dot(along) > 0.999, "{facing:?}");
+        // 1.5 m away, or with no table: no opinion.
+        let far = table
+            .world_from_box()
+            .transform_point3(Vec3::new(0.0, 1.9, 0.0));
+        assert!(facing_its_table(&chair(far.x, far.y), std::slice::from_ref(&table)).is_none());
+        assert!(facing_its_table(&chair(side.x, side.y), &[]).is_none());
+    }
 
     /// The rendered kitchen's ground-truth contact graph, without its models.
     fn kitchen_graph() -> ContactGraph {
