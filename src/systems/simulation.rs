@@ -225,6 +225,8 @@ fn pose_arm_links(world: &mut World, q: &[f32], grip_m: Option<f32>) {
 
 /// An action that leaves its part part of the way goes on at most this many steps more.
 const MAX_PART_WAY_STEPS: usize = 3;
+/// How many times a pick or place whose arm motion rapier refused is planned again without it.
+const MAX_REFUSED_REPLANS: usize = 3;
 
 /// Performs `action` on the world: checks it, applies its changes, checks the physics; records
 /// and returns what happened. A door or drawer moved part of the way is moved on in further
@@ -276,13 +278,43 @@ fn perform_step(world: &mut World, action: &Action, then: &[Action]) -> StepReco
         .and_then(|(tree, entities)| {
             let spec = robot_spec(world).ok_or("the scene has no robot")?;
             let arm = world.get_resource::<RobotArm>().map(|a| a.0.clone());
-            let changes = attempt_then(&tree, &spec, arm.as_deref(), action, then)
-                .map_err(|e| e.to_string())?;
-            motion = simulate_motions(world, &tree, &entities, &changes, arm.as_deref());
-            if let Some(why) = motion.iter().find_map(MotionCheck::refusal) {
-                return Err(why);
+            // A pick or place whose arm motion rapier refuses is planned again without it
+            // (another grasp, spot or base pose), a few times.
+            let mut refused = Vec::new();
+            let mut refusals = Vec::new();
+            loop {
+                let changes = attempt_then(&tree, &spec, arm.as_deref(), action, then, &refused)
+                    .map_err(|e| {
+                        refusals.push(e.to_string());
+                        refusals.join("; then ")
+                    })?;
+                let arm_from;
+                (motion, arm_from) =
+                    simulate_motions(world, &tree, &entities, &changes, arm.as_deref());
+                let Some((k, why)) = motion
+                    .iter()
+                    .enumerate()
+                    .find_map(|(k, m)| Some((k, m.refusal()?)))
+                else {
+                    return Ok(changes);
+                };
+                let by_the_arm = arm_from.is_some_and(|from| k >= from);
+                // Only the arm's own motion (not the base's drive) is another grasp's to mend.
+                let arm_motion = changes.iter().find_map(|c| match c {
+                    Change::ArmMotion {
+                        what, part: None, ..
+                    } if by_the_arm => Some(what.clone()),
+                    _ => None,
+                });
+                refusals.push(why);
+                match arm_motion {
+                    Some(what) if refused.len() < MAX_REFUSED_REPLANS => {
+                        tracing::debug!("{}: {what} refused in rapier", action.in_words());
+                        refused.push(what);
+                    }
+                    _ => return Err(refusals.join("; then ")),
+                }
             }
-            Ok(changes)
         });
     let record = match outcome {
         Err(reason) => StepRecord {
@@ -360,16 +392,17 @@ fn perform_step(world: &mut World, action: &Action, then: &[Action]) -> StepReco
 /// last the action makes) or the first that knocks something or takes the arm into the scene.
 /// The first motion runs on the scene's own entities (the arm's on its link entities); those
 /// after it start from a state the scene is not in yet, and run in a scratch world of the tree
-/// as the motions before left it.
+/// as the motions before left it. With the checks, the index of the first of the arm's own
+/// motion (its reach, follow and retreat), if it ran.
 fn simulate_motions(
     world: &mut World,
     tree: &KinematicTree,
     entities: &[Entity],
     changes: &[Change],
     arm: Option<&ArmRig>,
-) -> Vec<MotionCheck> {
+) -> (Vec<MotionCheck>, Option<usize>) {
     let mut tree = tree.clone();
-    let mut checks = Vec::new();
+    let (mut checks, mut arm_from) = (Vec::new(), None);
     let mut as_the_scene_stands = true;
     let falling: Vec<usize> = world
         .get_resource::<FallsAtRest>()
@@ -379,6 +412,7 @@ fn simulate_motions(
         .collect();
     for (k, change) in changes.iter().enumerate() {
         if let (Change::ArmMotion { .. }, Some(rig)) = (change, arm) {
+            arm_from = Some(checks.len());
             let handover = changes.get(k + 1);
             for phase in arm_phases(&tree, rig, change, handover, REST_STEP_S) {
                 let movers = Movers {
@@ -433,7 +467,7 @@ fn simulate_motions(
         }
         as_the_scene_stands = false;
     }
-    checks
+    (checks, arm_from)
 }
 
 /// `movers` checked in rapier on the scene's own entities when `tree` is the scene as it stands

@@ -116,7 +116,7 @@ pub(super) fn pick_motion(
     first_grasp_that_works(
         id,
         &format!("pick {id}"),
-        Vec::new(),
+        &state.refused,
         candidates,
         tried,
         then,
@@ -179,21 +179,30 @@ enum GraspFailure {
     Action(#[from] ActionError),
 }
 
-/// The arm's motion with the first of `candidates` (at most `tried` of them) for which `plan`
-/// (given the grasp and its index) finds a reach, a retreat and where the object ends up, and
-/// whose changes `then` accepts; else the first that `plan` finds; else `what` fails with
-/// `attempts` and each grasp's reason.
+/// The arm's motion with the first of `candidates` (at most `tried` of them, those whose motion
+/// the simulation `refused` left out) for which `plan` (given the grasp and its index) finds a
+/// reach, a retreat and where the object ends up, and whose changes `then` accepts; else the
+/// first that `plan` finds; else `what` fails with each grasp's reason.
 fn first_grasp_that_works(
     id: &str,
     what: &str,
-    mut attempts: Vec<String>,
+    refused: &[String],
     candidates: Vec<Grasp>,
     tried: usize,
     then: &dyn Fn(&[Change]) -> Result<(), LookAheadError>,
     plan: impl Fn(usize, &Grasp) -> Result<GraspPlan, GraspFailure>,
 ) -> Result<Vec<Change>, ActionError> {
-    let mut first = None;
-    for (i, grasp) in candidates.into_iter().take(tried).enumerate() {
+    let (mut first, mut attempts) = (None, Vec::new());
+    let mut not_refused = Vec::new();
+    for (i, grasp) in candidates.into_iter().enumerate() {
+        let label = grasp_label(&grasp);
+        if refused.contains(&format!("{label} of {id}")) {
+            attempts.push(format!("{label}: refused by the simulation in rapier"));
+        } else {
+            not_refused.push((i, grasp));
+        }
+    }
+    for (i, grasp) in not_refused.into_iter().take(tried) {
         let label = grasp_label(&grasp);
         match plan(i, &grasp) {
             Ok(planned) => {
@@ -260,7 +269,7 @@ pub(super) fn place_motion(
     first_grasp_that_works(
         id,
         &format!("place {id}"),
-        Vec::new(),
+        &state.refused,
         candidates,
         MAX_GRASPS,
         &|_| Ok(()),

@@ -197,6 +197,9 @@ pub struct PartFollow {
 pub struct RobotInTree {
     pub base: BasePose,
     pub holding: Option<String>,
+    /// Arm motions (by what they do, `ArmMotion::what`) the simulation in rapier refused for
+    /// the action being planned: its grasps are not tried again.
+    pub refused: Vec<String>,
 }
 
 /// Reads the robot's pose and load off the tree (`None` when it has no robot).
@@ -216,6 +219,7 @@ pub fn robot_in_tree(tree: &KinematicTree) -> Option<RobotInTree> {
             yaw: crate::sim::scene_view::yaw_of(&pose),
         },
         holding,
+        refused: Vec::new(),
     })
 }
 
@@ -228,22 +232,25 @@ pub fn attempt(
     arm: Option<&ArmRig>,
     action: &Action,
 ) -> Result<Vec<Change>, ActionError> {
-    attempt_then(tree, robot, arm, action, &[])
+    attempt_then(tree, robot, arm, action, &[], &[])
 }
 
 /// [`attempt`] for a task whose next actions are `then`: an arm's pick looks ahead to the place
-/// of its object among them (`pick_ahead`).
+/// of its object among them (`pick_ahead`). The arm motions `refused` (by what they do) are not
+/// planned again.
 pub fn attempt_then(
     tree: &KinematicTree,
     robot: &RobotSpec,
     arm: Option<&ArmRig>,
     action: &Action,
     then: &[Action],
+    refused: &[String],
 ) -> Result<Vec<Change>, ActionError> {
     let view = SceneView::new(tree);
-    let Some(state) = robot_in_tree(tree) else {
+    let Some(mut state) = robot_in_tree(tree) else {
         return Err(ActionError::NoRobot);
     };
+    state.refused = refused.to_vec();
     match action {
         Action::Navigate { to } => navigate(&view, robot, &state, to),
         Action::Open {
