@@ -26,6 +26,9 @@ const FINGER_CLEARANCE_M: f32 = 0.002;
 /// the fingers close on it, metres.
 const RIM_WIDTH_M: f32 = 0.01;
 const RIM_INSET_M: f32 = 0.006;
+/// The rim is the object's outline within this much (metres) of its top: a mug's handle, which
+/// ends lower, is no rim (at the box's side a finger went 15 mm into a mug in rapier).
+const RIM_BAND_M: f32 = 0.01;
 /// Room left between the object and the palm, metres: more than the planner's clearance on
 /// the last stretch (`reach::STRETCH_MARGIN_M`, 4 mm).
 const PALM_CLEARANCE_M: f32 = 0.006;
@@ -150,14 +153,24 @@ pub fn grasps(
         }
     }
     if rim {
+        // Around the middle of the rim, at each side of its outline.
+        let ring: Vec<Vec3> = points
+            .iter()
+            .copied()
+            .filter(|p| p.z >= hi.z - RIM_BAND_M)
+            .collect();
+        let (ring_lo, ring_hi) = points_bounds(&ring).unwrap_or((lo, hi));
+        let ring_size = ring_hi - ring_lo;
+        let off_middle = (0.5 * (ring_lo + ring_hi) - 0.5 * (lo + hi)).with_z(0.0);
+        let rim_top = top + world_from_object.transform_vector3(off_middle);
         let (mut rims, mut leaning_rims) = (Vec::new(), Vec::new());
         for (outward, half) in [
-            (axis_x, 0.5 * size.x),
-            (-axis_x, 0.5 * size.x),
-            (axis_y, 0.5 * size.y),
-            (-axis_y, 0.5 * size.y),
+            (axis_x, 0.5 * ring_size.x),
+            (-axis_x, 0.5 * ring_size.x),
+            (axis_y, 0.5 * ring_size.y),
+            (-axis_y, 0.5 * ring_size.y),
         ] {
-            let at = top + outward * (half - RIM_INSET_M);
+            let at = rim_top + outward * (half - RIM_INSET_M);
             rims.push(Grasp {
                 kind: GraspKind::Rim,
                 world_from_tool: tool_pose(at, -Vec3::Z, outward),
@@ -326,6 +339,29 @@ mod tests {
         );
         assert_eq!(bowl[0].kind, GraspKind::Rim);
         assert!((bowl[0].world_from_tool.translation.x - (1.0 - 0.064)).abs() < 1e-5);
+        // A 10 cm mug whose handle (on +x, 2 cm out) ends 1.2 cm under its rim: the rim grasp
+        // on the handle's side is at the body's wall, not at the handle's outer bar.
+        let mut mug = cuboid(Vec3::new(-0.04, -0.04, 0.0), Vec3::new(0.04, 0.04, 0.1));
+        mug.extend(cuboid(
+            Vec3::new(0.04, -0.006, 0.025),
+            Vec3::new(0.06, 0.006, 0.088),
+        ));
+        let mug = grasps(
+            &Affine3A::IDENTITY,
+            &mug,
+            hand(0.08),
+            Vec2::new(1.0, 0.0),
+            true,
+        );
+        let on_the_handle_side = mug
+            .iter()
+            .filter(|g| g.kind == GraspKind::Rim && g.approach.z < -0.99)
+            .map(|g| g.world_from_tool.translation.x)
+            .fold(f32::MIN, f32::max);
+        assert!(
+            (on_the_handle_side - (0.04 - RIM_INSET_M)).abs() < 1e-5,
+            "{on_the_handle_side}"
+        );
         // A bottle too wide for the hand is taken by its neck from above.
         let mut bottle = cuboid(Vec3::new(-0.045, -0.045, 0.0), Vec3::new(0.045, 0.045, 0.2));
         bottle.extend(cuboid(
