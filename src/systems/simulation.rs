@@ -278,43 +278,15 @@ fn perform_step(world: &mut World, action: &Action, then: &[Action]) -> StepReco
         .and_then(|(tree, entities)| {
             let spec = robot_spec(world).ok_or("the scene has no robot")?;
             let arm = world.get_resource::<RobotArm>().map(|a| a.0.clone());
-            // A pick or place whose arm motion rapier refuses is planned again without it
-            // (another grasp, spot or base pose), a few times.
-            let mut refused = Vec::new();
-            let mut refusals = Vec::new();
-            loop {
-                let changes = attempt_then(&tree, &spec, arm.as_deref(), action, then, &refused)
-                    .map_err(|e| {
-                        refusals.push(e.to_string());
-                        refusals.join("; then ")
-                    })?;
-                let arm_from;
-                (motion, arm_from) =
-                    simulate_motions(world, &tree, &entities, &changes, arm.as_deref());
-                let Some((k, why)) = motion
-                    .iter()
-                    .enumerate()
-                    .find_map(|(k, m)| Some((k, m.refusal()?)))
-                else {
-                    return Ok(changes);
-                };
-                let by_the_arm = arm_from.is_some_and(|from| k >= from);
-                // Only the arm's own motion (not the base's drive) is another grasp's to mend.
-                let arm_motion = changes.iter().find_map(|c| match c {
-                    Change::ArmMotion {
-                        what, part: None, ..
-                    } if by_the_arm => Some(what.clone()),
-                    _ => None,
-                });
-                refusals.push(why);
-                match arm_motion {
-                    Some(what) if refused.len() < MAX_REFUSED_REPLANS => {
-                        tracing::debug!("{}: {what} refused in rapier", action.in_words());
-                        refused.push(what);
-                    }
-                    _ => return Err(refusals.join("; then ")),
-                }
-            }
+            let scene = (&tree, &entities[..]);
+            planned_and_checked(
+                world,
+                scene,
+                &spec,
+                arm.as_deref(),
+                (action, then),
+                &mut motion,
+            )
         });
     let record = match outcome {
         Err(reason) => StepRecord {
@@ -384,6 +356,52 @@ fn perform_step(world: &mut World, action: &Action, then: &[Action]) -> StepReco
         .0
         .push(record.clone());
     record
+}
+
+/// `action`'s changes on the scene `(tree, entities)` as it stands, planned (looking ahead to
+/// `then`) and their motions simulated in rapier (the checks into `motion`), or why not. A pick
+/// or place whose arm motion rapier refuses is planned again without it (another grasp, spot
+/// or base pose), up to [`MAX_REFUSED_REPLANS`] times; the reason lists every refusal.
+fn planned_and_checked(
+    world: &mut World,
+    (tree, entities): (&KinematicTree, &[Entity]),
+    spec: &RobotSpec,
+    arm: Option<&ArmRig>,
+    (action, then): (&Action, &[Action]),
+    motion: &mut Vec<MotionCheck>,
+) -> Result<Vec<Change>, String> {
+    let (mut refused, mut refusals) = (Vec::new(), Vec::new());
+    loop {
+        let changes = attempt_then(tree, spec, arm, action, then, &refused).map_err(|e| {
+            refusals.push(e.to_string());
+            refusals.join("; then ")
+        })?;
+        let arm_from;
+        (*motion, arm_from) = simulate_motions(world, tree, entities, &changes, arm);
+        let Some((k, why)) = motion
+            .iter()
+            .enumerate()
+            .find_map(|(k, m)| Some((k, m.refusal()?)))
+        else {
+            return Ok(changes);
+        };
+        // Only the arm's own motion (not the base's drive) is another grasp's to mend.
+        let by_the_arm = arm_from.is_some_and(|from| k >= from);
+        let arm_motion = changes.iter().find_map(|c| match c {
+            Change::ArmMotion {
+                what, part: None, ..
+            } if by_the_arm => Some(what.clone()),
+            _ => None,
+        });
+        refusals.push(why);
+        match arm_motion {
+            Some(what) if refused.len() < MAX_REFUSED_REPLANS => {
+                tracing::debug!("{}: {what} refused in rapier", action.in_words());
+                refused.push(what);
+            }
+            _ => return Err(refusals.join("; then ")),
+        }
+    }
 }
 
 /// The motions of `changes` (a drive, a door, the arm's reach, follow and retreat) simulated in
