@@ -777,11 +777,14 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
 fn panda_puts_the_bowl_from_the_table_into_the_microwave_of_the_reconstruction() {
     let (_, rec) = common::shared_noisy_map("kitchen");
     let tmp = tempfile::tempdir().expect("tempdir");
-    let (_, out, trace) = panda_task(
-        &rec,
-        serde_json::json!({"goals": ["bowl_1 in microwave_1", "microwave_1 closed"]}),
-        tmp.path(),
-    );
+    let task: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            common::root().join("scenes/tasks/kitchen_bowl_to_microwave_panda.json"),
+        )
+        .expect("task"),
+    )
+    .expect("JSON");
+    let (_, out, trace) = panda_task(&rec, task, tmp.path());
     assert_eq!(trace["success"], true, "{}", trace["steps"]);
     let (kinds, grasps) = arm_steps_ran_in_rapier(&trace);
     assert_eq!(kinds.first().map(String::as_str), Some("open"), "{kinds:?}");
