@@ -102,14 +102,40 @@ pub fn ground(scene: &SymbolicScene, goal: &[Fact]) -> GroundProblem {
         }
         pre
     };
-    for c in &scene.containers {
-        let (open, closed) = (Fact::IsOpen(c.clone()), Fact::IsClosed(c.clone()));
+    // Each container's main part, as the container's own open and close, and its other doors
+    // and drawers, those the goal names only: nothing else needs them open or closed, and each
+    // one ungoaled would double the states the search may visit. Per part: the operators'
+    // names, the container, the part's name, and its open and closed facts.
+    let mains = scene.containers.iter().map(|c| {
+        (
+            (format!("(open {c})"), format!("(close {c})")),
+            c,
+            None,
+            (Fact::IsOpen(c.clone()), Fact::IsClosed(c.clone())),
+        )
+    });
+    let others = scene
+        .parts
+        .iter()
+        .map(|(link, (c, name))| {
+            (
+                (
+                    format!("(open-part {link} {c})"),
+                    format!("(close-part {link} {c})"),
+                ),
+                c,
+                Some(name.clone()),
+                (Fact::PartOpen(link.clone()), Fact::PartClosed(link.clone())),
+            )
+        })
+        .filter(|(_, _, _, (open, closed))| goal.contains(open) || goal.contains(closed));
+    for ((open_name, close_name), c, part, (open, closed)) in mains.chain(others) {
         op(
             &mut t,
-            format!("(open {c})"),
+            open_name,
             Action::Open {
                 object: c.clone(),
-                part: None,
+                part: part.clone(),
                 value: None,
             },
             hand(vec![at(c), closed.clone()]),
@@ -118,41 +144,10 @@ pub fn ground(scene: &SymbolicScene, goal: &[Fact]) -> GroundProblem {
         );
         op(
             &mut t,
-            format!("(close {c})"),
+            close_name,
             Action::Close {
                 object: c.clone(),
-                part: None,
-            },
-            hand(vec![at(c), open.clone()]),
-            vec![closed],
-            vec![open],
-        );
-    }
-    // A container's other doors and drawers, those the goal names only: nothing else needs
-    // them open or closed, and each one ungoaled would double the states the search may visit.
-    for (link, (c, name)) in &scene.parts {
-        let (open, closed) = (Fact::PartOpen(link.clone()), Fact::PartClosed(link.clone()));
-        if !goal.contains(&open) && !goal.contains(&closed) {
-            continue;
-        }
-        op(
-            &mut t,
-            format!("(open-part {link} {c})"),
-            Action::Open {
-                object: c.clone(),
-                part: Some(name.clone()),
-                value: None,
-            },
-            hand(vec![at(c), closed.clone()]),
-            vec![open.clone()],
-            vec![closed.clone()],
-        );
-        op(
-            &mut t,
-            format!("(close-part {link} {c})"),
-            Action::Close {
-                object: c.clone(),
-                part: Some(name.clone()),
+                part,
             },
             hand(vec![at(c), open.clone()]),
             vec![closed],
