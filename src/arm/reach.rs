@@ -41,6 +41,16 @@ pub struct Held {
     pub beside: Vec<String>,
 }
 
+impl Held {
+    /// The object lifted clear of what it stood against: it may touch nothing.
+    pub fn lifted(&self) -> Held {
+        Held {
+            pieces: self.pieces.clone(),
+            beside: Vec::new(),
+        }
+    }
+}
+
 /// A planned motion: the configurations (densified for execution) and the final one.
 #[derive(Clone, Debug)]
 pub struct ArmPath {
@@ -255,10 +265,7 @@ pub fn reach_configuration(
     line.reverse();
     let start = line[0].clone();
     // What the held object stood against it may touch on the straight stretch only.
-    let lifted = Held {
-        pieces: held.pieces.clone(),
-        beside: Vec::new(),
-    };
+    let lifted = held.lifted();
     let free_transit = clear_of(rig, world_from_root, transit, &lifted, TRANSIT_MARGIN_M);
     if let Some(why) = touching(
         rig,
@@ -516,10 +523,7 @@ pub fn retreat_along(
     })?;
     let top = line.last().expect("not empty").clone();
     // What the held object stood against it may touch on the straight stretch only.
-    let lifted = Held {
-        pieces: held.pieces.clone(),
-        beside: Vec::new(),
-    };
+    let lifted = held.lifted();
     let free_transit = clear_of(rig, world_from_root, transit, &lifted, TRANSIT_MARGIN_M);
     let path = plan(
         &top,

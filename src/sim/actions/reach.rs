@@ -4,6 +4,7 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::geometry::GravityBox;
 use crate::sim::actions::{ActionError, Change, RobotInTree};
 use crate::sim::navigation::{NavGoal, NavGrid};
 use crate::sim::robot::{BasePose, ROBOT_LINK, RobotSpec};
@@ -125,33 +126,21 @@ pub fn nav_grid(view: &SceneView) -> Result<NavGrid, ActionError> {
     Ok(grid.with_walls(wall_segments(view)))
 }
 
-/// The room's walls as segments on the floor: each wall's surface seen from above, along its
-/// longer extent through the middle of its thickness (the principal axis of its vertices, so
-/// a wall at any angle).
+/// The room's walls as segments on the floor: each wall's least box around its surface, along
+/// its longer side through the middle of its thickness (a wall at any angle).
 fn wall_segments(view: &SceneView) -> Vec<(Vec2, Vec2)> {
     (0..view.tree.links.len())
         .filter(|&l| view.tree.links[l].class.as_deref() == Some("wall"))
         .filter_map(|l| {
-            let points: Vec<Vec2> = view
-                .world_mesh(l)
-                .positions
-                .iter()
-                .map(|p| p.truncate())
-                .collect();
-            let n = points.len() as f32;
-            let mean = points.iter().copied().sum::<Vec2>() / n.max(1.0);
-            let (xx, xy, yy) = points.iter().fold((0.0, 0.0, 0.0), |(xx, xy, yy), p| {
-                let d = *p - mean;
-                (xx + d.x * d.x, xy + d.x * d.y, yy + d.y * d.y)
-            });
-            // The direction of the larger eigenvalue of the 2x2 covariance.
-            let angle = 0.5 * (2.0 * xy).atan2(xx - yy);
-            let along = Vec2::from_angle(angle);
-            let (lo, hi) = points.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| {
-                let t = (*p - mean).dot(along);
-                (lo.min(t), hi.max(t))
-            });
-            (lo < hi).then(|| (mean + along * lo, mean + along * hi))
+            let wall = GravityBox::minimal(&view.world_mesh(l).positions)?;
+            let along = Vec2::from_angle(wall.yaw);
+            let half = if wall.size.x >= wall.size.y {
+                along * 0.5 * wall.size.x
+            } else {
+                along.perp() * 0.5 * wall.size.y
+            };
+            let centre = wall.center.truncate();
+            Some((centre - half, centre + half))
         })
         .collect()
 }
