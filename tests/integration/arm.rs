@@ -374,10 +374,7 @@ fn panda_task(
 /// The task in `out` (a `simulate --robot` output) replayed in MuJoCo: every joint of the CSV
 /// is in the model and nothing of the robot or in its hand goes 5 mm into the scene at any
 /// sample; the replay's figures (tests/external/mujoco_replay.py) for the caller's checks.
-pub(crate) fn replay_in_mujoco(
-    out: &std::path::Path,
-    rig: &iscene::arm::rig::ArmRig,
-) -> serde_json::Value {
+fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::rig::ArmRig) -> serde_json::Value {
     let python = common::validator(".venv-validators/bin/python");
     let script = common::root().join("tests/external/mujoco_replay.py");
     let tool = format!("robot_{}", rig.arm.links[rig.arm.tool].name);
@@ -557,7 +554,25 @@ fn panda_on_its_lift_opens_and_closes_the_lowest_door_of_the_reconstruction() {
 }
 
 /// The Panda on the simulation's arm base, as `simulate --robot` mounts it.
-pub(crate) fn panda_rig() -> iscene::arm::rig::ArmRig {
+/// The replay of `out` in MuJoCo (`replay_in_mujoco` with the Panda), asserting that `what`
+/// the hand holds stays within 1 mm of where the fingers took it; the replay's figures.
+pub(crate) fn replay_holding(out: &std::path::Path, what: &str) -> serde_json::Value {
+    let replay = replay_in_mujoco(out, &panda_rig());
+    let drift = replay["held_drift_m"].as_f64().expect("drift");
+    assert!(
+        drift < 1e-3,
+        "the {what} slipped {drift} m in the hand: {replay}"
+    );
+    replay
+}
+
+/// A task file of scenes/tasks, as JSON.
+fn task_file(name: &str) -> serde_json::Value {
+    let path = common::root().join("scenes/tasks").join(name);
+    serde_json::from_str(&std::fs::read_to_string(&path).expect("task")).expect("JSON")
+}
+
+fn panda_rig() -> iscene::arm::rig::ArmRig {
     let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
     let base = iscene::sim::robot::RobotSpec::ARM_BASE;
     base.mount(iscene::arm::rig::ArmRig::new(arm, base.height))
@@ -642,14 +657,11 @@ fn arm_steps_ran_in_rapier(trace: &serde_json::Value) -> (Vec<String>, Vec<Strin
 fn panda_takes_the_box_from_the_fridge_into_the_microwave_of_the_reconstruction() {
     let (_, rec) = common::shared_noisy_map("kitchen");
     let tmp = tempfile::tempdir().expect("tempdir");
-    let task: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            common::root().join("scenes/tasks/kitchen_fridge_to_microwave_panda.json"),
-        )
-        .expect("task"),
-    )
-    .expect("JSON");
-    let (_, out, trace) = panda_task(&rec, task, tmp.path());
+    let (_, out, trace) = panda_task(
+        &rec,
+        task_file("kitchen_fridge_to_microwave_panda.json"),
+        tmp.path(),
+    );
     assert_eq!(trace["success"], true, "{}", trace["steps"]);
     let (kinds, _) = arm_steps_ran_in_rapier(&trace);
     assert_eq!(
@@ -694,13 +706,7 @@ fn panda_takes_the_box_from_the_fridge_into_the_microwave_of_the_reconstruction(
     assert!(fridge[1].2 >= 0.6 * 1.8, "{fridge:?}");
     assert!(fridge[3].2.abs() < 0.02, "{fridge:?}");
     assert_supports(&out, "microwave_1", "box_1");
-    let rig = panda_rig();
-    let replay = replay_in_mujoco(&out, &rig);
-    let held = replay["held_drift_m"].as_f64().expect("held drift");
-    assert!(
-        held < 1e-3,
-        "the box slipped {held} m in the hand: {replay}"
-    );
+    let replay = replay_holding(&out, "box");
     let part = replay["part_drift_m"].as_f64().expect("part drift");
     assert!(
         part < 0.002,
@@ -757,13 +763,7 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
     assert!(closed * 10 >= held.len() * 9, "{closed} of {}", held.len());
     assert!((fingers.last().expect("samples").1 - 0.04).abs() < 1e-5);
     assert_supports(&out, "cabinet_2", "cup_1");
-    let rig = panda_rig();
-    let replay = replay_in_mujoco(&out, &rig);
-    let drift = replay["held_drift_m"].as_f64().expect("drift");
-    assert!(
-        drift < 1e-3,
-        "the cup slipped {drift} m in the hand: {replay}"
-    );
+    replay_holding(&out, "cup");
 }
 
 /// On the kitchen's reconstruction, the Panda puts the bowl from the table into the microwave
@@ -777,14 +777,11 @@ fn panda_puts_the_cup_from_the_table_into_a_cabinet_of_the_reconstruction() {
 fn panda_puts_the_bowl_from_the_table_into_the_microwave_of_the_reconstruction() {
     let (_, rec) = common::shared_noisy_map("kitchen");
     let tmp = tempfile::tempdir().expect("tempdir");
-    let task: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            common::root().join("scenes/tasks/kitchen_bowl_to_microwave_panda.json"),
-        )
-        .expect("task"),
-    )
-    .expect("JSON");
-    let (_, out, trace) = panda_task(&rec, task, tmp.path());
+    let (_, out, trace) = panda_task(
+        &rec,
+        task_file("kitchen_bowl_to_microwave_panda.json"),
+        tmp.path(),
+    );
     assert_eq!(trace["success"], true, "{}", trace["steps"]);
     let (kinds, grasps) = arm_steps_ran_in_rapier(&trace);
     assert_eq!(kinds.first().map(String::as_str), Some("open"), "{kinds:?}");
@@ -792,13 +789,7 @@ fn panda_puts_the_bowl_from_the_table_into_the_microwave_of_the_reconstruction()
     assert!(kinds[3..].iter().all(|k| k == "close"), "{kinds:?}");
     assert!(grasps[1].starts_with("rim grasp"), "{}", grasps[1]);
     assert_supports(&out, "microwave_1", "bowl_1");
-    let rig = panda_rig();
-    let replay = replay_in_mujoco(&out, &rig);
-    let drift = replay["held_drift_m"].as_f64().expect("drift");
-    assert!(
-        drift < 1e-3,
-        "the bowl slipped {drift} m in the hand: {replay}"
-    );
+    replay_holding(&out, "bowl");
 }
 
 /// On the kitchen's reconstruction, the Panda opens every drawer of the cabinet that has any
@@ -873,27 +864,16 @@ fn panda_opens_and_shuts_every_drawer_of_a_cabinet_of_the_reconstruction_from_go
         }
     }
     // pyperplan on each exported problem: the same number of operators as ours.
-    let python = common::validator(".venv-validators/bin/python");
-    let mut theirs = 0;
-    for problem in ["problem.pddl", "problem_then_0.pddl"] {
-        let pddl = tmp.path().join(format!("pddl_{problem}"));
-        std::fs::create_dir_all(&pddl).expect("dir");
-        for f in ["domain.pddl", problem] {
-            std::fs::copy(out.join(f), pddl.join(f)).expect("copy");
-        }
-        let run = std::process::Command::new(&python)
-            .args(["-m", "pyperplan", "-s", "astar", "-H", "hmax"])
-            .arg(pddl.join("domain.pddl"))
-            .arg(pddl.join(problem))
-            .output()
-            .expect("pyperplan");
-        let solution = std::fs::read_to_string(pddl.join(format!("{problem}.soln")))
-            .unwrap_or_else(|_| panic!("pyperplan: {}", String::from_utf8_lossy(&run.stderr)));
-        theirs += solution
-            .lines()
-            .filter(|l| l.trim().starts_with('('))
-            .count();
-    }
+    let theirs: usize = ["problem.pddl", "problem_then_0.pddl"]
+        .iter()
+        .map(|problem| {
+            common::pyperplan_plan_length(
+                &out,
+                problem,
+                &tmp.path().join(format!("pddl_{problem}")),
+            )
+        })
+        .sum();
     assert_eq!(plan.len(), theirs, "{plan:?}");
     // Every drawer moved, and ends shut.
     let mut last = std::collections::BTreeMap::new();

@@ -158,7 +158,6 @@ fn placing_into_the_closed_microwave_is_refused_with_the_reason_and_nothing_move
 
 #[test]
 fn the_planner_solves_kitchen_goals_and_pyperplan_agrees_on_their_length() {
-    let python = common::validator(".venv-validators/bin/python");
     let dir = tempfile::tempdir().expect("tempdir");
     let gt = kitchen_truth(dir.path());
     let goals: [&[&str]; 5] = [
@@ -179,29 +178,11 @@ fn the_planner_solves_kitchen_goals_and_pyperplan_agrees_on_their_length() {
         let (code, trace) = simulate(&gt, &task, &out);
         assert_eq!(code, 0, "{goal:?}: {trace:#}");
         let ours = trace["plan"].as_array().expect("plan").len();
-        // pyperplan writes its solution beside the problem: work on copies.
-        let pddl = dir.path().join(format!("pddl_{k}"));
-        std::fs::create_dir_all(&pddl).expect("dir");
-        for f in ["domain.pddl", "problem.pddl"] {
-            std::fs::copy(out.join(f), pddl.join(f)).expect("copy");
-        }
-        let run = std::process::Command::new(&python)
-            .args(["-m", "pyperplan", "-s", "astar", "-H", "hmax"])
-            .arg(pddl.join("domain.pddl"))
-            .arg(pddl.join("problem.pddl"))
-            .output()
-            .expect("pyperplan");
-        let solution =
-            std::fs::read_to_string(pddl.join("problem.pddl.soln")).unwrap_or_else(|_| {
-                panic!(
-                    "pyperplan found no plan for {goal:?}: {}",
-                    String::from_utf8_lossy(&run.stderr)
-                )
-            });
-        let theirs = solution
-            .lines()
-            .filter(|l| l.trim().starts_with('('))
-            .count();
+        let theirs = common::pyperplan_plan_length(
+            &out,
+            "problem.pddl",
+            &dir.path().join(format!("pddl_{k}")),
+        );
         assert_eq!(ours, theirs, "{goal:?}: ours {ours}, pyperplan {theirs}");
     }
 }

@@ -203,6 +203,35 @@ pub fn shared_noisy_map(scene: &str) -> (PathBuf, PathBuf) {
     .clone()
 }
 
+/// The length of the plan pyperplan (A* with h_max) finds for `problem` of a `simulate`
+/// output folder `out` with its `domain.pddl`, worked on copies in `work` (pyperplan writes
+/// its solution beside the problem); a panic naming the problem when it finds none.
+pub fn pyperplan_plan_length(out: &Path, problem: &str, work: &Path) -> usize {
+    let python = validator(".venv-validators/bin/python");
+    std::fs::create_dir_all(work).expect("dir");
+    for f in ["domain.pddl", problem] {
+        std::fs::copy(out.join(f), work.join(f)).expect("copy");
+    }
+    let run = std::process::Command::new(&python)
+        .args(["-m", "pyperplan", "-s", "astar", "-H", "hmax"])
+        .arg(work.join("domain.pddl"))
+        .arg(work.join(problem))
+        .output()
+        .expect("pyperplan");
+    let solution =
+        std::fs::read_to_string(work.join(format!("{problem}.soln"))).unwrap_or_else(|_| {
+            panic!(
+                "pyperplan found no plan for {}: {}",
+                out.join(problem).display(),
+                String::from_utf8_lossy(&run.stderr)
+            )
+        });
+    solution
+        .lines()
+        .filter(|l| l.trim().starts_with('('))
+        .count()
+}
+
 /// A validator installed by scripts/setup-validators.sh, or a panic that says to run it.
 pub fn validator(relative: &str) -> PathBuf {
     let path = root().join(relative);
