@@ -19,9 +19,8 @@ use glam::Vec3;
 use iscene::cad::ParametricLibrary;
 use iscene::cad::db::database::CadDatabase;
 use iscene::cad::replace::matching::ObservedObject;
-use iscene::cad::replace::replacement::{
-    AlignMethod, align_scene, check_and_place, observed_objects, rank_scene,
-};
+use iscene::cad::replace::observed_objects::observed_objects;
+use iscene::cad::replace::replacement::{AlignMethod, align_scene, check_and_place, rank_scene};
 use iscene::graph::ContactGraph;
 use iscene::graph::build::{ContactGraphParams, build_contact_graph_with_surfaces};
 

@@ -16,9 +16,9 @@ use serde::Serialize;
 use crate::cad::db::database::CadDatabase;
 use crate::cad::replace::alignment::{Alignment, choice_score};
 use crate::cad::replace::matching::{Candidate, ObservedObject};
+use crate::cad::replace::observed_objects::observed_objects;
 use crate::cad::replace::replacement::{
-    AlignMethod, ReplacementRecord, align_scene_reusing, check_and_place, observed_objects,
-    rank_scene,
+    AlignMethod, ReplacementRecord, align_scene_reusing, check_and_place, rank_scene,
 };
 use crate::cad::replace::shape_filter::{Rejection, layout_planes, rejection};
 use crate::cad::replace::synthesis::add_perceived_candidates;

@@ -5,6 +5,7 @@ pub mod alignment;
 pub mod height_fit;
 pub mod icp;
 pub mod matching;
+pub mod observed_objects;
 pub mod orientation;
 pub mod physical_check;
 pub mod placement_verdict;
