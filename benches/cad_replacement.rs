@@ -69,7 +69,7 @@ fn cad_replacement(c: &mut Criterion) {
         .collect();
     let mut objects: Vec<ObservedObject> = scenes
         .iter()
-        .flat_map(|(graph, points)| observed_objects(graph, points))
+        .flat_map(|(graph, points)| observed_objects(graph, points, &HashMap::new()))
         .collect();
     objects.truncate(OBJECTS);
     assert_eq!(objects.len(), OBJECTS, "two scenes have 20 objects");
@@ -126,7 +126,7 @@ fn cad_replacement(c: &mut Criterion) {
 
     let (kitchen, points) = &scenes[0];
     let library = CadDatabase::parametric();
-    let kitchen_objects = observed_objects(kitchen, points);
+    let kitchen_objects = observed_objects(kitchen, points, &HashMap::new());
     let ranked = rank_scene(&kitchen_objects, &library, AlignMethod::Lm);
     let aligned = align_scene(&kitchen_objects, &library, &ranked, AlignMethod::Lm);
     let ids: Vec<String> = kitchen_objects.iter().map(|o| o.id.to_string()).collect();

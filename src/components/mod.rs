@@ -35,7 +35,7 @@ pub use joint::Joint;
 pub use link_body::LinkBody;
 pub use listed_part::ListedPart;
 pub use model_part::ModelPart;
-pub use observed_surface::ObservedSurface;
+pub use observed_surface::{CounterBody, ObservedSurface};
 pub use oriented_box::OrientedBox;
 pub use panoptic::{Panoptic, SceneEntity};
 pub use perceived_front::PerceivedFront;

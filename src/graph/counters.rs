@@ -103,6 +103,36 @@ pub fn find_counter_tops(unclaimed: &[Vec3], params: &CounterParams) -> Vec<Vec<
     tops
 }
 
+/// How far beyond a counter top's outline (metres) its front and ends are gathered: a worktop
+/// overhangs its doors, so they lie under it, but a top seen short of its edge does not.
+const BODY_REACH_M: f32 = 0.05;
+/// The body's points lie from this high above the floor (the floor's own points lie lower) ...
+const BODY_ABOVE_FLOOR_M: f32 = 0.03;
+/// ... to this far under the top's lowest point.
+const BODY_UNDER_TOP_M: f32 = 0.02;
+
+/// What the map saw of a counter under its `top` (z up, floor at 0) among `surface`: its front
+/// of doors and drawers and its ends, the points under the top's outline (grown by
+/// [`BODY_REACH_M`]) between the floor and the top. The segmenters know no counter, so these
+/// points are unclaimed or a wall's (its front is a large vertical plane); the caller leaves out
+/// other objects' (a chair pushed under it).
+pub fn counter_body(top: &[Vec3], surface: &[Vec3]) -> Vec<Vec3> {
+    let Some(outline) = GravityBox::minimal(top) else {
+        return Vec::new();
+    };
+    let under = top.iter().map(|p| p.z).fold(f32::MAX, f32::min) - BODY_UNDER_TOP_M;
+    let reach = GravityBox {
+        size: outline.size + Vec3::new(2.0 * BODY_REACH_M, 2.0 * BODY_REACH_M, 0.0),
+        ..outline
+    };
+    surface
+        .iter()
+        .copied()
+        .filter(|p| (BODY_ABOVE_FLOOR_M..=under).contains(&p.z))
+        .filter(|p| reach.contains(p.with_z(reach.center.z), 0.0))
+        .collect()
+}
+
 fn cell_of(p: Vec3, cell: f32) -> IVec2 {
     IVec2::new((p.x / cell).floor() as i32, (p.y / cell).floor() as i32)
 }
@@ -202,6 +232,26 @@ mod tests {
         assert!((top.top_z() - 0.9).abs() < 0.02, "{top:?}");
         let (w, l) = (top.size.x.min(top.size.y), top.size.x.max(top.size.y));
         assert!((w - 0.6).abs() < 0.05 && (l - 2.4).abs() < 0.05, "{top:?}");
+    }
+
+    #[test]
+    fn a_counter_s_body_is_what_lies_under_its_top() {
+        let top = grid((0.0, 3.0), (2.4, 3.6), 0.9);
+        // Its front at y = 2.98 under a 2 cm overhang, the floor before it, a chair 30 cm out
+        // and the wall above the top.
+        let mut surface: Vec<Vec3> = (0..40)
+            .flat_map(|i| (2..44).map(move |k| Vec3::new(0.06 * i as f32, 2.98, 0.02 * k as f32)))
+            .collect();
+        let front = surface.len();
+        surface.extend(grid((0.0, 2.0), (2.4, 2.9), 0.0));
+        surface.extend(grid((1.0, 2.5), (1.4, 2.7), 0.45));
+        surface.extend((0..20).map(|k| Vec3::new(1.0, 3.62, 0.95 + 0.05 * k as f32)));
+        let body = counter_body(&top, &surface);
+        assert_eq!(body.len(), front);
+        assert!(
+            body.iter()
+                .all(|p| p.y == 2.98 && (0.03..=0.88).contains(&p.z))
+        );
     }
 
     #[test]

@@ -10,10 +10,13 @@ use glam::{Affine3A, Vec3};
 
 use crate::geometry::surface_points::surface_points;
 use crate::geometry::{GravityBox, TriMesh};
+use crate::perception::front_marks::FrontMarks;
 use crate::perception::handles::{Front, Handle, HandleKind, find_handles};
 use crate::perception::open_doors::{OpenDoor, open_doors};
 use crate::perception::open_drawers::{OpenDrawer, open_drawers};
-use crate::perception::parts::{FrontExtent, PerceivedPart, front_extent, lay_out_parts};
+use crate::perception::parts::{
+    FrontExtent, Gaps, PerceivedPart, front_extent, lay_out_parts, lay_out_parts_between,
+};
 
 /// The front's points are those within its rectangle grown by this much sideways, metres (a
 /// handle near the edge, the box a little tight).
@@ -176,6 +179,27 @@ pub fn perceive_front(
         parts,
         clear,
     })
+}
+
+/// `seen` with what the frames show of its front (`perception::front_marks`): where the map's
+/// handles open no part on it (none found, or only the front's edges standing out of a real
+/// camera's noisy depth), the handles of its image lay out its parts, split at the gaps the
+/// image shows. Where the map's handles open parts they stand: they are measured, the image's
+/// are a colour.
+pub fn with_marks(seen: PerceivedFront, marks: &FrontMarks, flaps: bool) -> PerceivedFront {
+    if !seen.parts.is_empty() || marks.handles.is_empty() {
+        return seen;
+    }
+    let gaps = Gaps {
+        vertical: marks.vertical_gaps.clone(),
+        horizontal: marks.horizontal_gaps.clone(),
+    };
+    let parts = lay_out_parts_between(&seen.front, seen.extent, &marks.handles, flaps, &gaps);
+    PerceivedFront {
+        handles: marks.handles.clone(),
+        parts,
+        ..seen
+    }
 }
 
 /// `extent` grown over the rectangles of the `open` drawers (whose fronts are not on the front

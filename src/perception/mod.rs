@@ -3,6 +3,8 @@
 //! agree with the perceived ones. Bevy-free; uses geometry, the map's median and the contact
 //! graph's surface sampling.
 
+pub mod front_marks;
+pub mod front_texture;
 pub mod fronts;
 pub mod handles;
 pub mod open_doors;

@@ -125,8 +125,10 @@ const HANDLE_CLEARANCE_M: f32 = 0.02;
 /// drawer under its door).
 const MIN_FLAP_HEIGHT_M: f32 = 0.25;
 /// On any class, a part higher than wide pulled by a bar in the top quarter is a flap (Rusu et
-/// al.'s rule).
+/// al.'s rule) ...
 const FLAP_TOP_SHARE: f32 = 0.25;
+/// ... unless it starts this low (metres above the floor) or lower: a base unit's door.
+const FLOOR_LEVEL_M: f32 = 0.25;
 /// Handles stand 2 to 5 cm out of a front: a cluster reaching farther (to the end of the
 /// handles' band, 8 cm) is more likely the edge of an open door or drawer crossing the band, and
 /// lays out no part.
@@ -160,6 +162,28 @@ pub fn lay_out_parts(
     extent: FrontExtent,
     handles: &[Handle],
     flaps: bool,
+) -> Vec<PerceivedPart> {
+    lay_out_parts_between(front, extent, handles, flaps, &Gaps::default())
+}
+
+/// The gaps seen between a front's parts: vertical ones as distances along it (as
+/// `Front::local`'s x), horizontal ones as heights, each in increasing order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Gaps {
+    pub vertical: Vec<f32>,
+    pub horizontal: Vec<f32>,
+}
+
+/// As [`lay_out_parts`], with the parts meeting at the `gaps` seen between handles where there
+/// are any (the nearest to halfway), and a row's outer parts ending at the nearest gap beyond
+/// their handles: a door whose handle was missed stays a panel of its own instead of widening
+/// its neighbour.
+pub fn lay_out_parts_between(
+    front: &Front,
+    extent: FrontExtent,
+    handles: &[Handle],
+    flaps: bool,
+    gaps: &Gaps,
 ) -> Vec<PerceivedPart> {
     let width = extent.width();
     if width <= 0.0 || extent.z[1] <= extent.z[0] {
@@ -214,23 +238,36 @@ pub fn lay_out_parts(
         row.sort_by(|a, b| a.right.total_cmp(&b.right));
         meet_in_the_middle(row, middle, width);
     }
-    let bounds = row_bounds(&rows, extent, flaps);
+    let bounds = row_bounds(&rows, extent, flaps, &gaps.horizontal);
     rows.iter()
         .zip(bounds.windows(2))
         .flat_map(|(row, z)| {
             let z = [z[0], z[1]];
-            column_bounds(row, extent)
-                .windows(2)
+            // Doors pulled at their top pair up to meet in the middle: the first of a row hinges
+            // on its left, the next on its right, and so on.
+            let mut pulled_doors = 0;
+            column_bounds(row, extent, &gaps.vertical)
+                .into_iter()
                 .zip(row)
-                .map(|(x, p)| {
-                    let right = [x[0], x[1]];
+                .map(|(right, p)| {
                     let kind = match p.role {
                         Role::Edge if p.right - right[0] > right[1] - p.right => {
                             PartKind::Door { hinge: Side::Left }
                         }
                         Role::Edge => PartKind::Door { hinge: Side::Right },
-                        Role::Pull if pulls_a_flap(p, right, z, flaps) => PartKind::Flap,
-                        Role::Pull => PartKind::Drawer,
+                        Role::Pull => match pulled_kind(p, right, z, flaps) {
+                            Pulled::Flap => PartKind::Flap,
+                            Pulled::Drawer => PartKind::Drawer,
+                            Pulled::Door => {
+                                pulled_doors += 1;
+                                let hinge = if pulled_doors % 2 == 1 {
+                                    Side::Left
+                                } else {
+                                    Side::Right
+                                };
+                                PartKind::Door { hinge }
+                            }
+                        },
                     };
                     PerceivedPart {
                         kind,
@@ -244,13 +281,31 @@ pub fn lay_out_parts(
         .collect()
 }
 
-/// Whether the pulled part `right` by `z` is a flap: on a class with `flaps` when it is high
-/// enough, on any when it is higher than wide with its bar along its top quarter.
-fn pulls_a_flap(p: &Placed, right: [f32; 2], z: [f32; 2], flaps: bool) -> bool {
+/// How a part pulled by its handle opens.
+enum Pulled {
+    Flap,
+    Drawer,
+    /// A tall part at floor level with its bar along its top: a base unit's door (a flap there
+    /// would open onto the floor). Its hinge side is not seen: a centred handle says nothing.
+    Door,
+}
+
+/// How the pulled part `right` by `z` opens: as a flap on a class with `flaps` when it is high
+/// enough, on any other when it is higher than wide with its bar along its top quarter (Rusu et
+/// al.'s rule) unless it reaches down to the floor, where it is a door; else as a drawer.
+fn pulled_kind(p: &Placed, right: [f32; 2], z: [f32; 2], flaps: bool) -> Pulled {
     let (width, height) = (right[1] - right[0], z[1] - z[0]);
     let near_top = p.handle.center.z >= z[1] - FLAP_TOP_SHARE * height;
-    (flaps && height >= MIN_FLAP_HEIGHT_M)
-        || (p.handle.kind == HandleKind::Bar && height > width && near_top)
+    let tall_with_top_bar = p.handle.kind == HandleKind::Bar && height > width && near_top;
+    if flaps && height >= MIN_FLAP_HEIGHT_M {
+        Pulled::Flap
+    } else if tall_with_top_bar && z[0] <= FLOOR_LEVEL_M {
+        Pulled::Door
+    } else if tall_with_top_bar {
+        Pulled::Flap
+    } else {
+        Pulled::Drawer
+    }
 }
 
 /// Two knobs of a row straddling the front's middle close to it are the free edges of two doors
@@ -272,7 +327,7 @@ fn meet_in_the_middle(row: &mut [Placed], middle: f32, width: f32) {
 /// at the bottom or (without flaps) the top holds drawers with their pulls in the middle, so it
 /// reaches as far past its pulls as the extent's edge lies on their other side; rows in between
 /// meet halfway between their handles. Each bound keeps clear of both rows' handles.
-fn row_bounds(rows: &[Vec<Placed>], extent: FrontExtent, flaps: bool) -> Vec<f32> {
+fn row_bounds(rows: &[Vec<Placed>], extent: FrontExtent, flaps: bool, gaps: &[f32]) -> Vec<f32> {
     let mean_z =
         |row: &[Placed]| row.iter().map(|p| p.handle.center.z).sum::<f32>() / row.len() as f32;
     let pulls = |row: &[Placed]| row.iter().all(|p| p.role == Role::Pull);
@@ -299,8 +354,9 @@ fn row_bounds(rows: &[Vec<Placed>], extent: FrontExtent, flaps: bool) -> Vec<f32
             .fold(f32::MAX, f32::min)
             - HANDLE_CLEARANCE_M;
         let halfway = 0.5 * (zl + zu);
-        let bound = match reflected {
-            Some(b) if (lowest..=highest).contains(&b) => b,
+        let bound = match (nearest_between(gaps, lowest, highest, halfway), reflected) {
+            (Some(gap), _) => gap,
+            (None, Some(b)) if (lowest..=highest).contains(&b) => b,
             _ if lowest <= highest => halfway.clamp(lowest, highest),
             _ => halfway,
         };
@@ -313,7 +369,10 @@ fn row_bounds(rows: &[Vec<Placed>], extent: FrontExtent, flaps: bool) -> Vec<f32
 /// Where the parts of a row (sorted left to right) meet, with the extent's sides at the ends:
 /// equal widths, as units are built, when each handle then lies on its own part; else halfway
 /// between neighbouring handles.
-fn column_bounds(row: &[Placed], extent: FrontExtent) -> Vec<f32> {
+fn column_bounds(row: &[Placed], extent: FrontExtent, gaps: &[f32]) -> Vec<[f32; 2]> {
+    if !gaps.is_empty() {
+        return columns_at_gaps(row, extent, gaps);
+    }
     let n = row.len();
     let step = extent.width() / n as f32;
     let equal: Vec<f32> = (0..=n).map(|k| extent.right[0] + step * k as f32).collect();
@@ -322,12 +381,57 @@ fn column_bounds(row: &[Placed], extent: FrontExtent) -> Vec<f32> {
         .enumerate()
         .all(|(k, p)| (equal[k]..=equal[k + 1]).contains(&p.right));
     if each_on_its_own {
-        return equal;
+        return equal.windows(2).map(|w| [w[0], w[1]]).collect();
     }
     let mut bounds = vec![extent.right[0]];
     bounds.extend(row.windows(2).map(|w| 0.5 * (w[0].right + w[1].right)));
     bounds.push(extent.right[1]);
-    bounds
+    bounds.windows(2).map(|w| [w[0], w[1]]).collect()
+}
+
+/// The handle's reach along the front either way from its centre, metres.
+fn half_width(p: &Placed) -> f32 {
+    match p.handle.kind {
+        HandleKind::Bar => 0.5 * p.handle.length * p.handle.axis.truncate().length(),
+        HandleKind::Knob => 0.5 * p.handle.length,
+    }
+}
+
+/// Where the parts of a row lie with `gaps` seen (increasing): each handle's part runs between
+/// the nearest gaps beyond its handle's ends, or to the extent's sides; neighbours with no gap
+/// between them meet halfway between their handles.
+fn columns_at_gaps(row: &[Placed], extent: FrontExtent, gaps: &[f32]) -> Vec<[f32; 2]> {
+    let beside = |p: &Placed| {
+        let reach = half_width(p) + HANDLE_CLEARANCE_M;
+        let left = gaps
+            .iter()
+            .copied()
+            .filter(|g| *g > extent.right[0] && *g < p.right - reach)
+            .fold(extent.right[0], f32::max);
+        let right = gaps
+            .iter()
+            .copied()
+            .filter(|g| *g > p.right + reach && *g < extent.right[1])
+            .fold(extent.right[1], f32::min);
+        [left, right]
+    };
+    let mut columns: Vec<[f32; 2]> = row.iter().map(beside).collect();
+    for k in 1..row.len() {
+        if columns[k][0] < columns[k - 1][1] {
+            let halfway = 0.5 * (row[k - 1].right + row[k].right);
+            columns[k - 1][1] = halfway;
+            columns[k][0] = halfway;
+        }
+    }
+    columns
+}
+
+/// The one of `gaps` within `lowest..=highest` nearest to `target`.
+fn nearest_between(gaps: &[f32], lowest: f32, highest: f32, target: f32) -> Option<f32> {
+    gaps.iter()
+        .copied()
+        .filter(|g| (lowest..=highest).contains(g))
+        .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
 }
 
 #[cfg(test)]
@@ -364,6 +468,56 @@ mod tests {
             length: 0.03,
             depth: 0.025,
         }
+    }
+
+    #[test]
+    fn a_base_run_pulled_at_the_top_is_doors_in_pairs_split_at_the_gaps_seen() {
+        // Four 0.45 m doors from x = -0.9 to 0.9, from the plinth (0.1 m) to 0.85 m, with
+        // horizontal bars along their tops; the third's bar was missed. The gaps are seen
+        // (the third door's edges included) and the middle of two handles is not a gap.
+        let front = Front::new(Vec3::new(0.0, 0.0, 0.5), -Vec3::Y).expect("front");
+        let extent = FrontExtent {
+            right: [-0.9, 0.9],
+            z: [0.1, 0.85],
+        };
+        let bars = [
+            bar(-0.675, 0.8, false),
+            bar(-0.225, 0.8, false),
+            bar(0.675, 0.8, false),
+        ];
+        let gaps = Gaps {
+            vertical: vec![-0.45, 0.0, 0.45],
+            horizontal: Vec::new(),
+        };
+        let parts = lay_out_parts_between(&front, extent, &bars, false, &gaps);
+        let laid: Vec<(PartKind, [f32; 2])> = parts.iter().map(|p| (p.kind, p.right)).collect();
+        assert_eq!(
+            laid,
+            [
+                (PartKind::Door { hinge: Side::Left }, [-0.9, -0.45]),
+                (PartKind::Door { hinge: Side::Right }, [-0.45, 0.0]),
+                (PartKind::Door { hinge: Side::Left }, [0.45, 0.9]),
+            ]
+        );
+        assert!(parts.iter().all(|p| p.z == [0.1, 0.85]));
+        // Without the gaps the third door's width goes to its neighbours (equal widths).
+        let parts = lay_out_parts(&front, extent, &bars, false);
+        assert_eq!(parts.len(), 3);
+        assert!((parts[1].right[1] - 0.3).abs() < 1e-4, "{parts:?}");
+        // Lifted off the floor (a wall unit), the same front opens as flaps (Rusu et al.).
+        let high = FrontExtent {
+            right: extent.right,
+            z: [1.4, 2.15],
+        };
+        let lifted: Vec<Handle> = bars
+            .iter()
+            .map(|h| Handle {
+                center: h.center + Vec3::Z * 1.3,
+                ..*h
+            })
+            .collect();
+        let parts = lay_out_parts_between(&front, high, &lifted, false, &gaps);
+        assert!(parts.iter().all(|p| p.kind == PartKind::Flap), "{parts:?}");
     }
 
     #[test]

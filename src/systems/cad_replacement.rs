@@ -27,8 +27,11 @@ use crate::components::{
     ShapeRejection,
 };
 use crate::geometry::GravityBox;
+use crate::perception::front_marks::{FrontMarks, marks_seen};
+use crate::perception::front_texture::{View, ViewImages};
 use crate::perception::fronts::fitted_to_front;
 use crate::systems::contact_graph::SceneGravity;
+use crate::systems::ingest::InputSequence;
 use crate::systems::scene_graph::hang_frames;
 use crate::systems::scene_nodes::SceneNodes;
 
@@ -139,6 +142,53 @@ fn library(commands: &mut Commands, given: Option<Res<CadLibrary>>) -> Arc<CadDa
     }
 }
 
+/// What the frames show of the fronts on which the map's handles open no part, by object id
+/// (`perception::front_marks`): CadMatch reads them once, CadAlign perceives the fronts with them
+/// again.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct SeenFrontMarks(pub HashMap<String, FrontMarks>);
+
+/// The marks the frames of `sequence` show on the clear fronts of `objects` on which the map's
+/// handles open no part.
+fn marks_from_frames(
+    objects: &[ObservedObject],
+    sequence: &crate::io::sequence::Sequence,
+    gravity: &SceneGravity,
+) -> HashMap<String, FrontMarks> {
+    let aligned_from_world = gravity.0.aligned_from_world();
+    let views: Vec<View> = sequence
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(frame, record)| View {
+            frame,
+            world_from_camera: aligned_from_world * record.world_from_camera,
+        })
+        .collect();
+    let load = |frame: usize| {
+        sequence
+            .load_frame(frame)
+            .inspect_err(|e| tracing::warn!("a front's image: {e}"))
+            .ok()
+            .map(|f| ViewImages {
+                color: f.color,
+                depth: f.depth,
+            })
+    };
+    objects
+        .iter()
+        .filter_map(|o| {
+            let front = o.front.as_ref()?;
+            if !front.clear || !front.parts.is_empty() {
+                return None;
+            }
+            let marks = marks_seen(front, &sequence.camera, &views, load)?;
+            tracing::debug!("{}: its image shows {marks:?}", o.id);
+            Some((o.id.to_string(), marks))
+        })
+        .collect()
+}
+
 /// CadMatch: every object either rejected by the shape filters or given its ranked candidates.
 fn cad_match_stage(
     mut commands: Commands,
@@ -146,14 +196,23 @@ fn cad_match_stage(
     surfaces: Query<(&SceneEntity, &ObservedSurface)>,
     given: Option<Res<CadLibrary>>,
     method: Res<CadAlignMethod>,
+    (sequence, gravity): (Option<Res<InputSequence>>, Res<SceneGravity>),
 ) {
     let db = library(&mut commands, given);
     let graph = nodes.contact_graph();
     let points = observed_points(surfaces.iter());
     let entity_of = nodes.entities_by_id();
     let layout = layout_planes(&graph);
+    let marks = match sequence {
+        Some(sequence) => marks_from_frames(
+            &observed_objects(&graph, &points, &HashMap::new()),
+            &sequence.0,
+            &gravity,
+        ),
+        None => HashMap::new(),
+    };
     let mut objects = Vec::new();
-    for object in observed_objects(&graph, &points) {
+    for object in observed_objects(&graph, &points, &marks) {
         if let Some(front) = &object.front {
             commands
                 .entity(entity_of[object.id])
@@ -174,6 +233,7 @@ fn cad_match_stage(
             .entity(entity_of[object.id])
             .insert(CadCandidates(candidates));
     }
+    commands.insert_resource(SeenFrontMarks(marks));
 }
 
 /// CadAlign: every object's candidates aligned to its observed surface (a rejected object gets
@@ -186,12 +246,19 @@ fn cad_align_stage(
     candidates: Query<&CadCandidates>,
     library: Res<CadLibrary>,
     method: Res<CadAlignMethod>,
-    cache: Option<ResMut<CadAlignmentCache>>,
+    (cache, marks): (
+        Option<ResMut<CadAlignmentCache>>,
+        Option<Res<SeenFrontMarks>>,
+    ),
 ) {
     let graph = nodes.contact_graph();
     let points = observed_points(surfaces.iter());
     let entity_of = nodes.entities_by_id();
-    let objects = observed_objects(&graph, &points);
+    let objects = observed_objects(
+        &graph,
+        &points,
+        &marks.map(|m| m.0.clone()).unwrap_or_default(),
+    );
     let ranked: Vec<Vec<Candidate>> = objects
         .iter()
         .map(|o| {

@@ -8,12 +8,14 @@ use glam::Vec3;
 
 use crate::geometry::TriMesh;
 
-use crate::components::{ObservedSurface, Panoptic, SceneEntity, SegmentMesh, SightedOutline};
+use crate::components::{
+    CounterBody, ObservedSurface, Panoptic, SceneEntity, SegmentMesh, SightedOutline,
+};
 use crate::error::IsceneError;
 use crate::graph::build::{
     COUNTER_CLASS, ContactGraphParams, GraphEntity, build_contact_graph_with_surfaces,
 };
-use crate::graph::counters::{CounterParams, find_counter_tops};
+use crate::graph::counters::{CounterParams, counter_body, find_counter_tops};
 use crate::graph::gravity::{GravityReport, camera_up_hint, resolve_gravity};
 use crate::map::extract_mesh;
 use crate::systems::ingest::InputSequence;
@@ -69,7 +71,8 @@ fn resolve_scene_gravity(
 
 /// ContactGraph, second: a `counter` entity for each counter top among the map's surface that
 /// no entity claims (graph/counters.rs), its mesh the top's points (world frame, no triangles:
-/// the map saw a surface, not a solid; the contact graph stretches its box down to the floor).
+/// the map saw a surface, not a solid; the contact graph stretches its box down to the floor),
+/// with what the map saw under the top as its `CounterBody`.
 fn spawn_counters(
     mut commands: Commands,
     ids: Query<&SceneEntity>,
@@ -86,8 +89,25 @@ fn spawn_counters(
         .filter(|(_, entity)| *entity == 0)
         .map(|(p, _)| aligned_from_world.transform_point3(*p))
         .collect();
+    // What a counter's body may hold: surface nothing claims or a layout entity does (its front
+    // is a vertical plane a wall may take), never another object's.
+    let layout_or_unclaimed: Vec<Vec3> = surface
+        .voxels
+        .iter()
+        .filter(|(_, entity)| {
+            *entity == 0
+                || surface
+                    .entities
+                    .get(*entity as usize - 1)
+                    .is_some_and(|e| e.kind == crate::classes::EntityKind::Layout)
+        })
+        .map(|(p, _)| aligned_from_world.transform_point3(*p))
+        .collect();
     let world_from_aligned = aligned_from_world.inverse();
     let tops = find_counter_tops(&unclaimed, &CounterParams::default());
+    let counter_kind = crate::classes::ClassTable::builtin()
+        .get(COUNTER_CLASS)
+        .map_or(crate::classes::EntityKind::Rigid, |c| c.kind);
     let mut k = 0;
     for top in tops {
         // The next free id (a segmenter never names a counter, but stay safe).
@@ -98,6 +118,7 @@ fn spawn_counters(
                 break id;
             }
         };
+        let body = CounterBody(counter_body(&top, &layout_or_unclaimed));
         let mesh = TriMesh {
             positions: top
                 .iter()
@@ -110,9 +131,10 @@ fn spawn_counters(
             Panoptic {
                 instance: COUNTER_INSTANCE_BASE + k,
                 class: COUNTER_CLASS.into(),
-                kind: crate::classes::EntityKind::Rigid,
+                kind: counter_kind,
             },
             SegmentMesh(mesh),
+            body,
         ));
     }
 }
@@ -128,6 +150,7 @@ fn build_contact_graph(
         &Panoptic,
         &mut SegmentMesh,
         Option<&SightedOutline>,
+        Option<&CounterBody>,
     )>,
     gravity: Option<Res<SceneGravity>>,
     map: Option<Res<PanopticMap>>,
@@ -137,14 +160,14 @@ fn build_contact_graph(
         return;
     };
     let aligned_from_world = gravity.0.aligned_from_world();
-    for (.., mut mesh, _) in &mut entities {
+    for (_, _, _, mut mesh, ..) in &mut entities {
         mesh.0 = mesh.0.transformed(&aligned_from_world);
     }
     let mut rows: Vec<_> = entities.iter().collect();
     rows.sort_by_key(|(e, ..)| graph_order(*e));
     let aligned_outlines: Vec<Vec<Vec<Vec3>>> = rows
         .iter()
-        .map(|(.., outline)| {
+        .map(|(.., outline, _)| {
             outline.map_or_else(Vec::new, |o| {
                 o.0.iter()
                     .map(|points| {
@@ -160,7 +183,7 @@ fn build_contact_graph(
     let graph_entities: Vec<GraphEntity> = rows
         .iter()
         .zip(&aligned_outlines)
-        .map(|((_, id, p, mesh, _), sighted)| GraphEntity {
+        .map(|((_, id, p, mesh, ..), sighted)| GraphEntity {
             id: &id.0,
             class: &p.class,
             kind: p.kind,
@@ -175,7 +198,14 @@ fn build_contact_graph(
     );
     let by_id: HashMap<String, Entity> =
         rows.iter().map(|(e, id, ..)| (id.0.clone(), *e)).collect();
-    for (node, surface) in built.graph.nodes.iter().zip(built.surfaces) {
+    let bodies: HashMap<&str, &CounterBody> = rows
+        .iter()
+        .filter_map(|(_, id, .., body)| Some((id.0.as_str(), (*body)?)))
+        .collect();
+    for (node, mut surface) in built.graph.nodes.iter().zip(built.surfaces) {
+        if let Some(body) = bodies.get(node.id.as_str()) {
+            surface.extend_from_slice(&body.0);
+        }
         commands
             .entity(by_id[&node.id])
             .insert(ObservedSurface(surface));

@@ -11,7 +11,8 @@ use crate::cad::replace::matching::{Facing, ObservedObject};
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
 use crate::graph::ContactGraph;
-use crate::perception::fronts::{PerceivedFront, fitted_to_front, perceive_front};
+use crate::perception::front_marks::FrontMarks;
+use crate::perception::fronts::{PerceivedFront, fitted_to_front, perceive_front, with_marks};
 use crate::perception::handles::HandleKind;
 use crate::perception::parts::opens_as_flap;
 
@@ -41,10 +42,13 @@ const FACES_ITS_TABLE: [&str; 1] = ["chair"];
 const AT_TABLE_M: f32 = 0.5;
 
 /// The objects of `graph` that replacement works on (not layout, enough points), in node order.
-/// `points` gives each node id its observed surface points (aligned world).
+/// `points` gives each node id its observed surface points (aligned world), `marks` what the
+/// frames show of the fronts of some (`perception::front_marks`, read off the fronts perceived
+/// without them).
 pub fn observed_objects<'a>(
     graph: &'a ContactGraph,
     points: &'a HashMap<String, Vec<Vec3>>,
+    marks: &HashMap<String, FrontMarks>,
 ) -> Vec<ObservedObject<'a>> {
     // Wall planes face into the room.
     let walls: Vec<Plane> = graph
@@ -145,6 +149,10 @@ pub fn observed_objects<'a>(
                     .filter(|_| articulated)
                     .and_then(|f| perceive_front(&bbox, f.direction, p, flaps));
                 (facing, front)
+            };
+            let front = match (front, marks.get(&n.id)) {
+                (Some(front), Some(marks)) => Some(with_marks(front, marks, flaps)),
+                (front, _) => front,
             };
             // An open door or drawer (or what stands in front) is no part of the closed object
             // the models are fitted as.
