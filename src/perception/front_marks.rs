@@ -248,11 +248,12 @@ fn band_rows(texture: &FrontTexture, off_whole: &[bool]) -> Vec<bool> {
     let w = texture.width;
     (0..texture.height)
         .map(|r| {
+            let row = r * w..(r + 1) * w;
             let (mut seen, mut off_count) = (0usize, 0usize);
-            for i in r * w..(r + 1) * w {
-                if texture.texels[i].is_some() {
+            for (texel, off) in texture.texels[row.clone()].iter().zip(&off_whole[row]) {
+                if texel.is_some() {
                     seen += 1;
-                    off_count += usize::from(off_whole[i]);
+                    off_count += usize::from(*off);
                 }
             }
             seen > 0 && off_count as f32 >= BAND_SHARE * seen as f32

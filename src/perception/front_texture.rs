@@ -192,7 +192,7 @@ pub fn bake(rect: &FrontRect, camera: &Pinhole, views: &[(View, ViewImages)]) ->
         texels: vec![None; width * height],
     };
     // Every view's colour of every texel it sees, with how well it sees it there.
-    let samples: Vec<Vec<Option<([u8; 3], f32)>>> = (0..height * width)
+    let samples: Vec<Vec<Option<Sample>>> = (0..height * width)
         .map(|i| {
             let (right, z) = texture.texel_center((i % width) as f32, (i / width) as f32);
             let p = rect.point(right, z);
@@ -217,7 +217,7 @@ pub fn bake(rect: &FrontRect, camera: &Pinhole, views: &[(View, ViewImages)]) ->
                 .collect()
         })
         .collect();
-    let colour = |s: &Option<([u8; 3], f32)>| s.map(|(c, _)| c);
+    let colour = |s: &Option<Sample>| s.map(|(c, _)| c);
     let gains: Vec<[f32; 3]> = (0..views.len())
         .map(|k| exposure_gain(samples.iter().map(|s| (colour(&s[0]), colour(&s[k])))))
         .collect();
@@ -233,6 +233,9 @@ pub fn bake(rect: &FrontRect, camera: &Pinhole, views: &[(View, ViewImages)]) ->
     }
     texture
 }
+
+/// A view's colour of a texel, and how squarely and closely it sees it (larger is better).
+type Sample = ([u8; 3], f32);
 
 /// Overlapping samples fewer than this leave a view's gain at 1.
 const MIN_GAIN_SAMPLES: usize = 100;

@@ -139,19 +139,22 @@ fn spawn_counters(
     }
 }
 
+/// What the contact graph reads of a scene entity.
+type GraphEntityRow = (
+    Entity,
+    &'static SceneEntity,
+    &'static Panoptic,
+    &'static mut SegmentMesh,
+    Option<&'static SightedOutline>,
+    Option<&'static CounterBody>,
+);
+
 /// ContactGraph, last: the entities' meshes join the aligned world, and their contact graph
 /// (`graph::build`) is hung into the ECS as the support tree, each node with the surface it was
 /// built from.
 fn build_contact_graph(
     mut commands: Commands,
-    mut entities: Query<(
-        Entity,
-        &SceneEntity,
-        &Panoptic,
-        &mut SegmentMesh,
-        Option<&SightedOutline>,
-        Option<&CounterBody>,
-    )>,
+    mut entities: Query<GraphEntityRow>,
     gravity: Option<Res<SceneGravity>>,
     map: Option<Res<PanopticMap>>,
     surface: Option<Res<PanopticSurface>>,

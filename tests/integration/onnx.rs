@@ -302,7 +302,70 @@ fn the_kitchen_reconstructs_with_table_chairs_cups_and_a_counter_holding_the_mon
         &out.path().join("report.json"),
         "redkitchen_onnx_frames_0__2/report.json",
     );
+    the_counter_s_doors_are_seen_and_open_into_the_room(out.path(), &graph);
     panda_takes_a_cup_from_the_table_onto_the_counter(out.path(), &graph, table);
+}
+
+/// Issue 36 on the real kitchen: the red counter along the north wall shows four doors about
+/// 40 cm wide in the frames, each with a steel bar along its top and a groove between it and the
+/// next; the depth cannot resolve the bars (they stand out less than its noise), the front's
+/// image baked from the frames does. The fourth door's bar, in the shade of the corner, is
+/// lost in its image: three doors are found, each with its bar, hinged on a vertical axis,
+/// opening into the room through their whole range, and MuJoCo opens them to their limits
+/// without them meeting anything.
+fn the_counter_s_doors_are_seen_and_open_into_the_room(out: &Path, graph: &serde_json::Value) {
+    let nodes = graph["nodes"].as_array().expect("nodes");
+    let floor = nodes
+        .iter()
+        .find(|n| n["class"] == "floor")
+        .expect("a floor");
+    let xy = |v: &serde_json::Value| {
+        glam::Vec2::new(
+            v[0].as_f64().unwrap_or(0.0) as f32,
+            v[1].as_f64().unwrap_or(0.0) as f32,
+        )
+    };
+    let room = xy(&floor["box"]["center"]);
+    let counter = nodes
+        .iter()
+        .filter(|n| n["class"] == "counter")
+        .max_by_key(|n| n["parts"].as_array().map_or(0, Vec::len))
+        .expect("a counter");
+    let id = counter["id"].as_str().expect("id");
+    assert_eq!(counter["kind"], "articulated", "{counter}");
+    let parts = counter["parts"].as_array().expect("parts");
+    let with_bars = parts
+        .iter()
+        .filter(|p| p["handle"]["kind"] == "bar")
+        .count();
+    assert!(
+        (3..=4).contains(&with_bars) && with_bars == parts.len(),
+        "{id}: {with_bars} of {} parts with bar handles: {parts:?}",
+        parts.len()
+    );
+    let centre = xy(&counter["box"]["center"]);
+    for part in parts {
+        assert_eq!(part["source"], "perceived", "{part}");
+        let joint = &part["joint"];
+        assert_eq!(joint["type"], "revolute", "a door: {part}");
+        assert!(
+            joint["axis"][2].as_f64().is_some_and(|z| z.abs() > 0.99),
+            "a vertical hinge: {part}"
+        );
+        assert!(
+            joint["upper"].as_f64().is_some_and(|u| u >= 1.5),
+            "opens through its whole range: {part}"
+        );
+        let width = part["front"]["size"][0].as_f64().unwrap_or(0.0);
+        assert!((0.3..0.55).contains(&width), "a 40 cm door: {part}");
+        // The handle is on the side the room is.
+        let handle = xy(&part["handle"]["center"]);
+        assert!(
+            (handle - centre).dot(room - centre) > 0.0,
+            "{id}'s door faces away from the room: {part}"
+        );
+    }
+    crate::perceived_parts::mujoco_opens_every_part_of(out, id);
 }
 
 /// Issue 37 on the real kitchen: the Panda (`--robot`) takes a cup from the table onto the

@@ -142,7 +142,7 @@ fn a_cabinet_no_model_fits_gets_a_model_of_its_perceived_drawers() {
 
 /// MuJoCo loads `scene.xml` of `dir` and turns or slides every joint of `node` to both its
 /// limits without its parts meeting anything they did not meet closed.
-fn mujoco_opens_every_part_of(dir: &Path, node: &str) {
+pub(crate) fn mujoco_opens_every_part_of(dir: &Path, node: &str) {
     let python = common::validator(".venv-validators/bin/python");
     let mujoco_rest = common::validator("tests/external/mujoco_rest.py");
     let (code, stdout, stderr) = common::run_tool(&python, &[&mujoco_rest, &dir.join("scene.xml")]);

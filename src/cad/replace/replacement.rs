@@ -16,6 +16,7 @@ use crate::cad::replace::physical_check::{Holder, PlacedSolid, PlacementCheck, c
 use crate::cad::replace::sizing::pose_scale;
 use crate::classes::{ClassTable, EntityKind};
 use crate::geometry::{GravityBox, Plane};
+use crate::graph::build::COUNTER_CLASS;
 use crate::graph::{CadPlacement, ContactGraph};
 
 /// How candidates are chosen and aligned (`--align`).
@@ -142,6 +143,14 @@ pub fn check_and_place(
     // pieces of what was seen, `kinematics::link::observed_surface`), here their boxes: the
     // models must not enter those either (chairs tucked under a counter that no model
     // replaced), and what stands on one is snapped onto its top.
+    // A counter's solid is its own (`graph::build`): what no model replaced reaches into it only
+    // by its label bleeding down the counter's front, and stands above its top.
+    let counters: Vec<(&str, GravityBox)> = graph
+        .nodes
+        .iter()
+        .filter(|n| n.class == COUNTER_CLASS)
+        .map(|n| (n.id.as_str(), GravityBox::from(&n.bbox)))
+        .collect();
     let (obstacle_ids, obstacles): (Vec<&str>, Vec<PlacedSolid>) = graph
         .nodes
         .iter()
@@ -152,7 +161,11 @@ pub fn check_and_place(
                 .is_none_or(|i| alignments[i].is_empty())
         })
         .filter_map(|n| {
-            let gbox = GravityBox::from(&n.bbox);
+            let others = counters
+                .iter()
+                .filter(|(id, _)| *id != n.id)
+                .map(|(_, c)| c);
+            let gbox = above_counters(GravityBox::from(&n.bbox), others)?;
             let solid = PlacedSolid::from_hull(&gbox.corners())?;
             Some((n.id.as_str(), solid))
         })
@@ -286,6 +299,23 @@ pub fn check_and_place(
     }
 }
 
+/// `bbox` cut to above the top of the counter among `counters` its centre stands over, if it
+/// reaches into one; `None` when nothing of it is left above.
+fn above_counters<'a>(
+    bbox: GravityBox,
+    mut counters: impl Iterator<Item = &'a GravityBox>,
+) -> Option<GravityBox> {
+    let Some(counter) = counters.find(|c| c.contains(bbox.center.with_z(c.center.z), 0.0)) else {
+        return Some(bbox);
+    };
+    let (bottom, top) = (bbox.bottom_z().max(counter.top_z()), bbox.top_z());
+    (top > bottom).then(|| GravityBox {
+        center: bbox.center.with_z(0.5 * (bottom + top)),
+        size: bbox.size.with_z(top - bottom),
+        ..bbox
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -321,6 +351,35 @@ mod tests {
             alignment_error: 0.01,
             layout_error: 0.0,
         }
+    }
+
+    #[test]
+    fn what_no_model_replaced_reaches_into_a_counter_only_above_its_top() {
+        let counter = GravityBox {
+            center: Vec3::new(0.0, 3.0, 0.46),
+            yaw: 0.0,
+            size: Vec3::new(1.8, 0.6, 0.92),
+        };
+        // A bottle on the counter whose label ran down its front to the floor (7-Scenes).
+        let bled = GravityBox {
+            center: Vec3::new(0.2, 2.95, 0.565),
+            yaw: 0.3,
+            size: Vec3::new(0.16, 0.11, 1.13),
+        };
+        let cut = above_counters(bled, [counter].iter()).expect("its top");
+        assert!((cut.bottom_z() - 0.92).abs() < 1e-5 && (cut.top_z() - 1.13).abs() < 1e-5);
+        // A chair beside the counter, and one inside it entirely, below its top.
+        let beside = GravityBox {
+            center: Vec3::new(1.2, 3.0, 0.4),
+            ..bled
+        };
+        assert_eq!(above_counters(beside, [counter].iter()), Some(beside));
+        let under = GravityBox {
+            center: Vec3::new(0.0, 3.0, 0.3),
+            size: Vec3::new(0.4, 0.4, 0.6),
+            ..bled
+        };
+        assert_eq!(above_counters(under, [counter].iter()), None);
     }
 
     #[test]
