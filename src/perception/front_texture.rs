@@ -189,56 +189,65 @@ pub fn bake(rect: &FrontRect, camera: &Pinhole, views: &[(View, ViewImages)]) ->
         rect: *rect,
         width,
         height,
-        texels: vec![None; width * height],
+        texels: Vec::new(),
     };
-    // Every view's colour of every texel it sees, with how well it sees it there.
-    let samples: Vec<Vec<Option<Sample>>> = (0..height * width)
-        .map(|i| {
-            let (right, z) = texture.texel_center((i % width) as f32, (i / width) as f32);
-            let p = rect.point(right, z);
-            views
-                .iter()
-                .zip(&cameras)
-                .map(|((_, images), camera_from_world)| {
-                    let in_camera = camera_from_world.transform_point3(p);
-                    let (u, v) = in_image(camera, in_camera)?;
-                    let pixel = v * camera.width as usize + u;
-                    let depth = *images.depth.get(pixel)?;
-                    if depth <= 0.0 || (depth - in_camera.z).abs() > DEPTH_AGREES_M {
-                        return None;
-                    }
-                    let c = images.color.get(3 * pixel..3 * pixel + 3)?;
-                    // Squarely and closely: the texel's footprint in pixels.
-                    let square = -in_camera
-                        .normalize()
-                        .dot(camera_from_world.transform_vector3(rect.front.normal));
-                    Some(([c[0], c[1], c[2]], square / in_camera.length()))
-                })
-                .collect()
+    // View k's colour of texel i, with how well it sees it there.
+    let sample = |i: usize, k: usize| -> Option<Sample> {
+        let (right, z) = texture.texel_center((i % width) as f32, (i / width) as f32);
+        let p = rect.point(right, z);
+        let (images, camera_from_world) = (&views[k].1, &cameras[k]);
+        let in_camera = camera_from_world.transform_point3(p);
+        let (u, v) = in_image(camera, in_camera)?;
+        let pixel = v * camera.width as usize + u;
+        let depth = *images.depth.get(pixel)?;
+        if depth <= 0.0 || (depth - in_camera.z).abs() > DEPTH_AGREES_M {
+            return None;
+        }
+        let c = images.color.get(3 * pixel..3 * pixel + 3)?;
+        // Squarely and closely: the texel's footprint in pixels.
+        let square = -in_camera
+            .normalize()
+            .dot(camera_from_world.transform_vector3(rect.front.normal));
+        Some(([c[0], c[1], c[2]], square / in_camera.length()))
+    };
+    // The gains from every `GAIN_STEP`th texel each way: enough samples, and nothing held for
+    // every texel of a long run of units.
+    let probes: Vec<usize> = (0..height)
+        .step_by(GAIN_STEP)
+        .flat_map(|r| (0..width).step_by(GAIN_STEP).map(move |c| r * width + c))
+        .collect();
+    let gains: Vec<[f32; 3]> = (0..views.len())
+        .map(|k| {
+            exposure_gain(
+                probes
+                    .iter()
+                    .map(|&i| (sample(i, 0).map(|s| s.0), sample(i, k).map(|s| s.0))),
+            )
         })
         .collect();
-    let colour = |s: &Option<Sample>| s.map(|(c, _)| c);
-    let gains: Vec<[f32; 3]> = (0..views.len())
-        .map(|k| exposure_gain(samples.iter().map(|s| (colour(&s[0]), colour(&s[k])))))
+    let texels = (0..width * height)
+        .map(|i| {
+            let best = (0..views.len())
+                .filter_map(|k| Some((sample(i, k)?, gains[k])))
+                .max_by(|a, b| a.0.1.total_cmp(&b.0.1));
+            best.map(|((c, _), gain)| {
+                std::array::from_fn(|ch| {
+                    (f32::from(c[ch]) * gain[ch]).round().clamp(0.0, 255.0) as u8
+                })
+            })
+        })
         .collect();
-    for (texel, seen) in texture.texels.iter_mut().zip(&samples) {
-        let best = seen
-            .iter()
-            .zip(&gains)
-            .filter_map(|(sample, gain)| Some(((*sample)?, gain)))
-            .max_by(|a, b| a.0.1.total_cmp(&b.0.1));
-        *texel = best.map(|((c, _), gain)| {
-            std::array::from_fn(|ch| (f32::from(c[ch]) * gain[ch]).round().clamp(0.0, 255.0) as u8)
-        });
-    }
+    texture.texels = texels;
     texture
 }
 
 /// A view's colour of a texel, and how squarely and closely it sees it (larger is better).
 type Sample = ([u8; 3], f32);
 
-/// Overlapping samples fewer than this leave a view's gain at 1.
+/// Overlapping samples fewer than this leave a view's gain at 1 ...
 const MIN_GAIN_SAMPLES: usize = 100;
+/// ... taken every this many texels each way (1.2 cm).
+const GAIN_STEP: usize = 4;
 /// Channels darker than this (of 255) say little of a ratio.
 const MIN_GAIN_LEVEL: u8 = 10;
 
