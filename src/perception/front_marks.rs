@@ -2,10 +2,12 @@
 //! (`perception::front_texture`): what the map's depth cannot resolve on a real front. A handle
 //! is a compact patch whose colour differs from the front's around it, a bar long and thin along
 //! or across the front, a knob small and round (the shapes `perception::handles` fits to points);
-//! a gap is a dark line across most of the front, a groove's shadow.
+//! a gap is a line across the front a little darker than the front beside it, a groove's shadow.
 //!
-//! Colours are compared with the front's own colour nearby (the median of a block around each
-//! texel), not one colour for the whole front: light falls unevenly across a kitchen run.
+//! A handle's colour differs from the front's both overall and around it (a median over 12 cm):
+//! light falls unevenly across a kitchen run, and the red under a black worktop differs from the
+//! colour around it only. Rows mostly off the front's colour are bands along its edges (a
+//! worktop's lip, a plinth), never a handle; a handle has the front's colour all round it.
 
 use glam::Vec3;
 use rayon::prelude::*;
