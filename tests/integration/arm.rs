@@ -374,7 +374,10 @@ fn panda_task(
 /// The task in `out` (a `simulate --robot` output) replayed in MuJoCo: every joint of the CSV
 /// is in the model and nothing of the robot or in its hand goes 5 mm into the scene at any
 /// sample; the replay's figures (tests/external/mujoco_replay.py) for the caller's checks.
-fn replay_in_mujoco(out: &std::path::Path, rig: &iscene::arm::rig::ArmRig) -> serde_json::Value {
+pub(crate) fn replay_in_mujoco(
+    out: &std::path::Path,
+    rig: &iscene::arm::rig::ArmRig,
+) -> serde_json::Value {
     let python = common::validator(".venv-validators/bin/python");
     let script = common::root().join("tests/external/mujoco_replay.py");
     let tool = format!("robot_{}", rig.arm.links[rig.arm.tool].name);
@@ -572,7 +575,7 @@ fn task_file(name: &str) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(&path).expect("task")).expect("JSON")
 }
 
-fn panda_rig() -> iscene::arm::rig::ArmRig {
+pub(crate) fn panda_rig() -> iscene::arm::rig::ArmRig {
     let arm = Arm::read_urdf(&panda_urdf(), None).expect("the Panda reads");
     let base = iscene::sim::robot::RobotSpec::ARM_BASE;
     base.mount(iscene::arm::rig::ArmRig::new(arm, base.height))
