@@ -174,10 +174,10 @@ pub struct Gaps {
     pub horizontal: Vec<f32>,
 }
 
-/// As [`lay_out_parts`], with the parts meeting at the `gaps` seen between handles where there
-/// are any (the nearest to halfway), and a row's outer parts ending at the nearest gap beyond
-/// their handles: a door whose handle was missed stays a panel of its own instead of widening
-/// its neighbour.
+/// As [`lay_out_parts`], with the `gaps` seen: each handle's part runs between the nearest
+/// vertical gaps beyond its handle's ends (a door whose handle was missed stays a panel of its
+/// own instead of widening its neighbour), and rows meet at the horizontal gap nearest halfway
+/// between them.
 pub fn lay_out_parts_between(
     front: &Front,
     extent: FrontExtent,
@@ -366,9 +366,10 @@ fn row_bounds(rows: &[Vec<Placed>], extent: FrontExtent, flaps: bool, gaps: &[f3
     bounds
 }
 
-/// Where the parts of a row (sorted left to right) meet, with the extent's sides at the ends:
-/// equal widths, as units are built, when each handle then lies on its own part; else halfway
-/// between neighbouring handles.
+/// Where the parts of a row (sorted left to right) lie, each as [left, right]: between the
+/// `gaps` seen, where there are any ([`columns_at_gaps`]); else side by side across the extent,
+/// of equal widths, as units are built, when each handle then lies on its own part, or meeting
+/// halfway between neighbouring handles.
 fn column_bounds(row: &[Placed], extent: FrontExtent, gaps: &[f32]) -> Vec<[f32; 2]> {
     if !gaps.is_empty() {
         return columns_at_gaps(row, extent, gaps);
