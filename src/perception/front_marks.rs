@@ -18,6 +18,7 @@ use crate::perception::front_texture::{
 };
 use crate::perception::fronts::PerceivedFront;
 use crate::perception::handles::{Handle, HandleKind};
+use crate::perception::parts::Gaps;
 
 /// A front's image must cover at least this share of it to be read.
 const MIN_COVERAGE: f32 = 0.5;
@@ -107,22 +108,20 @@ const GAP_END_MARGIN_M: f32 = 0.05;
 const GAP_SIDE_MARGIN_M: f32 = 0.04;
 
 /// What a front's image shows: its handles (world frame, standing [`SEEN_HANDLE_OUT_M`] out of
-/// the front) and where its gaps run, vertical ones as distances along the front (the front's
-/// `right`, as `Front::local`), horizontal ones as heights.
+/// the front) and where its gaps run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrontMarks {
     pub handles: Vec<Handle>,
-    pub vertical_gaps: Vec<f32>,
-    pub horizontal_gaps: Vec<f32>,
+    pub gaps: Gaps,
 }
 
 fn brightness(c: [f32; 3]) -> f32 {
     (c[0] + c[1] + c[2]) / 3.0
 }
 
+/// The median of `values` (not empty), as the map takes it.
 fn median(mut values: Vec<f32>) -> f32 {
-    values.sort_by(f32::total_cmp);
-    values[values.len() / 2]
+    crate::map::median(&mut values)
 }
 
 /// The front's own colour overall: the median, channel by channel, of its texels seen.
@@ -134,12 +133,10 @@ fn front_colour(texture: &FrontTexture) -> Option<[f32; 3]> {
 
 /// The front's own colour around each texel: the median, channel by channel, of the texels seen
 /// within [`BASE_WINDOW`] of it, taken on a grid [`BASE_STEP`] apart (a median of row medians: a
-/// handle is too small to move it, a shade across the front is not). `None` when nothing is seen.
-fn front_colours(texture: &FrontTexture) -> Option<Vec<[f32; 3]>> {
+/// handle is too small to move it, a shade across the front is not); `whole` where nothing near
+/// is seen.
+fn front_colours(texture: &FrontTexture, whole: [f32; 3]) -> Vec<[f32; 3]> {
     let (w, h) = (texture.width, texture.height);
-    if texture.texels.iter().all(Option::is_none) {
-        return None;
-    }
     let (gw, gh) = (w.div_ceil(BASE_STEP), h.div_ceil(BASE_STEP));
     let reach = BASE_WINDOW / 2;
     // Medians along each row, at the grid's columns.
@@ -165,25 +162,23 @@ fn front_colours(texture: &FrontTexture) -> Option<Vec<[f32; 3]>> {
                 .then(|| std::array::from_fn(|ch| median(seen.iter().map(|t| t[ch]).collect())))
         })
         .collect();
-    let whole = front_colour(texture)?;
-    Some(
-        (0..w * h)
-            .map(|i| {
-                let (gc, gr) = (
-                    (i % w + BASE_STEP / 2) / BASE_STEP,
-                    (i / w + BASE_STEP / 2) / BASE_STEP,
-                );
-                grid[gr.min(gh - 1) * gw + gc.min(gw - 1)].unwrap_or(whole)
-            })
-            .collect(),
-    )
+    (0..w * h)
+        .map(|i| {
+            let (gc, gr) = (
+                (i % w + BASE_STEP / 2) / BASE_STEP,
+                (i / w + BASE_STEP / 2) / BASE_STEP,
+            );
+            grid[gr.min(gh - 1) * gw + gc.min(gw - 1)].unwrap_or(whole)
+        })
+        .collect()
 }
 
 /// The handles and gaps `texture` shows.
 pub fn front_marks(texture: &FrontTexture) -> FrontMarks {
-    let (Some(around), Some(whole)) = (front_colours(texture), front_colour(texture)) else {
+    let Some(whole) = front_colour(texture) else {
         return FrontMarks::default();
     };
+    let around = front_colours(texture, whole);
     let apart = |c: [u8; 3], base: [f32; 3]| {
         let d2: f32 = (0..3).map(|k| (f32::from(c[k]) - base[k]).powi(2)).sum();
         d2.sqrt() > OFF_COLOUR
@@ -204,8 +199,10 @@ pub fn front_marks(texture: &FrontTexture) -> FrontMarks {
         .collect();
     FrontMarks {
         handles: handles(texture, &off, &band_rows(texture, &off_whole)),
-        vertical_gaps: gaps(texture, true),
-        horizontal_gaps: gaps(texture, false),
+        gaps: Gaps {
+            vertical: gaps(texture, true),
+            horizontal: gaps(texture, false),
+        },
     }
 }
 
@@ -486,9 +483,9 @@ mod tests {
         }
         assert!((marks.handles[1].length - 0.2).abs() < 0.011, "{marks:?}");
         assert!(marks.handles[1].axis.abs_diff_eq(front.right, 1e-5));
-        assert_eq!(marks.vertical_gaps.len(), 1, "{marks:?}");
-        assert!((marks.vertical_gaps[0] - 0.6).abs() < 0.004, "{marks:?}");
-        assert!(marks.horizontal_gaps.is_empty(), "{marks:?}");
+        assert_eq!(marks.gaps.vertical.len(), 1, "{marks:?}");
+        assert!((marks.gaps.vertical[0] - 0.6).abs() < 0.004, "{marks:?}");
+        assert!(marks.gaps.horizontal.is_empty(), "{marks:?}");
     }
 
     #[test]
@@ -515,9 +512,9 @@ mod tests {
                 RED
             }
         }));
-        assert!(marks.vertical_gaps.is_empty(), "{marks:?}");
-        assert_eq!(marks.horizontal_gaps.len(), 2, "{marks:?}");
-        assert!((marks.horizontal_gaps[0] - 0.35).abs() < 0.004, "{marks:?}");
-        assert!((marks.horizontal_gaps[1] - 0.55).abs() < 0.004, "{marks:?}");
+        assert!(marks.gaps.vertical.is_empty(), "{marks:?}");
+        assert_eq!(marks.gaps.horizontal.len(), 2, "{marks:?}");
+        assert!((marks.gaps.horizontal[0] - 0.35).abs() < 0.004, "{marks:?}");
+        assert!((marks.gaps.horizontal[1] - 0.55).abs() < 0.004, "{marks:?}");
     }
 }

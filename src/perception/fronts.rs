@@ -15,7 +15,7 @@ use crate::perception::handles::{Front, Handle, HandleKind, find_handles};
 use crate::perception::open_doors::{OpenDoor, open_doors};
 use crate::perception::open_drawers::{OpenDrawer, open_drawers};
 use crate::perception::parts::{
-    FrontExtent, Gaps, PerceivedPart, front_extent, lay_out_parts, lay_out_parts_between,
+    FrontExtent, PerceivedPart, front_extent, lay_out_parts, lay_out_parts_between,
 };
 
 /// The front's points are those within its rectangle grown by this much sideways, metres (a
@@ -190,11 +190,7 @@ pub fn with_marks(seen: PerceivedFront, marks: &FrontMarks, flaps: bool) -> Perc
     if !seen.parts.is_empty() || marks.handles.is_empty() {
         return seen;
     }
-    let gaps = Gaps {
-        vertical: marks.vertical_gaps.clone(),
-        horizontal: marks.horizontal_gaps.clone(),
-    };
-    let parts = lay_out_parts_between(&seen.front, seen.extent, &marks.handles, flaps, &gaps);
+    let parts = lay_out_parts_between(&seen.front, seen.extent, &marks.handles, flaps, &marks.gaps);
     PerceivedFront {
         handles: marks.handles.clone(),
         parts,

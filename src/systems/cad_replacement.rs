@@ -203,16 +203,20 @@ fn cad_match_stage(
     let points = observed_points(surfaces.iter());
     let entity_of = nodes.entities_by_id();
     let layout = layout_planes(&graph);
+    // The fronts perceived in the map say which to read in the frames; only what the frames
+    // showed asks for the objects again.
+    let unmarked = observed_objects(&graph, &points, &HashMap::new());
     let marks = match sequence {
-        Some(sequence) => marks_from_frames(
-            &observed_objects(&graph, &points, &HashMap::new()),
-            &sequence.0,
-            &gravity,
-        ),
+        Some(sequence) => marks_from_frames(&unmarked, &sequence.0, &gravity),
         None => HashMap::new(),
     };
+    let observed = if marks.is_empty() {
+        unmarked
+    } else {
+        observed_objects(&graph, &points, &marks)
+    };
     let mut objects = Vec::new();
-    for object in observed_objects(&graph, &points, &marks) {
+    for object in observed {
         if let Some(front) = &object.front {
             commands
                 .entity(entity_of[object.id])

@@ -311,24 +311,7 @@ fn the_kitchen_reconstructs_with_table_chairs_cups_and_a_counter_holding_the_mon
 /// the start north of the table the Panda opens the counter, planned from the goal; every arm
 /// motion runs in rapier before it is made, and in MuJoCo's replay the hand stays on the handle.
 fn panda_opens_the_counter(rec: &Path, counter: &str) {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let task = dir.path().join("task.json");
-    std::fs::write(
-        &task,
-        serde_json::json!({
-            "start": {"position": [-1.0, 2.45], "yaw_deg": -90},
-            "goals": [format!("{counter} open")],
-        })
-        .to_string(),
-    )
-    .expect("task");
-    let out = dir.path().join("sim");
-    let (code, stdout, stderr) = common::simulate(rec, &task, &out, Some(&common::panda_urdf()));
-    assert_eq!(code, 0, "{stdout}{stderr}");
-    let trace: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
-            .expect("JSON");
-    assert_eq!(trace["success"], true, "{}", trace["steps"]);
+    let (_dir, out, _) = panda_succeeds_from_north_of_the_table(rec, &format!("{counter} open"));
     let replay = crate::arm::replay_in_mujoco(&out, &crate::arm::panda_rig());
     assert!(
         replay["part_samples"].as_u64().is_some_and(|n| n >= 20),
@@ -417,7 +400,7 @@ fn panda_takes_a_cup_from_the_table_onto_the_counter(
     graph: &serde_json::Value,
     table: &str,
 ) {
-    let start = glam::Vec2::new(-1.0, 2.45);
+    let start = NORTH_OF_THE_TABLE;
     let nodes = graph["nodes"].as_array().expect("nodes");
     let centre = |n: &serde_json::Value| {
         glam::Vec2::new(
@@ -446,13 +429,37 @@ fn panda_takes_a_cup_from_the_table_onto_the_counter(
             .to_string()
     };
     let (cup, counter) = (nearest("cup", Some(table)), nearest("counter", None));
+    let (_dir, out, trace) =
+        panda_succeeds_from_north_of_the_table(rec, &format!("{cup} on {counter}"));
+    for step in trace["steps"].as_array().expect("steps") {
+        for check in step["motion"].as_array().expect("motion checks") {
+            assert!(
+                check["knocked"].as_array().is_some_and(Vec::is_empty),
+                "{check}"
+            );
+        }
+    }
+    crate::arm::assert_supports(&out, &counter, &cup);
+    crate::arm::replay_holding(&out, "cup");
+}
+
+/// Where the Panda starts on the real kitchen's reconstruction: north of the table, facing south.
+const NORTH_OF_THE_TABLE: glam::Vec2 = glam::Vec2::new(-1.0, 2.45);
+
+/// Runs the Panda on `rec` for `goal` from [`NORTH_OF_THE_TABLE`], asserting that it succeeds:
+/// the folder holding the output, the output (`simulate`'s) and its trace.
+fn panda_succeeds_from_north_of_the_table(
+    rec: &Path,
+    goal: &str,
+) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
     let dir = tempfile::tempdir().expect("tempdir");
     let task = dir.path().join("task.json");
+    let start = NORTH_OF_THE_TABLE;
     std::fs::write(
         &task,
         serde_json::json!({
             "start": {"position": [start.x, start.y], "yaw_deg": -90},
-            "goals": [format!("{cup} on {counter}")],
+            "goals": [goal],
         })
         .to_string(),
     )
@@ -464,16 +471,7 @@ fn panda_takes_a_cup_from_the_table_onto_the_counter(
         serde_json::from_str(&std::fs::read_to_string(out.join("trace.json")).expect("trace"))
             .expect("JSON");
     assert_eq!(trace["success"], true, "{}", trace["steps"]);
-    for step in trace["steps"].as_array().expect("steps") {
-        for check in step["motion"].as_array().expect("motion checks") {
-            assert!(
-                check["knocked"].as_array().is_some_and(Vec::is_empty),
-                "{check}"
-            );
-        }
-    }
-    crate::arm::assert_supports(&out, &counter, &cup);
-    crate::arm::replay_holding(&out, "cup");
+    (dir, out, trace)
 }
 
 /// Issue 6's bar on the real kitchen's exports: check_urdf silent with every link; MuJoCo loads
