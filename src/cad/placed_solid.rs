@@ -21,6 +21,7 @@ const STANDING_BAND_M: std::ops::RangeInclusive<f32> = 0.001..=0.005;
 const SUPPORT_SAMPLES: usize = 8;
 
 /// A model placed in the world as solid convex pieces (the primitives it is built from).
+#[derive(Clone)]
 pub struct PlacedSolid {
     pub(crate) pieces: Vec<(ConvexPolyhedron, Vec3, Vec3)>,
     /// Bounds of the whole model.

@@ -345,7 +345,7 @@ mod tests {
     use crate::cad::ParametricLibrary;
     use crate::graph::{BoxJson, CadPlacement};
     use crate::kinematics::JointKind;
-    use crate::kinematics::observed::observed_surface;
+    use crate::kinematics::observed::{INTO_LAYOUT_SLACK_M, observed_surface};
 
     fn node(id: &str, class: &str, kind: EntityKind, gbox: GravityBox) -> GraphNode {
         GraphNode {
@@ -540,7 +540,7 @@ mod tests {
             yaw: 0.0,
             size: Vec3::new(1.2, 0.8, 0.75),
         };
-        let shape = observed_surface(&seen, &table, &[cup], &[cup]);
+        let shape = observed_surface(&seen, &table, &[cup], &[cup], &[]);
         let (lo, hi) = shape.surface.bounds().expect("the top");
         assert!(
             hi.y < 1.41 && lo.y > 0.59,
@@ -576,6 +576,47 @@ mod tests {
             })
         });
         assert!(holding.count() >= 1);
+    }
+
+    #[test]
+    fn what_an_unmodelled_object_is_made_of_stops_at_the_layout() {
+        // A tall "book" segment of the wall over a cabinet (seed 1): a sheet of the map from
+        // 4 cm behind the wall's face at x = 0 to 3 cm in front of it.
+        let slab = GravityBox {
+            center: Vec3::new(-0.005, 2.6, 1.85),
+            yaw: 0.0,
+            size: Vec3::new(0.07, 0.23, 1.87),
+        };
+        let seen = fine_cuboid(
+            Vec3::new(-0.04, 2.49, 0.92),
+            Vec3::new(0.03, 2.71, 2.78),
+            0.02,
+        );
+        let wall = GravityBox {
+            center: Vec3::new(-0.05, 2.5, 1.4),
+            yaw: 0.0,
+            size: Vec3::new(0.1, 5.0, 2.8),
+        };
+        let unclipped = observed_surface(&seen, &slab, &[], &[], &[]);
+        let (lo, _) = unclipped.surface.bounds().expect("a surface");
+        assert!(lo.x < -0.03, "the sheet reaches behind the wall: {lo}");
+        let clipped = observed_surface(&seen, &slab, &[], &[], &[wall]);
+        let (lo, hi) = clipped.surface.bounds().expect("its front");
+        assert!(
+            lo.x >= -INTO_LAYOUT_SLACK_M,
+            "nothing behind the face: {lo}"
+        );
+        assert!(hi.x > 0.025, "what stands before the wall stays: {hi}");
+        // A wall elsewhere (past the sheet's end along it) cuts nothing.
+        let elsewhere = GravityBox {
+            center: Vec3::new(-0.05, 6.0, 1.4),
+            ..wall
+        };
+        let kept = observed_surface(&seen, &slab, &[], &[], &[elsewhere]);
+        assert_eq!(
+            kept.surface.triangles.len(),
+            unclipped.surface.triangles.len()
+        );
     }
 
     #[test]

@@ -6,6 +6,7 @@ pub mod height_fit;
 pub mod icp;
 pub mod matching;
 pub mod observed_objects;
+pub mod on_holder;
 pub mod orientation;
 pub mod physical_check;
 pub mod placement_verdict;

@@ -20,7 +20,7 @@ use crate::cad::replace::height_fit::fit_heights_to_children;
 use crate::cad::replace::placement_verdict::placement_verdicts;
 use crate::cad::replace::separation::{parted, retreat_from_walls, separate_neighbours};
 use crate::cad::replace::sizing::built_to_fit;
-use crate::cad::replace::snapping::snap_onto_holders;
+use crate::cad::replace::snapping::{Snapped, snap_onto_holders};
 use crate::geometry::Plane;
 
 /// Deeper interpenetration than this (metres) is a conflict (the bar).
@@ -56,7 +56,8 @@ pub struct PlacementCheck {
     /// to it), any into an obstacle, failed support tests, tipping over.
     pub conflicts: usize,
     /// How far it was pulled apart from its neighbours and out of walls (metres): moved, for a
-    /// movable object, or taken off its width or depth, for a fixed one. Over a few centimetres
+    /// movable object, or taken off its width or depth, for a fixed one; with how far a
+    /// movable object overhanging what holds it was slid back onto it (`on_holder`). Over a few centimetres
     /// this is the map's segmentation at fault (one label bled over the neighbour) or a model
     /// deeper than the object (big handles), fixed here, not hidden.
     pub separated_m: f32,
@@ -215,13 +216,12 @@ pub fn check_placements(
         .map(|i| choice[i].map(|k| alignments[i][k].0))
         .collect();
     let retreated_m = retreat_from_walls(&models, movable, layout, &mut poses);
-    let separated_m: Vec<f32> =
-        separate_neighbours(&models, holders, movable, obstacles, &mut poses)
-            .iter()
-            .zip(&retreated_m)
-            .map(|(a, b)| a + b)
-            .collect();
-    let finals = snap_onto_holders(&models, holders, obstacles, &mut poses);
+    let separated = separate_neighbours(&models, holders, movable, obstacles, &mut poses);
+    let Snapped { finals, slid_m } =
+        snap_onto_holders(&models, holders, movable, obstacles, &mut poses);
+    let separated_m: Vec<f32> = (0..n)
+        .map(|i| separated[i] + retreated_m[i] + slid_m[i])
+        .collect();
     let checks = placement_verdicts(
         &finals,
         &choice,
