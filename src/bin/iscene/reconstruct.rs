@@ -100,7 +100,8 @@ pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<()
                 )
             }
         );
-        // Pulled apart by more than a voxel or two: the map's segmentation at fault.
+        // Moved by more than a voxel or two (pulled apart from neighbours, out of a wall, back
+        // onto what holds it): the map's segmentation or the fit at fault.
         let parted: Vec<String> = cad
             .replaced
             .iter()
@@ -109,7 +110,7 @@ pub(crate) fn reconstruct(args: ReconstructArgs, interactive: bool) -> Result<()
             .collect();
         if !parted.is_empty() {
             println!(
-                "           pulled apart from overlapping neighbours: {}",
+                "           moved to fit (apart, off a wall, onto a holder): {}",
                 parted.join(", ")
             );
         }

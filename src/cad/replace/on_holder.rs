@@ -3,17 +3,17 @@
 //! pulled apart from its neighbours (`separation`), can end with half its bottom past its
 //! support's edge. The physical check's support bar (half the bottom held) lets that pass, and a
 //! simulator drops it: over seeds 0-49, a box held on 0.50 of its bottom fell 72 cm off its
-//! cabinet (seed 31), a cup held on 0.50 tipped 15 degrees (seed 16), and a cup held on 0.75, a
-//! quarter of it on the 2 cm edge of an open drawer's front, fell 96 cm (seed 22).
+//! cabinet (seed 31), and a cup held on 0.50 tipped 15 degrees (seed 16). A slide that would
+//! push the object into a neighbour is no way back: a cup pulled to the edge by the neighbour
+//! behind it stays there, and the rest test reports it (seed 22).
 
 use glam::{Affine3A, Vec2};
 
 use crate::cad::db::database::DatabaseModel;
-
 use crate::cad::placed_solid::{PlacedSolid, penetration_depth, support_area};
 
 /// A movable object held on less than this share of its bottom rectangle is slid back.
-pub(crate) const FULLY_HELD: f32 = 0.9;
+const FULLY_HELD: f32 = 0.9;
 /// Horizontal directions tried, evenly spaced (the first along +x: deterministic ties).
 const SLIDE_DIRECTIONS: usize = 16;
 /// Step (metres) of the slide distances tried, nearest first.

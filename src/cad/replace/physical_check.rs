@@ -56,10 +56,10 @@ pub struct PlacementCheck {
     /// to it), any into an obstacle, failed support tests, tipping over.
     pub conflicts: usize,
     /// How far it was pulled apart from its neighbours and out of walls (metres): moved, for a
-    /// movable object, or taken off its width or depth, for a fixed one; with how far a
-    /// movable object overhanging what holds it was slid back onto it (`on_holder`). Over a few centimetres
-    /// this is the map's segmentation at fault (one label bled over the neighbour) or a model
-    /// deeper than the object (big handles), fixed here, not hidden.
+    /// movable object, or taken off its width or depth, for a fixed one; with how far a movable
+    /// object overhanging what holds it was slid back onto it (`on_holder`). Over a few
+    /// centimetres this is the map's segmentation at fault (one label bled over the neighbour)
+    /// or a model deeper than the object (big handles), fixed here, not hidden.
     pub separated_m: f32,
     /// Its centre of mass is not over what it stands on (`PlacedSolid::stands`).
     pub tips_over: bool,

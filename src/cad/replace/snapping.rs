@@ -15,6 +15,7 @@ use crate::cad::replace::physical_check::Holder;
 /// a few centimetres taller or lower than the surface the child was seen on (a table model
 /// scaled to the whole table segment, chairs and all).
 const SNAP_HEIGHT_BAND_M: f32 = 0.1;
+
 /// The models as finally placed, and how far each was slid onto what holds it (metres).
 pub struct Snapped {
     pub finals: Vec<Option<PlacedSolid>>,
