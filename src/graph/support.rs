@@ -292,19 +292,85 @@ fn support_of(
                     && footprint.overlap_with_box(&parent.bbox) >= params.min_area
             })
             .max_by(|a, b| a.1.bbox.top_z().total_cmp(&b.1.bbox.top_z()));
-        if let Some((parent, holder)) = under {
-            let top = holder.bbox.top_z();
+        let under = under.map(|(parent, holder)| (parent, holder.bbox.top_z()));
+        // Or the board it stands on inside another's box, seen around it but hidden under it
+        // (a bottle on a shelf's board, which the floor took, its box stretched 0.8 m down).
+        let inside = board_inside(child, entities, params);
+        let nearest = [under, inside]
+            .into_iter()
+            .flatten()
+            .min_by(|a, b| (bottom - a.1).abs().total_cmp(&(bottom - b.1).abs()));
+        if let Some((parent, height)) = nearest {
             return Some(SupportChoice::Below {
                 parent,
-                plane: Plane::from_point_normal(Vec3::new(0.0, 0.0, top), Vec3::Z),
-                score: (1.0 - (bottom - top).abs().min(1.0))
-                    * footprint.overlap_with_box(&holder.bbox),
+                plane: Plane::from_point_normal(Vec3::new(0.0, 0.0, height), Vec3::Z),
+                score: (1.0 - (bottom - height).abs().min(1.0))
+                    * footprint.overlap_with_box(&entities[parent].bbox),
                 registered: true,
             });
         }
     }
     // Nothing better: the floor, however far below (legs that were never seen).
     best
+}
+
+/// Grid cells (`area_cell` wide) holding a parent's surface seen beside a child's footprint
+/// (within `surface_reach`), at one height (within `plane_band` of their median), that make the
+/// board it stands on: a board's edge seen along a bottle is a row of them; a table's legs
+/// beside a box under it are a cell or two each, at every height.
+const BOARD_MIN_CELLS: usize = 4;
+
+/// The object whose box the footprint of `child` stands in, from below its bottom to above it,
+/// whose surface is seen beside the child's footprint at its bottom (within `max_gap` under it
+/// or `above_tolerance` over it, in `BOARD_MIN_CELLS` at one height), and that height: the
+/// board it stands on, hidden under it. The innermost such box (highest bottom) when several
+/// hold it.
+fn board_inside(
+    child: usize,
+    entities: &[SupportEntity],
+    params: &SupportParams,
+) -> Option<(usize, f32)> {
+    let c = &entities[child];
+    let bottom = c.bbox.bottom_z();
+    let footprint = Footprint::of(&c.bbox);
+    let ring = Footprint::of(&GravityBox {
+        size: c.bbox.size + Vec3::new(2.0, 2.0, 0.0) * params.surface_reach,
+        ..c.bbox
+    });
+    entities
+        .iter()
+        .enumerate()
+        .filter(|(p, parent)| {
+            *p != child
+                && parent.kind != EntityKind::Layout
+                && parent.bbox.bottom_z() < bottom
+                && parent.bbox.top_z() > bottom + params.above_tolerance
+                && footprint.overlap_with_box(&parent.bbox) >= params.min_area
+        })
+        .filter_map(|(p, parent)| {
+            let beside: Vec<&Vec3> = parent
+                .vertices
+                .iter()
+                .filter(|v| {
+                    v.z >= bottom - params.max_gap && v.z <= bottom + params.above_tolerance
+                })
+                .filter(|v| ring.contains(v.truncate()) && !footprint.contains(v.truncate()))
+                .collect();
+            let mut heights: Vec<f32> = beside.iter().map(|v| v.z).collect();
+            heights.sort_by(f32::total_cmp);
+            let height = *heights.get(heights.len() / 2)?;
+            let cells: std::collections::BTreeSet<(i32, i32)> = beside
+                .iter()
+                .filter(|v| (v.z - height).abs() <= params.plane_band)
+                .map(|v| {
+                    let cell = (v.truncate() / params.area_cell).floor();
+                    (cell.x as i32, cell.y as i32)
+                })
+                .collect();
+            (cells.len() >= BOARD_MIN_CELLS).then_some((p, parent.bbox.bottom_z(), height))
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(p, _, height)| (p, height))
 }
 
 /// Height of `plane` above the floor point `xy` (planes here are near horizontal).
@@ -565,6 +631,55 @@ mod tests {
             matches!(supports[2], Some(SupportChoice::Below { parent: 0, .. })),
             "{:?}",
             supports[2]
+        );
+    }
+
+    #[test]
+    fn a_bottle_on_a_shelf_board_hidden_under_it_stands_in_the_shelf_not_on_the_floor() {
+        let floor = slab(Vec3::new(2.0, 2.0, -0.05), Vec3::new(4.0, 4.0, 0.1));
+        // A shelf 1.6 m tall whose board at 0.82 m is seen only as its front edge, a row of
+        // vertices beside the bottle; its other surfaces are the sides and top.
+        let shelf = slab(Vec3::new(1.0, 1.0, 0.8), Vec3::new(0.9, 0.4, 1.6));
+        let mut shelf_vertices = top_vertices(&shelf);
+        shelf_vertices.extend((0..30).map(|i| Vec3::new(0.7 + 0.01 * i as f32, 0.82, 0.82)));
+        let bottle = slab(Vec3::new(0.85, 0.9, 0.93), Vec3::new(0.07, 0.07, 0.22));
+        let up = |b: &GravityBox| Plane::from_point_normal(Vec3::new(0.0, 0.0, b.top_z()), Vec3::Z);
+        let planes = [vec![up(&floor)], vec![up(&shelf)], vec![]];
+        let vertices = [vec![], shelf_vertices, vec![]];
+        let boxes = [floor, shelf, bottle];
+        let classes = ["floor", "shelf", "bottle"];
+        let entities = floor_parent_child(&classes, &boxes, &planes, &vertices);
+        match infer_supports(&entities, &SupportParams::default())[2] {
+            Some(SupportChoice::Below {
+                parent,
+                plane,
+                registered,
+                ..
+            }) => {
+                assert_eq!(parent, 1, "in the shelf, not on the floor");
+                assert!((plane_height(&plane, Vec2::ZERO) - 0.82).abs() < 1e-4);
+                assert!(registered);
+            }
+            other => panic!("{other:?}"),
+        }
+        // A box under a table, its bottom unseen, two of the table's legs beside it: a cell each
+        // at every height make no board, and the floor holds it.
+        let table = slab(Vec3::new(1.0, 1.0, 0.375), Vec3::new(1.2, 0.8, 0.75));
+        let mut table_vertices = top_vertices(&table);
+        table_vertices.extend((0..75).map(|i| Vec3::new(0.42, 0.62, 0.01 * i as f32)));
+        table_vertices.extend((0..75).map(|i| Vec3::new(0.58, 0.62, 0.01 * i as f32)));
+        let low_box = slab(Vec3::new(0.5, 0.7, 0.3), Vec3::new(0.12, 0.12, 0.2));
+        let planes = [vec![up(&floor)], vec![up(&table)], vec![]];
+        let vertices = [vec![], table_vertices, vec![]];
+        let boxes = [floor, table, low_box];
+        let classes = ["floor", "table", "box"];
+        let entities = floor_parent_child(&classes, &boxes, &planes, &vertices);
+        assert!(
+            matches!(
+                infer_supports(&entities, &SupportParams::default())[2],
+                Some(SupportChoice::Below { parent: 0, .. })
+            ),
+            "on the floor"
         );
     }
 
