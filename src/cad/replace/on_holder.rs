@@ -22,6 +22,12 @@ const SLIDE_STEP_M: f32 = 0.005;
 /// already is: the check's separation leaves neighbours 2 mm apart.
 const SLIDE_CONTACT_SLACK_M: f32 = 0.001;
 
+/// Whether `solid` stands on less than `FULLY_HELD` of its bottom on `holder`: what `slide_onto`
+/// slides.
+pub(crate) fn overhangs(solid: &PlacedSolid, holder: &PlacedSolid) -> bool {
+    support_area(solid, holder) < FULLY_HELD
+}
+
 /// The shortest horizontal slide of `solid` (a movable object's model at `pose`) that puts at
 /// least `FULLY_HELD` of its bottom on `holder`'s surface without taking it deeper into the
 /// holder or any of `neighbours`, at most half its bottom's longer side (as far as a bottom half
@@ -34,7 +40,7 @@ pub(crate) fn slide_onto(
     holder: &PlacedSolid,
     neighbours: &[PlacedSolid],
 ) -> Option<(Affine3A, f32)> {
-    if support_area(solid, holder) >= FULLY_HELD {
+    if !overhangs(solid, holder) {
         return None;
     }
     let [c0, c1, _, c3] = solid.footprint;
@@ -68,30 +74,30 @@ mod tests {
     use super::*;
     use crate::cad::db::database::CadDatabase;
 
-    fn model_of<'a>(db: &'a CadDatabase, id: &str) -> &'a DatabaseModel {
-        db.models()
-            .iter()
-            .find(|m| m.model.id == id)
-            .expect("model")
+    fn model<'a>(db: &'a CadDatabase, id: &str) -> &'a DatabaseModel {
+        db.get(id).expect("a library model")
+    }
+
+    /// The library's table at the origin.
+    fn table(db: &CadDatabase) -> PlacedSolid {
+        PlacedSolid::new(model(db, "table_01"), &Affine3A::IDENTITY)
     }
 
     /// The library's table at the origin, and the cup standing on its top at `xy`.
     fn cup_on_table(db: &CadDatabase, xy: Vec2) -> (PlacedSolid, PlacedSolid, Affine3A) {
-        let table = PlacedSolid::new(model_of(db, "table_01"), &Affine3A::IDENTITY);
+        let table = table(db);
         let pose = Affine3A::from_translation(xy.extend(table.hi.z));
-        let cup = PlacedSolid::new(model_of(db, "cup_01"), &pose);
+        let cup = PlacedSolid::new(model(db, "cup_01"), &pose);
         (table, cup, pose)
     }
 
     #[test]
     fn a_cup_half_over_the_edge_slides_back_onto_the_table_the_shortest_way() {
         let db = CadDatabase::parametric();
-        let edge = PlacedSolid::new(model_of(&db, "table_01"), &Affine3A::IDENTITY)
-            .hi
-            .x;
+        let edge = table(&db).hi.x;
         let (table, cup, pose) = cup_on_table(&db, Vec2::new(edge, 0.0));
         assert!(support_area(&cup, &table) < FULLY_HELD);
-        let model = model_of(&db, "cup_01");
+        let model = model(&db, "cup_01");
         let (slid, distance) = slide_onto(&cup, &pose, model, &table, &[]).expect("a slide");
         assert!(support_area(&PlacedSolid::new(model, &slid), &table) >= FULLY_HELD);
         let shift = Vec3::from(slid.translation - pose.translation);
@@ -107,21 +113,19 @@ mod tests {
     fn a_cup_well_on_the_table_stays() {
         let db = CadDatabase::parametric();
         let (table, cup, pose) = cup_on_table(&db, Vec2::new(0.1, 0.05));
-        let model = model_of(&db, "cup_01");
+        let model = model(&db, "cup_01");
         assert!(slide_onto(&cup, &pose, model, &table, &[]).is_none());
     }
 
     #[test]
     fn a_slide_never_pushes_into_a_neighbour() {
         let db = CadDatabase::parametric();
-        let edge = PlacedSolid::new(model_of(&db, "table_01"), &Affine3A::IDENTITY)
-            .hi
-            .x;
+        let edge = table(&db).hi.x;
         let (table, cup, pose) = cup_on_table(&db, Vec2::new(edge, 0.0));
         let width = cup.hi.x - cup.lo.x;
         // A second cup 2 mm behind it: the way straight back, the shortest, is taken.
         let (_, behind, _) = cup_on_table(&db, Vec2::new(edge - width - 0.002, 0.0));
-        let model = model_of(&db, "cup_01");
+        let model = model(&db, "cup_01");
         let (free, _) = slide_onto(&cup, &pose, model, &table, &[]).expect("a slide");
         assert!(penetration_depth(&PlacedSolid::new(model, &free), &behind) > 0.005);
         if let Some((slid, _)) =
@@ -136,11 +140,9 @@ mod tests {
     #[test]
     fn nothing_within_reach_to_slide_onto_is_no_slide() {
         let db = CadDatabase::parametric();
-        let edge = PlacedSolid::new(model_of(&db, "table_01"), &Affine3A::IDENTITY)
-            .hi
-            .x;
+        let edge = table(&db).hi.x;
         let (table, cup, pose) = cup_on_table(&db, Vec2::new(edge + 0.5, 0.0));
-        let model = model_of(&db, "cup_01");
+        let model = model(&db, "cup_01");
         assert!(slide_onto(&cup, &pose, model, &table, &[]).is_none());
     }
 }

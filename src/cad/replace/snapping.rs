@@ -7,7 +7,7 @@ use glam::{Affine3A, Vec3};
 
 use crate::cad::db::database::DatabaseModel;
 use crate::cad::placed_solid::PlacedSolid;
-use crate::cad::replace::on_holder::slide_onto;
+use crate::cad::replace::on_holder::{overhangs, slide_onto};
 use crate::cad::replace::physical_check::Holder;
 
 /// How far (metres) from a child's bottom its parent's final surface may be for the child to be
@@ -46,19 +46,19 @@ pub fn snap_onto_holders(
             _ => None,
         };
         let mut pose = snapped_onto(model, pose, holders[i], holder);
-        if movable[i]
-            && let Some(holder) = holder
-        {
-            let solid = PlacedSolid::new(model, &pose);
+        let mut solid = PlacedSolid::new(model, &pose);
+        // Only an overhanging object pays for its neighbours' solids and the slide search.
+        if let Some(holder) = holder.filter(|h| movable[i] && overhangs(&solid, h)) {
             let neighbours = neighbours_on(i, holders, models, poses, &finals);
             if let Some((slid, distance)) = slide_onto(&solid, &pose, model, holder, &neighbours) {
                 tracing::debug!("physical check: object {i} slid {distance:.3} m onto its holder");
                 pose = snapped_onto(model, slid, holders[i], Some(holder));
+                solid = PlacedSolid::new(model, &pose);
                 slid_m[i] = distance;
             }
         }
         poses[i] = Some(pose);
-        finals[i] = Some(PlacedSolid::new(model, &pose));
+        finals[i] = Some(solid);
     }
     Snapped { finals, slid_m }
 }
