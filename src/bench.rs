@@ -30,6 +30,8 @@ pub struct TsdfBenchOptions {
     pub runs: usize,
     /// The map's memory budget, GB.
     pub max_memory_gb: f64,
+    /// [`TsdfMap::pack_after_frames`].
+    pub pack_after_frames: u32,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -52,6 +54,8 @@ pub struct TsdfBenchReport {
     pub mesh_vertices: usize,
     pub mesh_triangles: usize,
     pub blocks: usize,
+    /// Blocks packed at the end (no frame touched them in the last `pack_after_frames`).
+    pub packed_blocks: usize,
     pub map_bytes: usize,
     /// Peak resident memory of the whole process (the map plus a batch of 64 decoded frames).
     pub peak_resident_bytes: Option<u64>,
@@ -120,6 +124,7 @@ pub fn bench_tsdf(options: &TsdfBenchOptions) -> Result<TsdfBenchReport, IsceneE
         mesh_vertices: mesh.positions.len(),
         mesh_triangles: mesh.triangles.len(),
         blocks: map.blocks.len(),
+        packed_blocks: map.packed_blocks(),
         map_bytes: map.memory_bytes(),
         peak_resident_bytes: crate::base::process::peak_resident_bytes(),
         held_out: (evaluated > 0).then(|| summarise(residuals, misses, evaluated)),
@@ -145,6 +150,7 @@ fn integrate_frames(
         load_s: 0.0,
         integrate_s: 0.0,
     };
+    run.map.pack_after_frames = options.pack_after_frames;
     for batch in frames.chunks(64) {
         let clock = Instant::now();
         let loaded = batch

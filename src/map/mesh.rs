@@ -129,7 +129,7 @@ fn block_triangles(map: &TsdfMap, key: IVec3, min_weight: f32) -> Vec<LooseTrian
                 for (c, offset) in CORNERS.iter().enumerate() {
                     match map.voxel(origin + *offset) {
                         Some(v) if v.is_observed() && v.weight() >= min_weight => {
-                            corners[c] = *v;
+                            corners[c] = v;
                             if v.sdf < 0.0 {
                                 cube_index |= 1 << c;
                             }
@@ -202,7 +202,7 @@ mod tests {
                 let p = ((block.key * BLOCK_SIDE as i32 + local).as_vec3() + 0.5) * vs;
                 let sdf = (p.distance(center) - radius).clamp(-truncation, truncation);
                 let label = if p.x < center.x { 1 } else { 2 };
-                block.voxels[i] = Voxel::observed(sdf, 1.0, [0; 3], label);
+                block.voxels_mut()[i] = Voxel::observed(sdf, 1.0, [0; 3], label);
             }
         }
         map

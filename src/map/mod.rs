@@ -2,6 +2,7 @@
 //! labelled marching cubes that turns it into meshes, and the colours it saw on a surface.
 
 pub mod agreement;
+pub mod block;
 pub mod depth_precision;
 pub mod frame_labels;
 pub mod free_space;

@@ -81,7 +81,7 @@ mod tests {
                 } else {
                     ([20, 40, 180], 2)
                 };
-                block.voxels[i] = Voxel::observed(sdf, 1.0, color, label);
+                block.voxels_mut()[i] = Voxel::observed(sdf, 1.0, color, label);
             }
         }
         map

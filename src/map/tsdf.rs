@@ -1,7 +1,7 @@
 //! A voxel-hashed truncated signed distance field with a segment label per voxel: blocks of 8^3
 //! voxels in an arena indexed by a hash map, projective integration of depth frames in parallel
 //! over the blocks a frame touches, weights that drop off behind the surface, colour, and
-//! Voxblox++'s label confidence vote.
+//! Voxblox++'s label confidence vote. Blocks out of view are packed (`block.rs`), losslessly.
 //!
 //! Signs: `sdf` is positive in front of the surface (free space, towards the camera), negative
 //! behind it, in metres, clamped to `[-truncation, truncation]`.
@@ -13,11 +13,8 @@ use glam::{Affine3A, IVec3, Vec3};
 use rayon::prelude::*;
 use wide::{CmpGe, CmpGt, CmpLe, CmpLt, f32x8};
 
+pub use super::block::{BLOCK_SIDE, BLOCK_VOXELS, Block, voxel_index, voxel_local};
 use crate::geometry::Pinhole;
-
-/// Voxels along one side of a block.
-pub const BLOCK_SIDE: usize = 8;
-pub const BLOCK_VOXELS: usize = BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE;
 
 /// A global segment label; 0 = none.
 pub type SegmentLabel = u32;
@@ -60,6 +57,23 @@ impl Voxel {
         f32::from(self.weight) / WEIGHT_STEPS
     }
 
+    /// Observed free space: the distance at `sdf` (the truncation), no colour, no label.
+    pub(super) fn free(sdf: f32, weight_steps: u16) -> Self {
+        Self {
+            sdf,
+            weight: weight_steps,
+            ..Self::default()
+        }
+    }
+
+    pub(super) fn weight_steps(&self) -> u16 {
+        self.weight
+    }
+
+    pub(super) fn label_weight_steps(&self) -> u16 {
+        self.label_weight
+    }
+
     pub fn is_observed(&self) -> bool {
         self.weight > 0
     }
@@ -74,35 +88,6 @@ impl Voxel {
 /// most what a `u16` holds.
 fn weight_steps(weight: f32) -> u16 {
     (weight * WEIGHT_STEPS + 0.5).clamp(1.0, f32::from(u16::MAX)) as u16
-}
-
-#[derive(Clone)]
-pub struct Block {
-    pub key: IVec3,
-    pub voxels: Box<[Voxel; BLOCK_VOXELS]>,
-}
-
-impl Block {
-    fn new(key: IVec3) -> Self {
-        Self {
-            key,
-            voxels: Box::new([Voxel::default(); BLOCK_VOXELS]),
-        }
-    }
-}
-
-/// Index of voxel `local` (each coordinate in `0..BLOCK_SIDE`) inside its block.
-pub fn voxel_index(local: IVec3) -> usize {
-    local.x as usize + BLOCK_SIDE * (local.y as usize + BLOCK_SIDE * local.z as usize)
-}
-
-/// Local coordinates of the voxel at slot `index` of its block (the inverse of `voxel_index`).
-pub fn voxel_local(index: usize) -> IVec3 {
-    IVec3::new(
-        (index % BLOCK_SIDE) as i32,
-        ((index / BLOCK_SIDE) % BLOCK_SIDE) as i32,
-        (index / (BLOCK_SIDE * BLOCK_SIDE)) as i32,
-    )
 }
 
 /// One frame to fuse: depth in metres along the optical axis (0 = none), optional row-major RGB
@@ -141,10 +126,21 @@ pub struct TsdfMap {
     /// Running averages stop growing their weight here, so the map can still change (at most
     /// 1023: weights are 16-bit fixed point).
     pub max_weight: f32,
+    /// A block no frame has touched for this many integrations is packed ([`Block::pack`]:
+    /// lossless, a fraction of the memory); 0 = never. The map's memory then grows with the
+    /// surface seen, at the packed blocks' size, and only the blocks in view take 8 KB each.
+    pub pack_after_frames: u32,
     /// Blocks in the order they were first touched.
     pub blocks: Vec<Block>,
+    /// Per block, the integration that last touched it (see `integrations`).
+    last_touched: Vec<u32>,
+    /// Frames integrated so far.
+    integrations: u32,
     index: BlockIndex,
 }
+
+/// One second of a Kinect's 30 frames per second.
+pub const PACK_AFTER_FRAMES: u32 = 30;
 
 impl TsdfMap {
     /// A map with `voxel_size` metres voxels and a truncation band of four voxels.
@@ -154,7 +150,10 @@ impl TsdfMap {
             truncation: 4.0 * voxel_size,
             max_ray_length: 5.0,
             max_weight: 1000.0,
+            pack_after_frames: PACK_AFTER_FRAMES,
             blocks: Vec::new(),
+            last_touched: Vec::new(),
+            integrations: 0,
             index: BlockIndex::default(),
         }
     }
@@ -163,10 +162,16 @@ impl TsdfMap {
         self.voxel_size * BLOCK_SIDE as f32
     }
 
-    /// Bytes held by voxel blocks.
+    /// Bytes held by voxel blocks and their index.
     pub fn memory_bytes(&self) -> usize {
-        self.blocks.len() * (BLOCK_VOXELS * std::mem::size_of::<Voxel>() + 16)
+        self.blocks.iter().map(Block::memory_bytes).sum::<usize>()
+            + self.last_touched.capacity() * 4
             + self.index.capacity() * 24
+    }
+
+    /// Blocks held packed.
+    pub fn packed_blocks(&self) -> usize {
+        self.blocks.iter().filter(|b| b.is_packed()).count()
     }
 
     /// Keys of the blocks the truncation band of `frame` passes through, sorted. Rays are sampled
@@ -221,14 +226,22 @@ impl TsdfMap {
     pub fn integrate(&mut self, frame: &TsdfFrame) {
         let keys = self.touched_blocks(frame);
         let mut touched = vec![false; self.blocks.len() + keys.len()];
+        self.integrations += 1;
         for key in keys {
-            touched[self.ensure_block(key)] = true;
+            let slot = self.ensure_block(key);
+            touched[slot] = true;
+            self.last_touched[slot] = self.integrations;
         }
         let integrator = Integrator {
             camera: *frame.camera,
             camera_from_world: frame.world_from_camera.inverse(),
             depth: frame.depth,
-            color: frame.color,
+            // A colour image of another size than the depth's is not used.
+            color: if frame.color.len() == frame.depth.len() * 3 {
+                frame.color
+            } else {
+                &[]
+            },
             labels: frame.labels,
             label_gains: frame.label_gains,
             voxel_size: self.voxel_size,
@@ -244,7 +257,25 @@ impl TsdfMap {
             .collect();
         work.par_iter_mut()
             .with_min_len(4)
-            .for_each(|block| integrator.block(block));
+            .for_each(|block| integrator.block(block.key, block.voxels_mut()));
+        self.pack_blocks_out_of_view();
+    }
+
+    /// Packs the blocks whose last touch is now `pack_after_frames` integrations old (each block
+    /// once: touched again, it is unpacked and ages from then).
+    fn pack_blocks_out_of_view(&mut self) {
+        let Some(aged) = self.integrations.checked_sub(self.pack_after_frames) else {
+            return;
+        };
+        if self.pack_after_frames == 0 {
+            return;
+        }
+        let truncation = self.truncation;
+        self.blocks
+            .par_iter_mut()
+            .zip(&self.last_touched)
+            .filter(|(_, last)| **last == aged)
+            .for_each(|(block, _)| block.pack(truncation));
     }
 
     /// The arena slot of block `key`, allocating an unobserved block when it is new.
@@ -253,19 +284,16 @@ impl TsdfMap {
         let slot = *self.index.entry(key).or_insert(next);
         if slot == next {
             self.blocks.push(Block::new(key));
+            self.last_touched.push(self.integrations);
         }
         slot as usize
     }
 
     /// Replaces voxel labels: `relabel[l]` is the new label of `l` (labels past its end stay).
     pub fn relabel(&mut self, relabel: &[SegmentLabel]) {
-        self.blocks.par_iter_mut().for_each(|block| {
-            for voxel in block.voxels.iter_mut() {
-                if let Some(&l) = relabel.get(voxel.label as usize) {
-                    voxel.label = l;
-                }
-            }
-        });
+        self.blocks
+            .par_iter_mut()
+            .for_each(|block| block.relabel(relabel));
     }
 
     /// The block holding voxel `index` (integer voxel coordinates), and the voxel's slot in it.
@@ -287,12 +315,12 @@ impl TsdfMap {
     }
 
     /// The voxel with integer coordinates `voxel`, if its block exists.
-    pub fn voxel(&self, voxel: IVec3) -> Option<&Voxel> {
-        self.locate(voxel).map(|(b, i)| &b.voxels[i])
+    pub fn voxel(&self, voxel: IVec3) -> Option<Voxel> {
+        self.locate(voxel).map(|(b, i)| b.voxel(i))
     }
 
     /// The voxel containing `point`, if its block exists.
-    pub fn voxel_at(&self, point: Vec3) -> Option<&Voxel> {
+    pub fn voxel_at(&self, point: Vec3) -> Option<Voxel> {
         self.voxel(self.voxel_coords(point))
     }
 
@@ -374,9 +402,9 @@ impl Integrator<'_> {
     /// Projects every voxel of `block` into the frame and fuses the pixel it lands on. Voxel
     /// positions in the camera frame advance by constant steps, so the inner loop is adds, one
     /// division and a lookup.
-    fn block(&self, block: &mut Block) {
+    fn block(&self, key: IVec3, voxels: &mut [Voxel; BLOCK_VOXELS]) {
         let vs = self.voxel_size;
-        let origin = (block.key * BLOCK_SIDE as i32).as_vec3() * vs + Vec3::splat(0.5 * vs);
+        let origin = (key * BLOCK_SIDE as i32).as_vec3() * vs + Vec3::splat(0.5 * vs);
         let p0 = self.camera_from_world.transform_point3(origin);
         let r = self.camera_from_world.matrix3;
         let (dx, dy, dz) = (
@@ -384,7 +412,6 @@ impl Integrator<'_> {
             Vec3::from(r.y_axis) * vs,
             Vec3::from(r.z_axis) * vs,
         );
-        let with_color = self.color.len() == self.depth.len() * 3;
         for z in 0..BLOCK_SIDE {
             for y in 0..BLOCK_SIDE {
                 let row = p0 + dz * z as f32 + dy * y as f32;
@@ -428,20 +455,7 @@ impl Integrator<'_> {
                 while lanes != 0 {
                     let x = lanes.trailing_zeros() as usize;
                     lanes &= lanes - 1;
-                    let pixel = pixels[x];
-                    let color = with_color.then(|| {
-                        let c = &self.color[3 * pixel..3 * pixel + 3];
-                        [c[0], c[1], c[2]]
-                    });
-                    let label = self.labels.map_or(0, |labels| labels[pixel]);
-                    let gain = self.label_gains.map_or(1, |gains| gains[pixel]);
-                    self.fuse(
-                        &mut block.voxels[slots + x],
-                        sdf[x],
-                        weight[x] as u16,
-                        color,
-                        (label, gain),
-                    );
+                    self.fuse(&mut voxels[slots + x], sdf[x], weight[x] as u16, pixels[x]);
                 }
             }
         }
@@ -476,16 +490,10 @@ impl Integrator<'_> {
         (index.to_array().map(|i| i as usize), voxel_z)
     }
 
-    /// Fuses one measurement of `weight` steps (1 to `WEIGHT_STEPS`) into `voxel`; its label
-    /// (0: none) votes with `gain` times the weight.
-    fn fuse(
-        &self,
-        voxel: &mut Voxel,
-        sdf: f32,
-        weight: u16,
-        color: Option<[u8; 3]>,
-        (label, gain): (SegmentLabel, u8),
-    ) {
+    /// Fuses one measurement of `weight` steps (1 to `WEIGHT_STEPS`) seen at `pixel` into
+    /// `voxel`. The pixel's colour and label are read only where they count: most fused voxels
+    /// are free space in front of the band, and a read there is a cache miss for nothing.
+    fn fuse(&self, voxel: &mut Voxel, sdf: f32, weight: u16, pixel: usize) {
         // In u32 the sum cannot overflow; the cap brings it back into a u16.
         let total = u32::from(voxel.weight) + u32::from(weight);
         let share = f32::from(weight) / total as f32;
@@ -496,8 +504,8 @@ impl Integrator<'_> {
         if sdf >= self.truncation {
             return;
         }
-        if let Some(c) = color {
-            for (old, new) in voxel.color.iter_mut().zip(c) {
+        if let Some(c) = self.color.get(3 * pixel..3 * pixel + 3) {
+            for (old, &new) in voxel.color.iter_mut().zip(c) {
                 let o = f32::from(*old);
                 *old = (o + (f32::from(new) - o) * share + 0.5) as u8;
             }
@@ -505,17 +513,24 @@ impl Integrator<'_> {
         // Labels vote only near the measured surface, where the voxel belongs to what the pixel
         // sees: deeper in the band lies whatever is behind it (the wall a few centimetres behind
         // a sofa would take the sofa's label from every view that sees the sofa in front of it).
-        if label != 0 && sdf.abs() < LABEL_BAND_VOXELS * self.voxel_size {
-            let vote = (u32::from(weight) * u32::from(gain)).min(u32::from(self.max_weight)) as u16;
-            if voxel.label == label {
-                voxel.label_weight = (u32::from(voxel.label_weight) + u32::from(vote))
-                    .min(u32::from(self.max_weight)) as u16;
-            } else if voxel.label_weight <= vote {
-                voxel.label = label;
-                voxel.label_weight = vote;
-            } else {
-                voxel.label_weight -= vote;
-            }
+        if sdf.abs() >= LABEL_BAND_VOXELS * self.voxel_size {
+            return;
+        }
+        let Some(labels) = self.labels else { return };
+        let label = labels[pixel];
+        if label == 0 {
+            return;
+        }
+        let gain = self.label_gains.map_or(1, |gains| gains[pixel]);
+        let vote = (u32::from(weight) * u32::from(gain)).min(u32::from(self.max_weight)) as u16;
+        if voxel.label == label {
+            voxel.label_weight = (u32::from(voxel.label_weight) + u32::from(vote))
+                .min(u32::from(self.max_weight)) as u16;
+        } else if voxel.label_weight <= vote {
+            voxel.label = label;
+            voxel.label_weight = vote;
+        } else {
+            voxel.label_weight -= vote;
         }
     }
 }
@@ -527,13 +542,19 @@ mod tests {
     use crate::scene::render_sequence::render_frame;
     use crate::scene::{SceneSpec, SceneWorld};
 
-    #[test]
-    fn fused_clean_depth_has_its_zero_crossing_on_the_true_surface() {
+    /// The built-in kitchen's world and the scene its frames are rendered from.
+    fn kitchen() -> (SceneWorld, crate::render::render_scene::RenderScene) {
         let spec = SceneSpec::parse(crate::BUILTIN_KITCHEN, std::path::Path::new("kitchen.json"))
             .expect("spec");
         let world =
             SceneWorld::from_spec(&spec, std::path::Path::new("kitchen.json")).expect("world");
         let scene = world.render_scene();
+        (world, scene)
+    }
+
+    #[test]
+    fn fused_clean_depth_has_its_zero_crossing_on_the_true_surface() {
+        let (world, scene) = kitchen();
         let camera = Pinhole::KINECT;
         let poses = room_loop(world.room_size, 60, 1.45);
         let mut map = TsdfMap::new(0.02);
@@ -590,6 +611,65 @@ mod tests {
             median < 0.005,
             "median |raycast - measured depth|: {median} m"
         );
+    }
+
+    #[test]
+    fn packing_blocks_out_of_view_changes_no_voxel() {
+        let (world, scene) = kitchen();
+        let camera = Pinhole::KINECT;
+        // Half the loop, then its start again: blocks go out of view, are packed, and are
+        // touched (unpacked) again.
+        let poses = room_loop(world.room_size, 40, 1.45);
+        let order: Vec<usize> = (0..20).chain(0..8).collect();
+        let frames: Vec<_> = order
+            .iter()
+            .map(|&k| render_frame(&scene, &camera, &poses[k], None, 1, k))
+            .collect();
+        let labels: Vec<Vec<SegmentLabel>> = frames
+            .iter()
+            .map(|f| {
+                (0..f.depth.len())
+                    .map(|i| (i % 7) as SegmentLabel)
+                    .collect()
+            })
+            .collect();
+        let map_packing_after = |frames_out_of_view: u32| {
+            let mut map = TsdfMap::new(0.04);
+            map.pack_after_frames = frames_out_of_view;
+            for ((f, l), &k) in frames.iter().zip(&labels).zip(&order) {
+                map.integrate(&TsdfFrame {
+                    depth: &f.depth,
+                    color: &f.color,
+                    labels: Some(l),
+                    label_gains: None,
+                    camera: &camera,
+                    world_from_camera: &poses[k],
+                });
+            }
+            map.relabel(&[0, 2, 1]);
+            map
+        };
+        let whole = map_packing_after(0);
+        let packed = map_packing_after(3);
+        assert_eq!(whole.packed_blocks(), 0);
+        assert!(
+            packed.packed_blocks() * 4 > packed.blocks.len(),
+            "{} of {} blocks packed",
+            packed.packed_blocks(),
+            packed.blocks.len()
+        );
+        assert!(packed.memory_bytes() < whole.memory_bytes());
+        assert_eq!(whole.blocks.len(), packed.blocks.len());
+        for (a, b) in whole.blocks.iter().zip(&packed.blocks) {
+            assert_eq!(a.key, b.key);
+            for (i, (va, vb)) in a.voxels().zip(b.voxels()).enumerate() {
+                assert!(
+                    va.sdf.to_bits() == vb.sdf.to_bits() && va == vb,
+                    "block {} slot {i}: {va:?} against {vb:?}",
+                    a.key
+                );
+            }
+        }
     }
 
     /// An 8 x 8 camera looking down +z (the label-vote tests).

@@ -148,8 +148,8 @@ pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, S
     };
     let mut out = Vec::new();
     for block in &map.blocks {
-        for (i, v) in block.voxels.iter().enumerate() {
-            if !observed(v) || v.sdf.abs() >= band * MAX_SDF_STRETCH {
+        for (i, v) in block.voxels().enumerate() {
+            if !observed(&v) || v.sdf.abs() >= band * MAX_SDF_STRETCH {
                 continue;
             }
             let key = block.key * crate::map::BLOCK_SIDE as i32 + crate::map::tsdf::voxel_local(i);

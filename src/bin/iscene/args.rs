@@ -359,6 +359,9 @@ pub(crate) enum BenchCommand {
         /// The map's memory budget in GB (as reconstruct's).
         #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
         max_memory: f64,
+        /// Pack a block no frame touched for this many frames (0: never), as the mapper does.
+        #[arg(long, default_value_t = iscene::map::tsdf::PACK_AFTER_FRAMES)]
+        pack_after: u32,
     },
     /// Time per action of a task (with its physics check), over fresh runs of the task on a
     /// scene folder (as `iscene simulate` takes).

@@ -16,6 +16,7 @@ pub(crate) fn bench(command: BenchCommand) -> Result<(), IsceneError> {
             mesh,
             runs,
             max_memory,
+            pack_after,
         } => {
             let report = iscene::bench::bench_tsdf(&iscene::bench::TsdfBenchOptions {
                 sequence,
@@ -26,6 +27,7 @@ pub(crate) fn bench(command: BenchCommand) -> Result<(), IsceneError> {
                 mesh,
                 runs: runs as usize,
                 max_memory_gb: max_memory,
+                pack_after_frames: pack_after,
             })?;
             print_json(&report)
         }
