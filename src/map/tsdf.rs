@@ -264,12 +264,12 @@ impl TsdfMap {
     /// Packs the blocks whose last touch is now `pack_after_frames` integrations old (each block
     /// once: touched again, it is unpacked and ages from then).
     fn pack_blocks_out_of_view(&mut self) {
-        let Some(aged) = self.integrations.checked_sub(self.pack_after_frames) else {
-            return;
-        };
         if self.pack_after_frames == 0 {
             return;
         }
+        let Some(aged) = self.integrations.checked_sub(self.pack_after_frames) else {
+            return;
+        };
         let truncation = self.truncation;
         self.blocks
             .par_iter_mut()
@@ -399,7 +399,7 @@ struct Integrator<'a> {
 }
 
 impl Integrator<'_> {
-    /// Projects every voxel of `block` into the frame and fuses the pixel it lands on. Voxel
+    /// Projects every voxel of the block at `key` into the frame and fuses the pixel it lands on. Voxel
     /// positions in the camera frame advance by constant steps, so the inner loop is adds, one
     /// division and a lookup.
     fn block(&self, key: IVec3, voxels: &mut [Voxel; BLOCK_VOXELS]) {
