@@ -126,10 +126,14 @@ pub struct TsdfMap {
     /// Running averages stop growing their weight here, so the map can still change (at most
     /// 1023: weights are 16-bit fixed point).
     pub max_weight: f32,
-    /// A block no frame has touched for this many integrations is packed ([`Block::pack`]:
-    /// lossless, a fraction of the memory); 0 = never. The map's memory then grows with the
-    /// surface seen, at the packed blocks' size, and only the blocks in view take 8 KB each.
+    /// Once the map holds more than `pack_above_blocks` blocks, a block no frame has touched for
+    /// this many integrations is packed ([`Block::pack`]: lossless, a fraction of the memory);
+    /// 0 = never. The map's memory then grows with the surface seen, at the packed blocks' size,
+    /// and only the blocks in view take 8 KB each.
     pub pack_after_frames: u32,
+    /// A map of at most this many blocks packs none: a room at 2 cm fits whole, and packing,
+    /// unpacking and reading packed blocks cost a little time.
+    pub pack_above_blocks: usize,
     /// Blocks in the order they were first touched.
     pub blocks: Vec<Block>,
     /// Per block, the integration that last touched it (see `integrations`).
@@ -141,6 +145,8 @@ pub struct TsdfMap {
 
 /// One second of a Kinect's 30 frames per second.
 pub const PACK_AFTER_FRAMES: u32 = 30;
+/// 32 MB of whole blocks.
+pub const PACK_ABOVE_BLOCKS: usize = 4096;
 
 impl TsdfMap {
     /// A map with `voxel_size` metres voxels and a truncation band of four voxels.
@@ -151,6 +157,7 @@ impl TsdfMap {
             max_ray_length: 5.0,
             max_weight: 1000.0,
             pack_after_frames: PACK_AFTER_FRAMES,
+            pack_above_blocks: PACK_ABOVE_BLOCKS,
             blocks: Vec::new(),
             last_touched: Vec::new(),
             integrations: 0,
@@ -261,10 +268,11 @@ impl TsdfMap {
         self.pack_blocks_out_of_view();
     }
 
-    /// Packs the blocks whose last touch is now `pack_after_frames` integrations old (each block
-    /// once: touched again, it is unpacked and ages from then).
+    /// Packs the whole blocks whose last touch is at least `pack_after_frames` integrations old,
+    /// once the map is over `pack_above_blocks` (touched again, a block is unpacked and ages from
+    /// then).
     fn pack_blocks_out_of_view(&mut self) {
-        if self.pack_after_frames == 0 {
+        if self.pack_after_frames == 0 || self.blocks.len() <= self.pack_above_blocks {
             return;
         }
         let Some(aged) = self.integrations.checked_sub(self.pack_after_frames) else {
@@ -274,7 +282,7 @@ impl TsdfMap {
         self.blocks
             .par_iter_mut()
             .zip(&self.last_touched)
-            .filter(|(_, last)| **last == aged)
+            .filter(|(block, last)| **last <= aged && !block.is_packed())
             .for_each(|(block, _)| block.pack(truncation));
     }
 
@@ -633,9 +641,10 @@ mod tests {
                     .collect()
             })
             .collect();
-        let map_packing_after = |frames_out_of_view: u32| {
+        let map_packing_after = |frames_out_of_view: u32, above_blocks: usize| {
             let mut map = TsdfMap::new(0.04);
             map.pack_after_frames = frames_out_of_view;
+            map.pack_above_blocks = above_blocks;
             for ((f, l), &k) in frames.iter().zip(&labels).zip(&order) {
                 map.integrate(&TsdfFrame {
                     depth: &f.depth,
@@ -649,9 +658,12 @@ mod tests {
             map.relabel(&[0, 2, 1]);
             map
         };
-        let whole = map_packing_after(0);
-        let packed = map_packing_after(3);
+        let whole = map_packing_after(0, 0);
+        let packed = map_packing_after(3, 0);
         assert_eq!(whole.packed_blocks(), 0);
+        // A map within `pack_above_blocks` packs nothing.
+        let small = map_packing_after(3, whole.blocks.len());
+        assert_eq!(small.packed_blocks(), 0);
         assert!(
             packed.packed_blocks() * 4 > packed.blocks.len(),
             "{} of {} blocks packed",

@@ -359,7 +359,8 @@ pub(crate) enum BenchCommand {
         /// The map's memory budget in GB (as reconstruct's).
         #[arg(long, default_value_t = iscene::map::memory_budget::DEFAULT_MAX_MEMORY_GB)]
         max_memory: f64,
-        /// Pack a block no frame touched for this many frames (0: never), as the mapper does.
+        /// Pack a block no frame touched for this many frames (0: never) once the map holds over
+        /// 4096 blocks, as the mapper does.
         #[arg(long, default_value_t = iscene::map::tsdf::PACK_AFTER_FRAMES)]
         pack_after: u32,
     },
