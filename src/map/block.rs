@@ -6,7 +6,7 @@
 
 use glam::IVec3;
 
-use super::tsdf::{SegmentLabel, Voxel};
+use super::voxel::{SegmentLabel, Voxel};
 
 /// Voxels along one side of a block.
 pub const BLOCK_SIDE: usize = 8;
@@ -139,10 +139,10 @@ impl PackedVoxels {
             if bitwise_equal(v, &Voxel::default()) {
                 continue;
             }
-            let free = Voxel::free(free_sdf, v.weight_steps());
-            if v.weight_steps() > 0 && bitwise_equal(v, &free) {
+            let free = Voxel::free(free_sdf, v.weight);
+            if v.weight > 0 && bitwise_equal(v, &free) {
                 packed.free[i / 64] |= bit;
-                free_weights.push(v.weight_steps());
+                free_weights.push(v.weight);
             } else {
                 packed.whole[i / 64] |= bit;
                 whole_voxels.push(*v);
@@ -173,8 +173,8 @@ impl PackedVoxels {
 /// Equal bit for bit (a distance of -0.0 is not 0.0 here: packing keeps every bit).
 fn bitwise_equal(a: &Voxel, b: &Voxel) -> bool {
     a.sdf.to_bits() == b.sdf.to_bits()
-        && a.weight_steps() == b.weight_steps()
-        && a.label_weight_steps() == b.label_weight_steps()
+        && a.weight == b.weight
+        && a.label_weight == b.label_weight
         && a.label == b.label
         && a.color == b.color
 }

@@ -6,10 +6,12 @@ pub mod block;
 pub mod depth_precision;
 pub mod frame_labels;
 pub mod free_space;
+mod integrator;
 pub mod memory_budget;
 pub mod mesh;
 pub mod seen_color;
 pub mod tsdf;
+mod voxel;
 
 pub use frame_labels::{FrameLabelStore, FrameLabels};
 pub use mesh::{LabelledMesh, extract_mesh};
