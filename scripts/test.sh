@@ -67,6 +67,11 @@ rm -f "$setup_log"
 disk
 
 echo "== tests"
+# One test thread more than cores: some tests wait on what they started (MuJoCo and PyBullet in
+# Python, a Slurm job's scheduling, a process they kill) and leave a core idle meanwhile. The 95
+# integration tests on 2 cores (2026-12-02, the same binary, one run each): 659 s on 2 threads (174 %
+# CPU), 546 s on 3 (185 %), 573 s on 4.
+export RUST_TEST_THREADS="${RUST_TEST_THREADS:-$(($(nproc) + 1))}"
 cargo test --locked --features viewer --lib --tests --no-fail-fast
 disk
 # The benchmarks are built above in the test profile; their figures come from `cargo bench`

@@ -339,26 +339,16 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     let mut timings = Vec::new();
     let (sequence_dir, rendered) = resolve_input(options, &mut timings)?;
     let sequence = open_sequence(&sequence_dir, options)?;
-    let mapping = MappingConfig {
-        params: MapperParams {
-            segment_every: options.segment_every.max(1),
-            ..MapperParams::new(options.voxel, options.fusion)
-        },
-        segmentation: options.segmentation,
-        models: options.models.clone(),
-        onnx_device: options.onnx_device,
-        progress: options.progress,
-    };
+    let format = sequence.format;
+    let mapping = mapping_config(options);
     // Staged before the work, so that a live session's previews land in the output's own folder.
     let staged = StagedDir::new(&target)?;
     let mut app = reconstruction_app(options, &mapping, &cad_library);
     app.insert_resource(ExportTarget(staged.path().to_path_buf()));
-    let format = sequence.format;
-    let mut live_report = None;
-    match &options.live {
+    let live_report = match &options.live {
         Some(live) => {
             let start = Instant::now();
-            let (map, seen, ingest, report) = map_live_with_previews(
+            let live_map = map_live_with_previews(
                 &sequence_dir,
                 sequence,
                 options,
@@ -368,16 +358,13 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
                 staged.path(),
             )?;
             timings.push(("live mapping".into(), start.elapsed().as_secs_f64()));
-            app.insert_resource(PanopticMap(map.0));
-            app.insert_resource(Segmenter(map.1));
-            app.insert_resource(ingest);
-            app.insert_resource(InputSequence(seen));
-            live_report = Some(report);
+            Some(insert_live_map(&mut app, live_map))
         }
         None => {
             app.insert_resource(InputSequence(sequence));
+            None
         }
-    }
+    };
     run_stages(&mut app)?;
     let mut report = collect_report(app.world_mut(), options, sequence_dir, format, rendered);
     report.timings.splice(0..0, timings);
@@ -388,6 +375,33 @@ pub fn reconstruct(options: &ReconstructOptions) -> Result<ReconstructReport, Is
     )?;
     staged.commit()?;
     Ok(report)
+}
+
+/// The mapping settings `options` ask for.
+fn mapping_config(options: &ReconstructOptions) -> MappingConfig {
+    MappingConfig {
+        params: MapperParams {
+            segment_every: options.segment_every.max(1),
+            ..MapperParams::new(options.voxel, options.fusion)
+        },
+        segmentation: options.segmentation,
+        models: options.models.clone(),
+        onnx_device: options.onnx_device,
+        progress: options.progress,
+    }
+}
+
+/// Gives the reconstruction the map a live session made, with what it saw, so that the
+/// schedule maps nothing again; returns the session's report.
+fn insert_live_map(
+    app: &mut App,
+    ((map, segmenter), seen, ingest, report): (LiveMap, Sequence, IngestReport, LiveReport),
+) -> LiveReport {
+    app.insert_resource(PanopticMap(map));
+    app.insert_resource(Segmenter(segmenter));
+    app.insert_resource(ingest);
+    app.insert_resource(InputSequence(seen));
+    report
 }
 
 /// The output folder `--out`, claimed: a folder that holds what another command wrote, or one

@@ -255,9 +255,10 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
     let dir = tempfile::tempdir().expect("tempdir");
     let cluster = LocalCluster::start(&dir.path().join("cluster"));
     let manifest =
-        serde_json::json!({"defaults": {"frames": FRAMES}, "inputs": [{"seeds": "0:6"}]});
+        serde_json::json!({"defaults": {"frames": FRAMES}, "inputs": [{"seeds": "0:4"}]});
     std::fs::write(dir.path().join("m.json"), manifest.to_string()).expect("manifest");
-    // Six rooms as a three-task array (one core each) plus the merge job.
+    // Four rooms as a two-task array (one core each, both running at once here) plus the merge
+    // job.
     let submit = |extra: &[&str]| {
         let mut args = vec![
             "batch",
@@ -266,7 +267,7 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
             "cluster_out",
             "--slurm",
             "--shards",
-            "3",
+            "2",
             "--cpus",
             "1",
         ];
@@ -275,20 +276,20 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
     };
     let (code, stdout, err) = submit(&[]);
     assert_eq!(code, 0, "{stdout}\n{err}");
-    assert!(stdout.contains("tasks 0-2 of 3 shards"), "{stdout}");
+    assert!(stdout.contains("tasks 0-1 of 2 shards"), "{stdout}");
     let out = dir.path().join("cluster_out");
     let script = std::fs::read_to_string(out.join("slurm/shards.sbatch")).expect("script");
     assert!(
-        script.contains("--shard \"${SLURM_ARRAY_TASK_ID}/3\""),
+        script.contains("--shard \"${SLURM_ARRAY_TASK_ID}/2\""),
         "{script}"
     );
     wait_for_summary(&cluster, &out, None);
     let on_slurm = summary(&out);
-    assert_eq!(on_slurm["rooms"], 6, "{on_slurm}\n{}", cluster.log_tails());
-    for task in 0..3 {
+    assert_eq!(on_slurm["rooms"], 4, "{on_slurm}\n{}", cluster.log_tails());
+    for task in 0..2 {
         let log = std::fs::read_to_string(out.join(format!("slurm/shard-{task}.out")))
             .expect("task output");
-        assert!(log.contains(&format!("shard {task}/3: 2 done")), "{log}");
+        assert!(log.contains(&format!("shard {task}/2: 2 done")), "{log}");
     }
     // The same seeds in one process, as `iscene benchmark` runs them.
     let frames = FRAMES.to_string();
@@ -296,7 +297,7 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
         &[
             "benchmark",
             "--seeds",
-            "0:6",
+            "0:4",
             "--frames",
             &frames,
             "--jobs",
@@ -310,17 +311,17 @@ fn a_slurm_job_array_merges_to_the_summary_of_one_process() {
     let single = summary(&dir.path().join("single"));
     assert_eq!(results(on_slurm.clone()), results(single));
     // A killed task's input is resubmitted alone (its shard only) and nothing else is redone.
-    kill_input(&out, "seed_4");
+    kill_input(&out, "seed_3");
     let seed_0 = modified(&out.join("seed_0/eval.json"));
     let before = modified(&out.join("summary.json"));
     let (code, stdout, err) = submit(&["--resume"]);
     assert_eq!(code, 0, "{stdout}\n{err}");
     assert!(
-        stdout.contains("tasks 1 of 3 shards, 1 inputs to run"),
+        stdout.contains("tasks 1 of 2 shards, 1 inputs to run"),
         "{stdout}"
     );
     assert!(
-        stdout.contains("this batch's 5 finished inputs"),
+        stdout.contains("this batch's 3 finished inputs"),
         "{stdout}"
     );
     wait_for_summary(&cluster, &out, Some(before));
