@@ -97,6 +97,26 @@ fn a_bare_iscene_renders_the_builtin_kitchen_and_writes_its_output_folder() {
     );
 }
 
+/// The four hand-written scenes rendered with realistic noise and reconstructed from every second
+/// frame, the maps the contact-graph, CAD, export and arm tests share: what each found, as it
+/// was (tests/golden, common/golden.rs). A refactoring that changes the office's, living room's
+/// or bedroom's result shows here, not only the kitchen's.
+#[test]
+fn the_four_scenes_reconstruct_as_they_did() {
+    for name in ["kitchen", "office", "living_room", "bedroom"] {
+        let (_, out) = common::shared_noisy_map(name);
+        common::golden::assert_json_matches(
+            &out.join("contact_graph.json"),
+            &format!("noisy_{name}/contact_graph.json"),
+            &[],
+        );
+        common::golden::assert_report_matches(
+            &out.join("report.json"),
+            &format!("noisy_{name}/report.json"),
+        );
+    }
+}
+
 #[test]
 fn seven_scenes_reconstructs_without_labels() {
     let input = common::shared_data("rgbd/7scenes-redkitchen");
