@@ -238,6 +238,22 @@ fn merge_coplanar_walls(
     }
 }
 
+/// The smallest and largest voxel index along each axis; `None` for no voxels.
+fn voxel_bounds(voxels: &[IVec3]) -> Option<(IVec3, IVec3)> {
+    let first = *voxels.first()?;
+    Some(
+        voxels
+            .iter()
+            .fold((first, first), |(lo, hi), v| (lo.min(*v), hi.max(*v))),
+    )
+}
+
+/// Whether box `inner` lies within box `outer` grown by `slack` voxels on every side.
+fn encloses(outer: (IVec3, IVec3), inner: (IVec3, IVec3), slack: i32) -> bool {
+    inner.0.cmpge(outer.0 - IVec3::splat(slack)).all()
+        && inner.1.cmple(outer.1 + IVec3::splat(slack)).all()
+}
+
 /// A piece of an object that instance fusion kept apart joins the instance of its class it
 /// touches (surface voxels 26-adjacent): a small piece (a patch of the oven's top under an
 /// instance of its own) when it has at most `share` of that instance's voxels, and a slab of a
@@ -245,11 +261,18 @@ fn merge_coplanar_walls(
 /// whatever its size. Two objects of one class that touch are both whole, neither much smaller
 /// than the other nor a face of it. Layout is left alone (a wall's corner touches the next
 /// wall).
+///
+/// A piece of fixed furniture (`is_fixed`: not movable) may also join a large object of another
+/// class: when it has at most `share` of that object's voxels and lies within the object's voxel
+/// box (one voxel of slack). That is the segmenter's noise labelling a patch of a shelf's back as
+/// cabinet, or a patch of a bed as sofa: no cabinet stands inside a shelf's outline. A movable
+/// object inside a large one (a box on a shelf, a cup in a cabinet) is a thing of its own.
 fn absorb_fragments(
     groups: &mut BTreeMap<(ClassId, InstanceId), Group>,
     voxels: &[(IVec3, SegmentLabel)],
     is_object: impl Fn(ClassId) -> bool,
     is_large: impl Fn(ClassId) -> bool,
+    is_fixed: impl Fn(ClassId) -> bool,
     share: f32,
     voxel_size: f32,
 ) {
@@ -296,12 +319,15 @@ fn absorb_fragments(
         let slab = is_large(small.0)
             .then(|| Slab::of(piece, voxel_size))
             .flatten();
-        if !fragment && slab.is_none() {
+        // Only large fixed furniture may be a mislabelled piece of another class's object.
+        let foreign = is_large(small.0) && is_fixed(small.0);
+        if !fragment && slab.is_none() && !foreign {
             continue;
         }
         // A front stands a little proud of its carcass: a voxel may lie between them.
         let reach = if slab.is_some() { 2 } else { 1 };
         let mut touching: BTreeMap<(ClassId, InstanceId), usize> = BTreeMap::new();
+        let mut touching_foreign: BTreeMap<(ClassId, InstanceId), usize> = BTreeMap::new();
         for v in piece {
             for dz in -reach..=reach {
                 for dy in -reach..=reach {
@@ -310,13 +336,15 @@ fn absorb_fragments(
                             let other = resolve(&host_of, other);
                             if other.0 == small.0 && other != small {
                                 touching.insert(other, groups[&other].voxels);
+                            } else if foreign && other.0 != small.0 && is_large(other.0) {
+                                touching_foreign.insert(other, groups[&other].voxels);
                             }
                         }
                     }
                 }
             }
         }
-        let host = touching
+        let same_class_host = touching
             .into_iter()
             .filter(|(k, n)| {
                 (fragment && size as f32 <= share * *n as f32)
@@ -324,6 +352,17 @@ fn absorb_fragments(
             })
             .max_by_key(|(k, n)| (*n, std::cmp::Reverse(*k)))
             .map(|(k, _)| k);
+        let host = same_class_host.or_else(|| {
+            let piece_bounds = voxel_bounds(piece)?;
+            touching_foreign
+                .into_iter()
+                .filter(|(k, n)| {
+                    size as f32 <= share * *n as f32
+                        && voxel_bounds(voxels_in(k)).is_some_and(|b| encloses(b, piece_bounds, 1))
+                })
+                .max_by_key(|(k, n)| (*n, std::cmp::Reverse(*k)))
+                .map(|(k, _)| k)
+        });
         if let Some(host) = host {
             merge_group(groups, small, host);
             host_of.insert(small, host);
@@ -381,11 +420,13 @@ pub fn extract_entities(
             .get(classes.name(c))
             .is_some_and(|info| !params.is_small(info))
     };
+    let is_fixed = |c: ClassId| table.get(classes.name(c)).is_some_and(|info| !info.movable);
     absorb_fragments(
         &mut groups,
         &voxels,
         is_object,
         is_large,
+        is_fixed,
         params.fragment_share,
         map.voxel_size,
     );
@@ -483,7 +524,15 @@ mod tests {
             ((9, 5), group(&[5], 1)),
             ((9, 6), group(&[6], 100)),
         ]);
-        absorb_fragments(&mut groups, &voxels, |c| c != 9, |_| false, 0.05, 0.02);
+        absorb_fragments(
+            &mut groups,
+            &voxels,
+            |c| c != 9,
+            |_| false,
+            |_| false,
+            0.05,
+            0.02,
+        );
         assert_eq!(groups[&(1, 1)].labels, vec![1, 2], "the piece joins");
         assert_eq!(groups[&(1, 1)].voxels, 102);
         assert!(groups.contains_key(&(1, 3)), "a touching twin stays whole");
@@ -520,7 +569,15 @@ mod tests {
             ((5, 2), group(&[2], count(2))),
             ((5, 3), group(&[3], count(3))),
         ]);
-        absorb_fragments(&mut groups, &voxels, |_| true, |c| c == 5, 0.05, 0.02);
+        absorb_fragments(
+            &mut groups,
+            &voxels,
+            |_| true,
+            |c| c == 5,
+            |_| false,
+            0.05,
+            0.02,
+        );
         assert_eq!(
             groups[&(5, 1)].labels,
             vec![1, 2],
@@ -535,8 +592,89 @@ mod tests {
             ((5, 1), group(&[1], count(1))),
             ((5, 2), group(&[2], count(2))),
         ]);
-        absorb_fragments(&mut groups, &voxels, |_| true, |_| false, 0.05, 0.02);
+        absorb_fragments(
+            &mut groups,
+            &voxels,
+            |_| true,
+            |_| false,
+            |_| false,
+            0.05,
+            0.02,
+        );
         assert!(groups.contains_key(&(5, 2)));
+    }
+
+    #[test]
+    fn a_patch_of_fixed_furniture_inside_another_class_s_object_joins_it() {
+        // Class 1, a shelf (label 1): its back at y = 20, sides at x = 0 and 50, bottom at
+        // z = 0. Class 2, cabinet (fixed): a patch on the back inside the shelf (label 2) and a
+        // patch outside beside it, touching its side (label 3). Class 3, a cup (small, label
+        // 4), and class 4, a box (large but movable, label 5), both standing on the bottom.
+        let mut voxels = Vec::new();
+        for x in 0..=50 {
+            for y in 0..=20 {
+                for z in 0..=90 {
+                    let shell = y == 20 || x == 0 || x == 50 || z == 0;
+                    if shell {
+                        voxels.push((IVec3::new(x, y, z), 1));
+                    }
+                }
+            }
+        }
+        for x in 10..=20 {
+            for z in 10..=20 {
+                voxels.push((IVec3::new(x, 19, z), 2));
+            }
+        }
+        for x in 51..=60 {
+            for z in 0..=10 {
+                voxels.push((IVec3::new(x, 10, z), 3));
+            }
+        }
+        for x in 20..=22 {
+            for y in 10..=12 {
+                voxels.push((IVec3::new(x, y, 1), 4));
+            }
+        }
+        for x in 30..=40 {
+            for y in 5..=15 {
+                voxels.push((IVec3::new(x, y, 1), 5));
+            }
+        }
+        let count = |l: SegmentLabel| voxels.iter().filter(|(_, k)| *k == l).count();
+        let mut groups = BTreeMap::from([
+            ((1, 1), group(&[1], count(1))),
+            ((2, 2), group(&[2], count(2))),
+            ((2, 3), group(&[3], count(3))),
+            ((3, 4), group(&[4], count(4))),
+            ((4, 5), group(&[5], count(5))),
+        ]);
+        assert!(
+            count(2) * 20 <= count(1),
+            "the patch has at most 5 % of the shelf"
+        );
+        let is_large = |c: ClassId| c != 3;
+        let is_fixed = |c: ClassId| c <= 2;
+        absorb_fragments(
+            &mut groups,
+            &voxels,
+            |_| true,
+            is_large,
+            is_fixed,
+            0.05,
+            0.02,
+        );
+        assert_eq!(
+            groups[&(1, 1)].labels,
+            vec![1, 2],
+            "the patch joins the shelf"
+        );
+        assert!(
+            groups.contains_key(&(2, 3)),
+            "a cabinet beside the shelf stays"
+        );
+        assert!(groups.contains_key(&(3, 4)), "a cup inside stays");
+        assert!(groups.contains_key(&(4, 5)), "a box inside stays");
     }
 
     #[test]
