@@ -238,15 +238,29 @@ fn merge_coplanar_walls(
     }
 }
 
-/// The smallest and largest voxel index along each axis; `None` for no voxels.
-fn voxel_bounds(voxels: &[IVec3]) -> Option<(IVec3, IVec3)> {
-    let first = *voxels.first()?;
-    Some(
-        voxels
-            .iter()
-            .fold((first, first), |(lo, hi), v| (lo.min(*v), hi.max(*v))),
-    )
+/// The smallest and largest voxel index along each axis, leaving out `trim` of the voxels at
+/// each end of each axis; `None` for no voxels.
+fn voxel_bounds(voxels: &[IVec3], trim: f32) -> Option<(IVec3, IVec3)> {
+    if voxels.is_empty() {
+        return None;
+    }
+    let n = voxels.len();
+    let cut = ((trim * n as f32) as usize).min((n - 1) / 2);
+    let mut lo = IVec3::ZERO;
+    let mut hi = IVec3::ZERO;
+    for axis in 0..3 {
+        let mut along: Vec<i32> = voxels.iter().map(|v| v[axis]).collect();
+        along.sort_unstable();
+        lo[axis] = along[cut];
+        hi[axis] = along[n - 1 - cut];
+    }
+    Some((lo, hi))
 }
+
+/// The share of an object's voxels left out at each end of its box when a piece of another class
+/// is tested for lying inside it: a label's stray voxels far from the object (a few dozen of
+/// 11k in a procedural room) would stretch its box over anything.
+const HOST_BOUNDS_TRIM: f32 = 0.01;
 
 /// Whether box `inner` lies within box `outer` grown by `slack` voxels on every side.
 fn encloses(outer: (IVec3, IVec3), inner: (IVec3, IVec3), slack: i32) -> bool {
@@ -353,12 +367,13 @@ fn absorb_fragments(
             .max_by_key(|(k, n)| (*n, std::cmp::Reverse(*k)))
             .map(|(k, _)| k);
         let host = same_class_host.or_else(|| {
-            let piece_bounds = voxel_bounds(piece)?;
+            let piece_bounds = voxel_bounds(piece, 0.0)?;
             touching_foreign
                 .into_iter()
                 .filter(|(k, n)| {
                     size as f32 <= share * *n as f32
-                        && voxel_bounds(voxels_in(k)).is_some_and(|b| encloses(b, piece_bounds, 1))
+                        && voxel_bounds(voxels_in(k), HOST_BOUNDS_TRIM)
+                            .is_some_and(|b| encloses(b, piece_bounds, 1))
                 })
                 .max_by_key(|(k, n)| (*n, std::cmp::Reverse(*k)))
                 .map(|(k, _)| k)
@@ -630,6 +645,10 @@ mod tests {
             for z in 0..=10 {
                 voxels.push((IVec3::new(x, 10, z), 3));
             }
+        }
+        // A few stray shelf voxels past the cabinet beside it: the shelf's box is not theirs.
+        for x in 61..=65 {
+            voxels.push((IVec3::new(x, 10, 5), 1));
         }
         for x in 20..=22 {
             for y in 10..=12 {
