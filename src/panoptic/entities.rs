@@ -276,9 +276,10 @@ fn encloses(outer: (IVec3, IVec3), inner: (IVec3, IVec3), slack: i32) -> bool {
 /// than the other nor a face of it. Layout is left alone (a wall's corner touches the next
 /// wall).
 ///
-/// A piece of fixed furniture (`is_fixed`: not movable) may also join a large object of another
-/// class: when it has at most `share` of that object's voxels and lies within the object's voxel
-/// box (one voxel of slack). That is the segmenter's noise labelling a patch of a shelf's back as
+/// A piece that `may_be_foreign` (large fixed furniture, big enough to be kept as an entity of
+/// its own: a smaller one is dropped anyway) may also join a large object of another class: when
+/// it has at most `share` of that object's voxels and lies within the object's voxel box (one
+/// voxel of slack). That is the segmenter's noise labelling a patch of a shelf's back as
 /// cabinet, or a patch of a bed as sofa: no cabinet stands inside a shelf's outline. A movable
 /// object inside a large one (a box on a shelf, a cup in a cabinet) is a thing of its own.
 fn absorb_fragments(
@@ -286,7 +287,7 @@ fn absorb_fragments(
     voxels: &[(IVec3, SegmentLabel)],
     is_object: impl Fn(ClassId) -> bool,
     is_large: impl Fn(ClassId) -> bool,
-    is_fixed: impl Fn(ClassId) -> bool,
+    may_be_foreign: impl Fn(ClassId, usize) -> bool,
     share: f32,
     voxel_size: f32,
 ) {
@@ -333,8 +334,7 @@ fn absorb_fragments(
         let slab = is_large(small.0)
             .then(|| Slab::of(piece, voxel_size))
             .flatten();
-        // Only large fixed furniture may be a mislabelled piece of another class's object.
-        let foreign = is_large(small.0) && is_fixed(small.0);
+        let foreign = may_be_foreign(small.0, size);
         if !fragment && slab.is_none() && !foreign {
             continue;
         }
@@ -435,13 +435,21 @@ pub fn extract_entities(
             .get(classes.name(c))
             .is_some_and(|info| !params.is_small(info))
     };
-    let is_fixed = |c: ClassId| table.get(classes.name(c)).is_some_and(|info| !info.movable);
+    // A mislabelled piece of another class's object: large fixed furniture (not movable) that
+    // would be kept as an entity.
+    let may_be_foreign = |c: ClassId, voxels: usize| {
+        table.get(classes.name(c)).is_some_and(|info| {
+            !info.movable
+                && !params.is_small(info)
+                && voxels >= params.min_surface_voxels(info.kind, false, map.voxel_size)
+        })
+    };
     absorb_fragments(
         &mut groups,
         &voxels,
         is_object,
         is_large,
-        is_fixed,
+        may_be_foreign,
         params.fragment_share,
         map.voxel_size,
     );
@@ -544,7 +552,7 @@ mod tests {
             &voxels,
             |c| c != 9,
             |_| false,
-            |_| false,
+            |_, _| false,
             0.05,
             0.02,
         );
@@ -589,7 +597,7 @@ mod tests {
             &voxels,
             |_| true,
             |c| c == 5,
-            |_| false,
+            |_, _| false,
             0.05,
             0.02,
         );
@@ -612,7 +620,7 @@ mod tests {
             &voxels,
             |_| true,
             |_| false,
-            |_| false,
+            |_, _| false,
             0.05,
             0.02,
         );
@@ -673,13 +681,13 @@ mod tests {
             "the patch has at most 5 % of the shelf"
         );
         let is_large = |c: ClassId| c != 3;
-        let is_fixed = |c: ClassId| c <= 2;
+        let may_be_foreign = |c: ClassId, _voxels: usize| c <= 2;
         absorb_fragments(
             &mut groups,
             &voxels,
             |_| true,
             is_large,
-            is_fixed,
+            may_be_foreign,
             0.05,
             0.02,
         );
