@@ -6,6 +6,7 @@ pub mod carve;
 pub mod entities;
 pub mod face_pieces;
 pub mod fusion;
+mod instance_groups;
 pub mod instances;
 pub mod live;
 pub mod mapper;
