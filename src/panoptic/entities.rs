@@ -1,7 +1,7 @@
 //! Scene entities out of the panoptic map: labels resolved to (class, instance), instances too
 //! small dropped, floor and ceiling each one entity, a labelled mesh cut per entity.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashSet};
 
 use glam::{IVec3, Vec3};
 use serde::{Deserialize, Serialize};
@@ -165,6 +165,42 @@ pub fn surface_voxels(map: &TsdfMap, params: &ExtractionParams) -> Vec<(IVec3, S
 /// The most a projective sdf is taken to overstate the distance to the surface.
 const MAX_SDF_STRETCH: f32 = 3.0;
 
+/// Voxels this close (in voxels, along each axis) are one piece of a surface: a voxel missing
+/// between two seen ones does not part them.
+const PIECE_REACH: i32 = 2;
+
+/// Whether `voxels` hold a connected piece (voxels within `PIECE_REACH` of each other) of at
+/// least `min` voxels. Stops at the first piece that large, so a compact object costs `min`
+/// voxels' search.
+fn has_piece_of(voxels: &[IVec3], min: usize) -> bool {
+    let cells: HashSet<IVec3> = voxels.iter().copied().collect();
+    let mut seen: HashSet<IVec3> = HashSet::new();
+    for &start in voxels {
+        if !seen.insert(start) {
+            continue;
+        }
+        let mut stack = vec![start];
+        let mut size = 0;
+        while let Some(v) = stack.pop() {
+            size += 1;
+            if size >= min {
+                return true;
+            }
+            for dz in -PIECE_REACH..=PIECE_REACH {
+                for dy in -PIECE_REACH..=PIECE_REACH {
+                    for dx in -PIECE_REACH..=PIECE_REACH {
+                        let w = v + IVec3::new(dx, dy, dz);
+                        if cells.contains(&w) && seen.insert(w) {
+                            stack.push(w);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    min == 0
+}
+
 pub fn extract_entities(
     map: &TsdfMap,
     instances: &InstanceCounts,
@@ -231,6 +267,10 @@ pub fn extract_entities(
         params.fragment_share,
         map.voxel_size,
     );
+    let mut voxels_by_label: BTreeMap<SegmentLabel, Vec<IVec3>> = BTreeMap::new();
+    for (v, l) in &voxels {
+        voxels_by_label.entry(*l).or_default().push(*v);
+    }
     let mut entities: Vec<PanopticEntity> = Vec::new();
     let mut per_class_count: BTreeMap<String, usize> = BTreeMap::new();
     for ((class_id, instance), g) in groups {
@@ -238,7 +278,21 @@ pub fn extract_entities(
         let info = table.get(&class);
         let kind = info.map_or(EntityKind::Rigid, |c| c.kind);
         let small = info.is_some_and(|c| params.is_small(c));
-        if g.voxels < params.min_surface_voxels(kind, small, map.voxel_size) {
+        let min_voxels = params.min_surface_voxels(kind, small, map.voxel_size);
+        if g.voxels < min_voxels {
+            continue;
+        }
+        // An object is one surface: labels scattered in specks over a room are noise, however
+        // many voxels they add up to. (A wall is a plane seen in parts, and stays.)
+        let object_voxels = || {
+            g.labels
+                .iter()
+                .filter_map(|l| voxels_by_label.get(l))
+                .flatten()
+                .copied()
+                .collect::<Vec<IVec3>>()
+        };
+        if kind != EntityKind::Layout && !has_piece_of(&object_voxels(), min_voxels) {
             continue;
         }
         let n = per_class_count.entry(class.clone()).or_default();
@@ -289,6 +343,24 @@ pub fn extract_entities(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn specks_scattered_over_a_room_hold_no_piece_an_object_needs() {
+        // 40 voxels as one 8 x 5 patch, and as 20 pairs 5 voxels apart.
+        let patch: Vec<IVec3> = (0..8)
+            .flat_map(|x| (0..5).map(move |y| IVec3::new(x, y, 0)))
+            .collect();
+        assert!(has_piece_of(&patch, 40));
+        assert!(!has_piece_of(&patch, 41));
+        let specks: Vec<IVec3> = (0..20)
+            .flat_map(|i| [IVec3::new(5 * i, 0, 0), IVec3::new(5 * i + 1, 0, 0)])
+            .collect();
+        assert!(has_piece_of(&specks, 2));
+        assert!(!has_piece_of(&specks, 3));
+        // A gap of one missing voxel does not part a surface.
+        let gapped: Vec<IVec3> = (0..40).map(|i| IVec3::new(2 * i, 0, 0)).collect();
+        assert!(has_piece_of(&gapped, 40));
+    }
 
     #[test]
     fn the_smallest_entity_kept_has_the_same_area_at_any_voxel_size() {
