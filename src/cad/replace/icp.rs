@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use crate::cad::db::database::{CadDatabase, DatabaseModel};
 use crate::cad::replace::alignment::{
-    Alignment, PRIOR_AE_WEIGHT, alignment_error, choice_score, placed_layout_error, stride_sample,
+    Alignment, FACING_AE_WEIGHT, alignment_error, choice_score, placed_layout_error, stride_sample,
 };
 use crate::cad::replace::matching::{Candidate, KEEP_CANDIDATES, ObservedObject, class_models};
 use crate::classes::ClassTable;
@@ -314,7 +314,7 @@ fn score(
                 .powi(2)
         })
         .sum();
-    (sum / points.len().max(1) as f32).sqrt() + PRIOR_AE_WEIGHT * facing_error(object, pose.yaw)
+    (sum / points.len().max(1) as f32).sqrt() + FACING_AE_WEIGHT * facing_error(object, pose.yaw)
 }
 
 /// df of the ranking (`Candidate::facing_error`) for a model turned by `yaw`.
