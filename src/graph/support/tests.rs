@@ -269,3 +269,82 @@ fn a_floating_box_is_stretched_down_to_its_plane() {
     );
     assert!((lifted.bottom_z() - 0.75).abs() < 1e-6 && (lifted.top_z() - 0.79).abs() < 1e-6);
 }
+
+#[test]
+fn a_microwave_on_a_unit_seen_only_as_its_front_stands_on_that_unit_not_on_the_floor() {
+    let floor = slab(Vec3::new(2.0, 2.0, -0.05), Vec3::new(4.0, 4.0, 0.1));
+    // A dishwasher between neighbours with a microwave on it: only its front was seen, a slab
+    // 5 cm deep whose top meets the microwave's bottom, 3 cm in front of the microwave's box.
+    let front = slab(Vec3::new(2.0, 1.025, 0.42), Vec3::new(0.6, 0.05, 0.84));
+    let microwave = slab(Vec3::new(2.0, 1.28, 0.99), Vec3::new(0.5, 0.4, 0.3));
+    // A bottle 30 cm above the unit's top is not on it: it falls to the floor as before.
+    let bottle = slab(Vec3::new(2.9, 1.1, 1.25), Vec3::new(0.07, 0.07, 0.2));
+    // A table seen as its top alone (legs never seen), a chair beside it as high as its top's
+    // underside: no unit, so the table stands on the floor, its legs unseen.
+    let table = slab(Vec3::new(2.0, 3.0, 0.735), Vec3::new(0.9, 0.9, 0.03));
+    let chair = slab(Vec3::new(2.0, 3.7, 0.375), Vec3::new(0.45, 0.45, 0.75));
+    let up = |b: &GravityBox| Plane::from_point_normal(Vec3::new(0.0, 0.0, b.top_z()), Vec3::Z);
+    let planes = [
+        vec![up(&floor)],
+        vec![],
+        vec![up(&microwave)],
+        vec![],
+        vec![],
+        vec![],
+    ];
+    let vertices = [
+        vec![],
+        vec![],
+        top_vertices(&microwave),
+        vec![],
+        vec![],
+        vec![],
+    ];
+    let boxes = [floor, front, microwave, bottle, table, chair];
+    let classes = [
+        "floor",
+        "dishwasher",
+        "microwave",
+        "bottle",
+        "table",
+        "chair",
+    ];
+    let entities: Vec<SupportEntity> = (0..boxes.len())
+        .map(|i| SupportEntity {
+            class: classes[i],
+            kind: match i {
+                0 => EntityKind::Layout,
+                1 | 2 => EntityKind::Articulated,
+                _ => EntityKind::Rigid,
+            },
+            movable: matches!(classes[i], "bottle" | "chair"),
+            bbox: boxes[i],
+            planes: &planes[i],
+            vertices: &vertices[i],
+        })
+        .collect();
+    let supports = infer_supports(&entities, &SupportParams::default());
+    assert!(
+        matches!(
+            supports[2],
+            Some(SupportChoice::Below {
+                parent: 1,
+                registered: true,
+                ..
+            })
+        ),
+        "{:?}",
+        supports[2]
+    );
+    let Some(SupportChoice::Below { plane, .. }) = supports[2] else {
+        unreachable!()
+    };
+    assert!((plane_height(&plane, Vec2::new(2.0, 1.28)) - 0.84).abs() < 1e-4);
+    for k in [3, 4] {
+        assert!(
+            matches!(supports[k], Some(SupportChoice::Below { parent: 0, .. })),
+            "{k}: {:?}",
+            supports[k]
+        );
+    }
+}
