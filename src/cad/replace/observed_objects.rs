@@ -93,10 +93,9 @@ pub fn observed_objects<'a>(
         .filter(|n| n.kind != EntityKind::Layout)
         .filter_map(|n| {
             let p = points.get(&n.id)?;
-            let articulated = table
-                .get(&n.class)
-                .is_some_and(|c| c.kind == EntityKind::Articulated);
-            let bbox = match table.get(&n.class).filter(|_| articulated) {
+            let class = table.get(&n.class);
+            let articulated = class.is_some_and(|c| c.kind == EntityKind::Articulated);
+            let bbox = match class.filter(|_| articulated) {
                 Some(c) => reaching_back_to_wall(
                     GravityBox::from(&n.bbox),
                     &walls,
@@ -246,12 +245,7 @@ fn reaching_back_to_wall(
     if short >= *depth.start() {
         return bbox;
     }
-    let (sin, cos) = bbox.yaw.sin_cos();
-    let short_axis = if bbox.size.x < bbox.size.y {
-        Vec3::new(cos, sin, 0.0)
-    } else {
-        Vec3::new(-sin, cos, 0.0)
-    };
+    let short_axis = short_axis(&bbox);
     let most = *depth.end() - short;
     // Over both faces across the short axis: the gap from the face to a wall whose normal points
     // the face's way back into the room, the nearest.
@@ -272,13 +266,24 @@ fn reaching_back_to_wall(
     };
     let grown = gap.max(0.0);
     let mut reached = bbox;
-    if bbox.size.x < bbox.size.y {
-        reached.size.x += grown;
-    } else {
-        reached.size.y += grown;
-    }
+    reached.size[short_axis_index(&bbox)] += grown;
     reached.center -= front * (0.5 * grown);
     reached
+}
+
+/// Which of `bbox`'s horizontal axes is its short one: 0 for x, 1 for y.
+fn short_axis_index(bbox: &GravityBox) -> usize {
+    usize::from(bbox.size.x >= bbox.size.y)
+}
+
+/// The world direction of `bbox`'s short horizontal axis.
+fn short_axis(bbox: &GravityBox) -> Vec3 {
+    let (sin, cos) = bbox.yaw.sin_cos();
+    if short_axis_index(bbox) == 0 {
+        Vec3::new(cos, sin, 0.0)
+    } else {
+        Vec3::new(-sin, cos, 0.0)
+    }
 }
 
 /// Facing away from each wall within `BACK_TO_WALL_M` of the box (its inward normal made
@@ -318,12 +323,7 @@ fn long_side_first(mut behind: Vec<Facing>, bbox: &GravityBox, wide: bool) -> Ve
         return behind;
     }
     // The facing along the box's short axis: its back then runs along the long side.
-    let (sin, cos) = bbox.yaw.sin_cos();
-    let short_axis = if bbox.size.x < bbox.size.y {
-        Vec3::new(cos, sin, 0.0)
-    } else {
-        Vec3::new(-sin, cos, 0.0)
-    };
+    let short_axis = short_axis(bbox);
     if let Some(k) = behind
         .iter()
         .position(|f| f.direction.dot(short_axis).abs() > CORNER_COS)
