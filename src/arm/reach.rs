@@ -174,12 +174,16 @@ pub fn reach(
     let first = from_target(&q_target);
     if !matches!(
         first,
-        Err(ReachError::ApproachBlocked { .. } | ReachError::ApproachStartTouches(_))
+        Err(ReachError::ApproachBlocked { .. }
+            | ReachError::ApproachStartTouches(_)
+            | ReachError::NoPathToApproach(_))
     ) {
         return first;
     }
     // The same tool pose with the elbow or the wrist the other way may leave the last stretch
-    // clear: a side grasp of a cup 6 cm over a table had link 6 under the hand.
+    // clear (a side grasp of a cup 6 cm over a table had link 6 under the hand), or start it
+    // where the planner finds a way (a cup carried down into a cabinet's low board through
+    // the narrow gap beside its open door).
     let others = distinct_configurations(
         rig,
         world_from_root,

@@ -191,4 +191,55 @@ impl ArmRig {
     pub fn stowed_link_poses(&self) -> Vec<Affine3A> {
         self.arm.link_poses(&self.base_from_root, &self.stow, 1.0)
     }
+
+    /// The stowed arm's envelope in the base's frame: how high (metres above the floor) its
+    /// highest collision piece reaches, and how far out from the base's vertical axis any
+    /// reaches. A door swinging lower than that over the base meets the arm folded there,
+    /// whatever the column's height.
+    pub fn stowed_envelope(&self) -> (f32, f32) {
+        let poses = self.stowed_link_poses();
+        self.arm
+            .links
+            .iter()
+            .zip(&poses)
+            .flat_map(|(link, pose)| {
+                link.pieces
+                    .iter()
+                    .flat_map(|piece| piece.positions.iter().map(|p| pose.transform_point3(*p)))
+            })
+            .fold((self.base_from_root.translation.z, 0.0), |(top, out), p| {
+                (top.max(p.z), out.max(p.truncate().length()))
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::TriMesh;
+
+    /// The planar two-link arm mounted 0.5 m up, its forearm (1 m from the root) a bar 1 m long
+    /// and 10 cm thick, stowed at `stow`.
+    fn bar_rig(stow: [f32; 2]) -> ArmRig {
+        let mut arm = crate::arm::tests::two_link_arm();
+        arm.links[2].pieces = vec![TriMesh::cuboid(
+            Vec3::new(0.0, -0.05, -0.05),
+            Vec3::new(1.0, 0.05, 0.05),
+        )];
+        ArmRig {
+            stow: stow.to_vec(),
+            ..ArmRig::new(arm, 0.5)
+        }
+    }
+
+    #[test]
+    fn the_stowed_envelope_holds_the_stowed_pieces_as_high_and_as_far_out_as_they_reach() {
+        let (top, out) = bar_rig([0.0, 0.0]).stowed_envelope();
+        assert!((top - 0.55).abs() < 1e-5, "{top}");
+        assert!((out - 2.0f32.hypot(0.05)).abs() < 1e-5, "{out}");
+        // The forearm folded a quarter turn: its far corner is 1.05 m along and 1 m across.
+        let (top, out) = bar_rig([0.0, std::f32::consts::FRAC_PI_2]).stowed_envelope();
+        assert!((top - 0.55).abs() < 1e-5, "{top}");
+        assert!((out - 1.05f32.hypot(1.0)).abs() < 1e-4, "{out}");
+    }
 }

@@ -436,6 +436,9 @@ const STAND_DIRECTIONS: usize = 16;
 /// top, and the part's surface is sampled this finely.
 const SWEEP_CLEARANCE_M: f32 = 0.05;
 const SWEEP_SAMPLE_M: f32 = 0.05;
+/// The least gap (metres) between a part where the arm leaves it and the arm stowed over the
+/// base: the planner's margin on the way.
+const STOWED_CLEARANCE_M: f32 = crate::arm::reach::TRANSIT_MARGIN_M;
 /// At most this many places to stand are tried.
 const MAX_STANDS: usize = 6;
 /// The handle stays within this fraction of the arm's span from its shoulder.
@@ -482,12 +485,22 @@ pub(super) fn places_to_stand(
     let rise = (0.5 * (low + high) - shoulder.z).clamp(down, up);
     let span = arm_span(rig, shoulder_link);
     let middle = path[1].truncate();
-    let swept = swept_footprint(view, joint, to, robot.height);
-    let swept_on = swept_footprint(view, joint, farthest, robot.height);
-    let clear_of = |swept: &[glam::Vec2], p: glam::Vec2| {
+    // The part misses the base's column all the way, and where the arm leaves it, the arm
+    // folded over the base: a microwave's door on a counter swings above the column, and
+    // stopped part of the way closed it stood a centimetre from the stowed fingers.
+    let (top, out) = rig.stowed_envelope();
+    let column = |end: f32| swept_footprint(view, joint, end, robot.height);
+    let points = part_points(view, joint);
+    let over_column = |end: f32| part_footprint(view, joint, &points, &[end], top);
+    let (swept, swept_on) = (column(to), column(farthest));
+    let (left, left_on) = (over_column(to), over_column(farthest));
+    let clear_of = |(swept, left): (&[glam::Vec2], &[glam::Vec2]), p: glam::Vec2| {
         swept
             .iter()
             .all(|s| s.distance(p) > robot.radius + SWEEP_CLEARANCE_M)
+            && left
+                .iter()
+                .all(|s| s.distance(p) > out + STOWED_CLEARANCE_M)
     };
     let mut places: Vec<((bool, bool, f32), glam::Vec2)> = STAND_DISTANCES_M
         .iter()
@@ -498,7 +511,7 @@ pub(super) fn places_to_stand(
             })
         })
         .filter(|p| (*p - closed.truncate()).dot(outward) >= robot.radius + 0.1)
-        .filter(|p| clear_of(&swept, *p))
+        .filter(|p| clear_of((&swept, &left), *p))
         .filter_map(|p| {
             let reach_from = |over: Vec3| path.iter().map(|h| h.distance(over)).fold(0.0, f32::max);
             let (stowed, lifted) = (
@@ -507,8 +520,14 @@ pub(super) fn places_to_stand(
             );
             let comfortable = COMFORTABLE_SPAN * span;
             // Where the arm works at its stowed height first, as without a lift.
-            (lifted <= comfortable)
-                .then_some(((stowed > comfortable, !clear_of(&swept_on, p), stowed), p))
+            (lifted <= comfortable).then_some((
+                (
+                    stowed > comfortable,
+                    !clear_of((&swept_on, &left_on), p),
+                    stowed,
+                ),
+                p,
+            ))
         })
         .collect();
     places.sort_by(|a, b| {
@@ -553,21 +572,31 @@ fn rigid(pose: &Affine3A) -> Affine3A {
 fn swept_footprint(view: &SceneView, joint: usize, to: f32, height: f32) -> Vec<glam::Vec2> {
     let link = &view.tree.links[joint];
     let from = link.value;
-    let now_from_world = view.poses[joint].inverse();
-    let mut surface = TriMesh::default();
-    for &l in &subtree(view, joint) {
-        surface.append(&view.world_mesh(l).transformed(&now_from_world));
-    }
-    let points = surface_points(&surface, SWEEP_SAMPLE_M).points;
+    let points = part_points(view, joint);
     let reach = points.iter().map(|p| p.length()).fold(0.1, f32::max);
     let step = match link.joint.kind {
         JointKind::Revolute => SWEEP_SAMPLE_M / reach,
         _ => SWEEP_SAMPLE_M,
     };
     let steps = ((to - from).abs() / step).ceil() as usize;
-    (0..=steps)
-        .flat_map(|k| {
-            let v = from + (to - from) * k as f32 / steps.max(1) as f32;
+    let values: Vec<f32> = (0..=steps)
+        .map(|k| from + (to - from) * k as f32 / steps.max(1) as f32)
+        .collect();
+    part_footprint(view, joint, &points, &values, height)
+}
+
+/// The points (x, y) below `height` of part `joint`'s surface `points` (in its frame, as
+/// [`part_points`] gives them) with its joint at each of `values`.
+fn part_footprint(
+    view: &SceneView,
+    joint: usize,
+    points: &[Vec3],
+    values: &[f32],
+    height: f32,
+) -> Vec<glam::Vec2> {
+    values
+        .iter()
+        .flat_map(|&v| {
             let at = world_from_part(view, joint, v);
             points
                 .iter()
@@ -576,4 +605,15 @@ fn swept_footprint(view: &SceneView, joint: usize, to: f32, height: f32) -> Vec<
                 .map(|p| p.truncate())
         })
         .collect()
+}
+
+/// Points every [`SWEEP_SAMPLE_M`] on the surface of part `joint` and what it carries, in the
+/// part's frame.
+fn part_points(view: &SceneView, joint: usize) -> Vec<Vec3> {
+    let now_from_world = view.poses[joint].inverse();
+    let mut surface = TriMesh::default();
+    for &l in &subtree(view, joint) {
+        surface.append(&view.world_mesh(l).transformed(&now_from_world));
+    }
+    surface_points(&surface, SWEEP_SAMPLE_M).points
 }
