@@ -258,12 +258,27 @@ pub fn extract_entities(
                 && voxels >= params.min_surface_voxels(info.kind, false, map.voxel_size)
         })
     };
+    // Smaller than the class's least size on two of its sides (horizontal ones sorted, the
+    // height): no object of the class, only a piece of one.
+    let no_object_of_its_class = |c: ClassId, extent: glam::Vec3| {
+        table.get(classes.name(c)).is_some_and(|info| {
+            let least = info.size_min;
+            let (short, long) = (extent.x.min(extent.y), extent.x.max(extent.y));
+            let under = [
+                short < least.x.min(least.y),
+                long < least.x.max(least.y),
+                extent.z < least.z,
+            ];
+            under.iter().filter(|&&u| u).count() >= 2
+        })
+    };
     absorb_fragments(
         &mut groups,
         &voxels,
         is_object,
         is_large,
         may_be_foreign,
+        no_object_of_its_class,
         params.fragment_share,
         map.voxel_size,
     );
