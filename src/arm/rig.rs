@@ -117,6 +117,15 @@ const STOW_TOOL_HEIGHT_M: f32 = 0.3;
 /// The stowed arm's clearance from itself: the planner's on the way, and 5 mm to spare.
 const STOW_SELF_CLEARANCE_M: f32 = TRANSIT_MARGIN_M + 0.005;
 
+/// Every vertex of `arm`'s collision pieces with its links at `poses`.
+fn piece_points<'a>(arm: &'a Arm, poses: &'a [Affine3A]) -> impl Iterator<Item = Vec3> + 'a {
+    arm.links.iter().zip(poses).flat_map(|(link, pose)| {
+        link.pieces
+            .iter()
+            .flat_map(|piece| piece.positions.iter().map(|p| pose.transform_point3(*p)))
+    })
+}
+
 /// The configuration the arm travels in: of the middle of its joint ranges and seeded random
 /// configurations (then small random changes of the best), the one whose links stay nearest
 /// the vertical through its root (the farthest point of any piece, horizontally), clear of
@@ -140,15 +149,7 @@ pub fn compact_stow(arm: &Arm, collider: &ArmCollider) -> Vec<f32> {
         {
             return None;
         }
-        let far = arm
-            .links
-            .iter()
-            .zip(&poses)
-            .flat_map(|(link, pose)| {
-                link.pieces
-                    .iter()
-                    .flat_map(|piece| piece.positions.iter().map(|p| pose.transform_point3(*p)))
-            })
+        let far = piece_points(arm, &poses)
             .map(|p| p.truncate().length())
             .fold(0.0f32, f32::max);
         Some(far)
@@ -198,15 +199,7 @@ impl ArmRig {
     /// whatever the column's height.
     pub fn stowed_envelope(&self) -> (f32, f32) {
         let poses = self.stowed_link_poses();
-        self.arm
-            .links
-            .iter()
-            .zip(&poses)
-            .flat_map(|(link, pose)| {
-                link.pieces
-                    .iter()
-                    .flat_map(|piece| piece.positions.iter().map(|p| pose.transform_point3(*p)))
-            })
+        piece_points(&self.arm, &poses)
             .fold((self.base_from_root.translation.z, 0.0), |(top, out), p| {
                 (top.max(p.z), out.max(p.truncate().length()))
             })
